@@ -1,0 +1,71 @@
+"""Force-term plug-ins and their registry.
+
+``make_term({"type": NAME, ...})`` builds a registered term from its vehicle-file
+dictionary; :func:`register` adds a class under a name (scipy.integrate-style
+name-or-class registry).  Built-ins: ``restoring``, ``diagonal`` damping,
+``actuators``; later modules add their own (effects, component build-up).
+"""
+from __future__ import annotations
+
+from typing import Callable
+
+from uvsim.errors import VehicleError
+from uvsim.forces.base import Context, ForceTerm, param
+
+_REGISTRY: dict[str, Callable[..., ForceTerm]] = {}
+
+
+def register(name: str):
+    """Class decorator registering a :class:`ForceTerm` under ``name``."""
+
+    def deco(cls):
+        _REGISTRY[name] = cls
+        cls.kind = name
+        return cls
+
+    return deco
+
+
+def registered() -> list[str]:
+    _load_builtin()
+    return sorted(_REGISTRY)
+
+
+def make_term(spec, *, context: str = "effects") -> ForceTerm:
+    """Build a term from a dict ``{"type": name, ...}`` or return a ``ForceTerm`` as is."""
+    if isinstance(spec, ForceTerm):
+        return spec
+    _load_builtin()
+    if not isinstance(spec, dict) or "type" not in spec:
+        raise VehicleError(f"{context}: expected a mapping with a 'type' key, got {spec!r}")
+    kind = spec["type"]
+    cls = _REGISTRY.get(kind)
+    if cls is None:
+        raise VehicleError(f"{context}: unknown term type {kind!r}; known: {', '.join(sorted(_REGISTRY))}")
+    kwargs = {k: v for k, v in spec.items() if k != "type"}
+    try:
+        return cls(**kwargs)
+    except TypeError as exc:
+        raise VehicleError(f"{context} ({kind}): {exc}") from None
+
+
+_BUILTIN_MODULES = ["uvsim.forces.restoring", "uvsim.forces.damping", "uvsim.forces.actuators", "uvsim.effects"]
+_loaded = False
+
+
+def _load_builtin() -> None:
+    global _loaded
+    if _loaded:
+        return
+    import importlib
+
+    _loaded = True
+    for name in _BUILTIN_MODULES:
+        try:
+            importlib.import_module(name)
+        except ModuleNotFoundError as exc:
+            if exc.name != name:
+                raise
+
+
+__all__ = ["Context", "ForceTerm", "make_term", "param", "register", "registered"]

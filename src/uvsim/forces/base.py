@@ -1,0 +1,125 @@
+"""The force-term plug-in interface.
+
+Every generalized force acting on the vehicle, apart from the inertial and Coriolis
+terms, is a :class:`ForceTerm`: restoring forces, damping, actuators and additional
+effects (tether, thruster dynamics, ...).  A term is a small strategy object
+(filterpy-style) with two phases:
+
+* ``prepare(params, n)`` is called once per simulation with the model's named
+  parameters (each a float or an array of shape ``(n,)`` for a batch of ``n``
+  parameter sets) and returns whatever the term wants precomputed;
+* ``forces(ctx, prep)`` is called at every integrator stage and returns the
+  generalized force ``tau`` (shape ``(n, 6)``, body frame, N and N m) that the term
+  applies *to* the vehicle (so damping returns ``-D(nu_r) nu_r`` and restoring
+  returns ``-g(eta)``).
+
+A term may own internal states (``n_states > 0``, e.g. first-order thruster
+dynamics); the model appends them to the state vector and integrates
+``state_derivative``.  A term may change the mass properties (``changes_mass``),
+e.g. a variable-buoyancy tank; the model then rebuilds ``M_RB`` each stage.
+Terms declare the named scalar parameters they read in ``parameters()`` so that a
+calibration can vary them.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+import numpy as np
+
+
+@dataclass
+class Context:
+    """Quantities shared by all terms at one integrator stage (batched, ``n`` rows).
+
+    Attributes
+    ----------
+    t : float
+        Time, s.
+    pos : (n, 3) NED position, m.
+    q : (n, 4) unit quaternion body -> NED, scalar first.
+    R : (n, 3, 3) rotation matrix body -> NED.
+    nu : (n, 6) body velocity [u, v, w, p, q, r].
+    nu_r : (n, 6) velocity relative to the water, ``nu - nu_c``.
+    u : (n, k) inputs held over the current sample interval (forces, thrusts or PWM).
+    input_kind : "force" | "thrust" | "pwm".
+    weight, mass : (n,) current weight W (N) and mass (kg).
+    r_g : (n, 3) current centre of gravity, m.
+    states : dict term index -> (n, k_i) internal states of that term.
+    params : the model's named parameters (floats or (n,) arrays).
+    mass_changed : True when a mass-changing term altered weight / CG at this stage.
+    """
+
+    t: float
+    pos: np.ndarray
+    q: np.ndarray
+    R: np.ndarray
+    nu: np.ndarray
+    nu_r: np.ndarray
+    u: np.ndarray
+    input_kind: str
+    weight: np.ndarray
+    mass: np.ndarray
+    r_g: np.ndarray
+    states: dict
+    params: Mapping[str, Any]
+    mass_changed: bool = False
+
+
+class ForceTerm:
+    """Base class of all force plug-ins (see module docstring)."""
+
+    #: registry name used in vehicle files
+    kind: str = "term"
+    #: number of internal states
+    n_states: int = 0
+    #: whether ``mass_properties`` returns non-zero changes
+    changes_mass: bool = False
+
+    def parameters(self) -> dict[str, float]:
+        """Named scalar parameters with their current values."""
+        return {}
+
+    def prepare(self, params: Mapping[str, Any], n: int) -> Any:
+        return None
+
+    def forces(self, ctx: Context, prep: Any) -> np.ndarray:
+        raise NotImplementedError
+
+    def state_derivative(self, ctx: Context, prep: Any, x: np.ndarray) -> np.ndarray:
+        return np.zeros((ctx.nu.shape[0], 0))
+
+    def initial_state(self, prep: Any, n: int, u0: np.ndarray, input_kind: str) -> np.ndarray:
+        return np.zeros((n, self.n_states))
+
+    def state_names(self) -> list[str]:
+        return [f"{self.kind}_{i}" for i in range(self.n_states)]
+
+    def mass_properties(self, ctx: Context, prep: Any, x: np.ndarray):
+        """Changes ``(dm (n,), d_first_moment (n, 3), dI (n, 3, 3))`` about the body origin."""
+        raise NotImplementedError
+
+    def to_dict(self) -> dict:
+        """Vehicle-file representation (inverse of the registry constructor)."""
+        return {"type": self.kind}
+
+    def with_parameters(self, values: Mapping[str, float]) -> "ForceTerm":
+        """A copy with some named parameters replaced (used to write fitted vehicles)."""
+        d = self.to_dict()
+        _replace_in(d, values)
+        from uvsim.forces import make_term
+
+        return make_term(d, context=self.kind)
+
+
+def _replace_in(d: dict, values: Mapping[str, float]) -> None:
+    for key, val in list(d.items()):
+        if isinstance(val, dict):
+            _replace_in(val, values)
+        elif key in values:
+            d[key] = float(values[key])
+
+
+def param(params: Mapping[str, Any], name: str, n: int) -> np.ndarray:
+    """Parameter ``name`` as an array of shape ``(n,)`` (broadcast from a float)."""
+    return np.broadcast_to(np.asarray(params[name], dtype=float), (n,))

@@ -1,0 +1,127 @@
+"""Shared set-up of the body (hull) methods: reference quantities and result container."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from uvsim.constants import NU_WATER
+from uvsim.errors import HydroError
+from uvsim.hydro import crossflow
+from uvsim.hydro.friction import FRICTION_LINES
+from uvsim.hydro.geometry import HullGeometry
+
+
+class Coefficients(NamedTuple):
+    """Force/moment coefficients, all arrays of the shape of ``alpha``.
+
+    ``CL`` lift (perpendicular to the flow, positive for positive alpha at small alpha),
+    ``CD`` drag (along the flow, >= 0), ``CM`` pitching moment about ``x_m`` (nose-up positive,
+    reference ``A_ref * L_ref``), ``CN`` normal force (body -z for positive alpha), ``CA`` axial
+    force (positive aft, i.e. along body -x).  ``CL = CN cos a - CA sin a``,
+    ``CD = CN sin a + CA cos a``.
+    """
+
+    CL: np.ndarray
+    CD: np.ndarray
+    CM: np.ndarray
+    CN: np.ndarray
+    CA: np.ndarray
+
+
+def wrap_angle(alpha) -> np.ndarray:
+    """Angles (rad) mapped to [-pi, pi) (periodic; not a clip)."""
+    a = np.asarray(alpha, dtype=float)
+    return (a + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def normal_axial_to_lift_drag(alpha, cn, ca):
+    """``(CL, CD)`` from normal and axial coefficients at angle of attack ``alpha`` (rad)."""
+    c, s = np.cos(alpha), np.sin(alpha)
+    return cn * c - ca * s, cn * s + ca * c
+
+
+@dataclass(frozen=True)
+class BodyModel:
+    """A hull plus the modelling choices of the body methods.
+
+    Parameters
+    ----------
+    hull : HullGeometry
+    ref_area : float, optional
+        Reference area ``A`` of all coefficients, m^2.  Default: hull frontal area ``pi d^2/4``.
+    ref_length : float, optional
+        Reference length for ``CM`` and the length Reynolds number, m.  Default: hull length.
+    x_m : float, optional
+        Moment reference station from the nose, m.  Default: volume centroid (centre of buoyancy).
+    cdn_model : {"reynolds", "subcritical"}
+        Cross-flow drag model, see :mod:`uvsim.hydro.crossflow`.
+    friction_line : {"schoenherr", "ittc57"}
+        Turbulent flat-plate line for ``C_f`` (:mod:`uvsim.hydro.friction`).
+    munk : float, optional
+        ``k2 - k1``; default from the equivalent prolate spheroid (:func:`crossflow.munk_factor`).
+    eta : float, optional
+        Cross-flow proportionality factor; default Jorgensen Fig. 4 at the hull's l/d.
+    nu : float
+        Kinematic viscosity, m^2/s, used only to convert speeds to Reynolds numbers.
+    """
+
+    hull: HullGeometry
+    ref_area: float | None = None
+    ref_length: float | None = None
+    x_m: float | None = None
+    cdn_model: str = "reynolds"
+    friction_line: str = "schoenherr"
+    munk: float | None = None
+    eta: float | None = None
+    nu: float = NU_WATER
+
+    def __post_init__(self):
+        if self.cdn_model not in crossflow.CDN_MODELS:
+            raise HydroError(f"BodyModel: cdn_model {self.cdn_model!r} not in {crossflow.CDN_MODELS}")
+        if self.friction_line not in FRICTION_LINES:
+            raise HydroError(f"BodyModel: friction_line {self.friction_line!r} not in {FRICTION_LINES}")
+        for key in ("ref_area", "ref_length", "nu"):
+            val = getattr(self, key)
+            if val is not None and not (np.isfinite(val) and val > 0):
+                raise HydroError(f"BodyModel: {key} must be > 0, got {val!r}")
+
+    @property
+    def A(self) -> float:
+        return float(self.ref_area) if self.ref_area is not None else self.hull.frontal_area
+
+    @property
+    def L(self) -> float:
+        return float(self.ref_length) if self.ref_length is not None else self.hull.length
+
+    @property
+    def xm(self) -> float:
+        return float(self.x_m) if self.x_m is not None else self.hull.volume_centroid
+
+    @property
+    def k(self) -> float:
+        """Munk factor ``k2 - k1``."""
+        return float(self.munk) if self.munk is not None else crossflow.munk_factor(self.hull.fineness_ratio)
+
+    @property
+    def eta_value(self) -> float:
+        return float(self.eta) if self.eta is not None else crossflow.eta(self.hull.fineness_ratio)
+
+    def crossflow_re(self, alpha, re) -> np.ndarray:
+        """Cross-flow Reynolds number ``Re_n = Re_L (d / L_ref) |sin alpha|``."""
+        return np.asarray(re, float) * (self.hull.diameter / self.L) * np.abs(np.sin(alpha))
+
+    def cdn(self, alpha, re) -> np.ndarray:
+        """Cross-flow drag coefficient at each alpha for length Reynolds number ``re``.
+
+        For ``alpha`` where ``sin(alpha) = 0`` the cross-flow term vanishes anyway; there the
+        value is taken at ``Re_n`` of 1 degree to stay finite.
+        """
+        a = np.asarray(alpha, float)
+        s = np.maximum(np.abs(np.sin(a)), np.sin(np.radians(1.0)))
+        re_n = np.asarray(re, float) * (self.hull.diameter / self.L) * s
+        return np.broadcast_to(crossflow.cdn(re_n, self.cdn_model), np.broadcast_shapes(a.shape, np.shape(re)))
+
+    def re_from_speed(self, speed: float) -> float:
+        return float(speed) * self.L / self.nu

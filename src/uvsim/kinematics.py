@@ -1,0 +1,112 @@
+"""Attitude kinematics: unit quaternions (scalar first, body -> NED), rotation
+matrices and ZYX Euler angles.
+
+Conventions (docs/model.md):  q = [eta, eps1, eps2, eps3] rotates body-frame vectors
+into NED, ``v_ned = R(q) @ v_body``.  ZYX Euler angles (roll phi, pitch theta,
+yaw psi) give the same rotation as R = Rz(psi) Ry(theta) Rx(phi) (Fossen 2021,
+eq. 2.18).  All functions broadcast over leading axes: shapes are ``(..., 4)``
+for quaternions, ``(..., 3)`` for Euler angles and ``(..., 3, 3)`` for matrices.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+def quat_normalize(q: np.ndarray) -> np.ndarray:
+    """Return ``q / |q|`` with the scalar part made non-negative, shape ``(..., 4)``."""
+    q = np.asarray(q, dtype=float)
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    return np.where(q[..., :1] < 0.0, -q, q)
+
+
+def quat_to_rotation(q: np.ndarray) -> np.ndarray:
+    """Rotation matrix body -> NED from a unit quaternion (seed 003 eq. 3;
+    Fossen 2021 eq. 2.72).  ``q`` shape ``(..., 4)``, returns ``(..., 3, 3)``."""
+    q = np.asarray(q, dtype=float)
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    R = np.empty(q.shape[:-1] + (3, 3))
+    R[..., 0, 0] = 1 - 2 * (y * y + z * z)
+    R[..., 0, 1] = 2 * (x * y - z * w)
+    R[..., 0, 2] = 2 * (x * z + y * w)
+    R[..., 1, 0] = 2 * (x * y + z * w)
+    R[..., 1, 1] = 1 - 2 * (x * x + z * z)
+    R[..., 1, 2] = 2 * (y * z - x * w)
+    R[..., 2, 0] = 2 * (x * z - y * w)
+    R[..., 2, 1] = 2 * (y * z + x * w)
+    R[..., 2, 2] = 1 - 2 * (x * x + y * y)
+    return R
+
+
+def euler_to_quat(euler: np.ndarray) -> np.ndarray:
+    """Unit quaternion from ZYX Euler angles ``[roll, pitch, yaw]`` (rad),
+    shape ``(..., 3)`` -> ``(..., 4)`` (Fossen 2021 eq. 2.84)."""
+    e = np.asarray(euler, dtype=float)
+    cr, sr = np.cos(e[..., 0] / 2), np.sin(e[..., 0] / 2)
+    cp, sp = np.cos(e[..., 1] / 2), np.sin(e[..., 1] / 2)
+    cy, sy = np.cos(e[..., 2] / 2), np.sin(e[..., 2] / 2)
+    q = np.stack(
+        [
+            cr * cp * cy + sr * sp * sy,
+            sr * cp * cy - cr * sp * sy,
+            cr * sp * cy + sr * cp * sy,
+            cr * cp * sy - sr * sp * cy,
+        ],
+        axis=-1,
+    )
+    return quat_normalize(q)
+
+
+def quat_to_euler(q: np.ndarray) -> np.ndarray:
+    """ZYX Euler angles ``[roll, pitch, yaw]`` (rad) from a unit quaternion.
+
+    Roll and yaw are in (-pi, pi], pitch in [-pi/2, pi/2].  At pitch = +-90 deg
+    the split between roll and yaw is not unique (gimbal lock of the *angles*;
+    the quaternion itself has no singularity): there roll is set to 0.
+    Shape ``(..., 4)`` -> ``(..., 3)``.
+    """
+    q = np.asarray(q, dtype=float)
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    s = np.clip(2 * (w * y - x * z), -1.0, 1.0)
+    pitch = np.arcsin(s)
+    roll = np.arctan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+    yaw = np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    lock = np.abs(s) > 1 - 1e-12
+    if np.any(lock):
+        # At the lock only yaw - sign(s) roll is defined; put it all in yaw.
+        yaw = np.where(lock, -np.sign(s) * 2 * np.arctan2(x, w), yaw)
+        roll = np.where(lock, 0.0, roll)
+    return np.stack([roll, pitch, yaw], axis=-1)
+
+
+def quat_multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton product ``a * b``, shapes ``(..., 4)``."""
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    aw, ax, ay, az = a[..., 0], a[..., 1], a[..., 2], a[..., 3]
+    bw, bx, by, bz = b[..., 0], b[..., 1], b[..., 2], b[..., 3]
+    return np.stack(
+        [
+            aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+        ],
+        axis=-1,
+    )
+
+
+def quat_conjugate(q: np.ndarray) -> np.ndarray:
+    q = np.asarray(q, dtype=float)
+    return q * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def attitude_error_angle(q_a: np.ndarray, q_b: np.ndarray) -> np.ndarray:
+    """Angle (rad, in [0, pi]) of the rotation taking attitude ``q_b`` to ``q_a``;
+    the attitude error used in every RMSE.  Shapes ``(..., 4)`` -> ``(...)``."""
+    d = np.abs(np.sum(np.asarray(q_a) * np.asarray(q_b), axis=-1))
+    return 2.0 * np.arccos(np.clip(d, 0.0, 1.0))
+
+
+def unwrap_angles(angles: np.ndarray, axis: int = 0) -> np.ndarray:
+    """Continuous angle history (``numpy.unwrap`` along ``axis``)."""
+    return np.unwrap(np.asarray(angles, dtype=float), axis=axis)

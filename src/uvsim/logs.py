@@ -1,0 +1,563 @@
+"""Read, validate and write logged runs and datasets (docs/log_format.md).
+
+A *run* is one CSV or Parquet file whose columns are named as in the log
+format (``t``, ``x``..``z``, ``qw``..``qz`` or ``roll``/``pitch``/``yaw``,
+``u``..``r`` and one kind of inputs).  A *dataset* is a directory with a
+``manifest.yaml`` listing run files.  Everything the contract forbids raises
+:class:`uvsim.errors.LogFormatError` naming the file, the column and/or the
+row; nothing is dropped, clipped or resampled.  Rows are counted from 0 (the
+first data row); for CSV files the message also gives the line number.
+"""
+from __future__ import annotations
+
+import csv
+import importlib.util
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import yaml
+
+from uvsim.errors import LogFormatError
+from uvsim.kinematics import attitude_error_angle, euler_to_quat, quat_to_euler
+
+DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw", "mixed")
+SPLITS = ("train", "validation")
+INPUT_KINDS = ("force", "thrust", "pwm")
+FORCE_COLUMNS = ("X", "Y", "Z", "K", "M", "N")
+POSITION_COLUMNS = ("x", "y", "z")
+QUAT_COLUMNS = ("qw", "qx", "qy", "qz")
+EULER_COLUMNS = ("roll", "pitch", "yaw")
+VELOCITY_COLUMNS = ("u", "v", "w")
+RATE_COLUMNS = ("p", "q", "r")
+MEASURED_COLUMNS = POSITION_COLUMNS + QUAT_COLUMNS + EULER_COLUMNS + VELOCITY_COLUMNS + RATE_COLUMNS
+
+#: Accepted ESC command range, microseconds.  Hobby/RC ESCs take 1000-2000 us
+#: pulses with 1500 us neutral; the Blue Robotics BlueESC is specified for
+#: 1000-2000 us and the Basic ESC for 1100-1900 us (Blue Robotics forum,
+#: discuss.bluerobotics.com/t/380 and /t/712).  A value outside 1000-2000 us
+#: is not a command any of these ESCs understands (e.g. 0 = "no pulse", or a
+#: column logged in percent or in normalized units), so it is rejected.
+PWM_RANGE_US = (1000.0, 2000.0)
+#: Tolerance on |q| - 1 for logged quaternions before they are normalized.
+QUAT_NORM_TOL = 1e-2
+#: Largest disagreement (rad) allowed between quaternion and Euler columns
+#: when a run logs both.
+ATTITUDE_CONSISTENCY_TOL = 1e-2
+MANIFEST = "manifest.yaml"
+_RUN_KEYS = {"file", "dof", "weight", "split"}
+_ACTUATOR_RE = re.compile(r"^(thrust|pwm)_([1-9][0-9]*)$")
+_ACTUATOR_LIKE_RE = re.compile(r"^(thrust|pwm|thruster)\D*\d+$", re.IGNORECASE)
+
+
+def _row(i: int, source: str) -> str:
+    """``"row i (line i+2)"`` for CSV files, ``"row i"`` otherwise."""
+    if source.lower().endswith(".csv"):
+        return f"row {i} (line {i + 2} of the file)"
+    return f"row {i}"
+
+
+def _check_choice(value, allowed, what: str, source: str, none_ok: bool = True):
+    if value is None and none_ok:
+        return None
+    if not isinstance(value, str) or value not in allowed:
+        raise LogFormatError(f"{source}: {what} {value!r} is not one of {', '.join(allowed)}")
+    return value
+
+
+def _check_weight(weight, source: str) -> float:
+    ok = isinstance(weight, (int, float, np.integer, np.floating)) and not isinstance(weight, bool)
+    if not ok or not math.isfinite(float(weight)) or float(weight) <= 0:
+        raise LogFormatError(f"{source}: weight {weight!r} must be a positive finite number")
+    return float(weight)
+
+
+def _clean(df: pd.DataFrame, source: str) -> tuple[pd.DataFrame, list[str]]:
+    """Numeric float64 copy of ``df`` with entirely empty columns removed.
+
+    Returns the frame and the names of the removed (empty) columns."""
+    df = df.copy()
+    df.columns = [str(c).strip() for c in df.columns]
+    dup = df.columns[df.columns.duplicated()]
+    if len(dup):
+        raise LogFormatError(f"{source}: column {dup[0]!r} appears more than once")
+    df = df.reset_index(drop=True)
+    if len(df) < 2:
+        raise LogFormatError(f"{source}: needs at least 2 samples, found {len(df)}")
+    empty = [c for c in df.columns if df[c].isna().all()]
+    df = df.drop(columns=empty)
+    for c in df.columns:
+        col = df[c]
+        if pd.api.types.is_bool_dtype(col):
+            bad = col.notna().to_numpy()
+        elif not pd.api.types.is_numeric_dtype(col):
+            num = pd.to_numeric(col, errors="coerce")
+            bad = (col.notna() & num.isna()).to_numpy()
+            col = num
+        else:
+            bad = np.zeros(len(col), dtype=bool)
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise LogFormatError(
+                f"{source}: column {c!r}, {_row(i, source)}: {df[c].iloc[i]!r} is not a number "
+                "(expected a numeric value, or an empty cell for a missing sample)"
+            )
+        df[c] = col.astype("float64")
+        inf = np.isinf(df[c].to_numpy())
+        if inf.any():
+            i = int(np.flatnonzero(inf)[0])
+            raise LogFormatError(
+                f"{source}: column {c!r}, {_row(i, source)} is infinite (expected a finite number "
+                "or an empty cell for a missing sample)"
+            )
+    return df, empty
+
+
+def _actuator_columns(cols, source: str) -> tuple[str | None, list[str]]:
+    """Input kind and input column names in order; raises on mixed or gappy inputs."""
+    found: dict[str, list[str]] = {"force": [c for c in FORCE_COLUMNS if c in cols]}
+    numbered: dict[str, dict[int, str]] = {"thrust": {}, "pwm": {}}
+    for c in cols:
+        m = _ACTUATOR_RE.match(c)
+        if m:
+            numbered[m.group(1)][int(m.group(2))] = c
+        elif _ACTUATOR_LIKE_RE.match(c):
+            raise LogFormatError(
+                f"{source}: column {c!r} looks like an actuator column; expected thrust_1..thrust_n "
+                "or pwm_1..pwm_n (lower case, underscore, numbered from 1)"
+            )
+    for kind, cols_by_index in numbered.items():
+        found[kind] = [cols_by_index[i] for i in sorted(cols_by_index)]
+        if cols_by_index and sorted(cols_by_index) != list(range(1, len(cols_by_index) + 1)):
+            missing = sorted(set(range(1, max(cols_by_index) + 1)) - set(cols_by_index))
+            raise LogFormatError(
+                f"{source}: {kind} columns must be numbered 1..n without gaps; "
+                f"found {found[kind]}, missing {[f'{kind}_{i}' for i in missing]}"
+            )
+    kinds = [k for k in INPUT_KINDS if found[k]]
+    if not kinds:
+        raise LogFormatError(
+            f"{source}: no input columns; expected all of X,Y,Z,K,M,N, or thrust_1..thrust_n, "
+            "or pwm_1..pwm_n"
+        )
+    if len(kinds) > 1:
+        raise LogFormatError(
+            f"{source}: mixed input kinds {kinds} ({', '.join(c for k in kinds for c in found[k])}); "
+            "a run must use exactly one of force (X..N), thrust_i or pwm_i"
+        )
+    kind = kinds[0]
+    if kind == "force" and len(found["force"]) != 6:
+        missing = [c for c in FORCE_COLUMNS if c not in cols]
+        raise LogFormatError(
+            f"{source}: force inputs need all six columns X,Y,Z,K,M,N; missing {missing}"
+        )
+    return kind, found[kind]
+
+
+def _validate(df: pd.DataFrame, source: str) -> tuple[pd.DataFrame, list[str], str, list[str]]:
+    """Check a run frame against the contract; returns (clean frame, empty
+    columns, input kind, input columns)."""
+    df, empty = _clean(df, source)
+    cols = list(df.columns)
+    if "t" not in cols:
+        raise LogFormatError(f"{source}: missing time column 't' (columns found: {cols})")
+    t = df["t"].to_numpy()
+    bad = np.flatnonzero(~np.isfinite(t))
+    if bad.size:
+        raise LogFormatError(
+            f"{source}: column 't', {_row(int(bad[0]), source)} is empty/NaN; time must be given in every row"
+        )
+    bad = np.flatnonzero(np.diff(t) <= 0)
+    if bad.size:
+        i = int(bad[0]) + 1
+        raise LogFormatError(
+            f"{source}: column 't' must be strictly increasing; {_row(i, source)} has t = {float(t[i])!r} "
+            f"after t = {float(t[i - 1])!r}"
+        )
+    for group, names in (("quaternion", QUAT_COLUMNS), ("Euler", EULER_COLUMNS)):
+        present = [c for c in names if c in cols]
+        if present and len(present) != len(names):
+            raise LogFormatError(
+                f"{source}: partial {group} columns {present}; expected all of {list(names)} "
+                "(an entirely empty column counts as absent)"
+            )
+    has_pos = any(c in cols for c in POSITION_COLUMNS)
+    has_att = all(c in cols for c in QUAT_COLUMNS) or all(c in cols for c in EULER_COLUMNS)
+    if not (has_pos or has_att):
+        raise LogFormatError(
+            f"{source}: no position (x, y, z) and no attitude (qw..qz or roll, pitch, yaw) columns; "
+            "a run needs at least one of them"
+        )
+    kind, in_cols = _actuator_columns(cols, source)
+    for c in in_cols:
+        v = df[c].to_numpy()
+        nan = np.flatnonzero(np.isnan(v))
+        if nan.size:
+            raise LogFormatError(
+                f"{source}: input column {c!r}, {_row(int(nan[0]), source)} is empty/NaN; "
+                "inputs must be given in every row"
+            )
+        if kind == "pwm":
+            lo, hi = PWM_RANGE_US
+            out = np.flatnonzero((v < lo) | (v > hi))
+            if out.size:
+                i = int(out[0])
+                raise LogFormatError(
+                    f"{source}: column {c!r}, {_row(i, source)}: PWM {float(v[i])!r} us outside the accepted "
+                    f"{lo:g}..{hi:g} us (standard ESC pulse range, 1500 us neutral; values must be in "
+                    "microseconds)"
+                )
+    if all(c in cols for c in QUAT_COLUMNS):
+        q = df[list(QUAT_COLUMNS)].to_numpy()
+        norm = np.linalg.norm(q, axis=1)
+        far = np.flatnonzero(np.abs(norm - 1.0) > QUAT_NORM_TOL)  # NaN rows compare False
+        if far.size:
+            i = int(far[0])
+            raise LogFormatError(
+                f"{source}: quaternion qw..qz in {_row(i, source)} has norm {norm[i]:.6g}; expected a unit "
+                f"quaternion (|q| within {QUAT_NORM_TOL:g} of 1)"
+            )
+        if all(c in cols for c in EULER_COLUMNS):
+            qe = euler_to_quat(df[list(EULER_COLUMNS)].to_numpy())
+            err = attitude_error_angle(q / norm[:, None], qe)
+            off = np.flatnonzero(err > ATTITUDE_CONSISTENCY_TOL)
+            if off.size:
+                i = int(off[0])
+                raise LogFormatError(
+                    f"{source}: quaternion and roll/pitch/yaw columns disagree by {err[i]:.4g} rad in "
+                    f"{_row(i, source)}; expected the same attitude (within {ATTITUDE_CONSISTENCY_TOL:g} rad)"
+                )
+    return df, empty, kind, in_cols
+
+
+@dataclass
+class Run:
+    """One logged run, validated on construction.
+
+    ``data`` holds every column as read (float64, index 0..n-1); columns that
+    were entirely empty are removed and listed in ``empty_columns``.  NaN in a
+    measured signal is a missing sample and is kept.
+    """
+
+    name: str
+    path: Path | None
+    data: pd.DataFrame = field(repr=False)
+    dof: str | None = None
+    weight: float = 1.0
+    split: str = "train"
+    empty_columns: list[str] = field(init=False, default_factory=list)
+    _kind: str = field(init=False, repr=False, default="")
+    _input_columns: list[str] = field(init=False, repr=False, default_factory=list)
+
+    def __post_init__(self):
+        src = str(self.path) if self.path is not None else f"run {self.name!r}"
+        self.path = Path(self.path) if self.path is not None else None
+        self.dof = _check_choice(self.dof, DOFS, "dof", src)
+        self.split = _check_choice(self.split, SPLITS, "split", src, none_ok=False)
+        self.weight = _check_weight(self.weight, src)
+        self.data, self.empty_columns, self._kind, self._input_columns = _validate(self.data, src)
+
+    def _cols(self, names) -> np.ndarray:
+        """(n, len(names)) array, NaN for absent columns."""
+        out = np.full((len(self.data), len(names)), np.nan)
+        for j, c in enumerate(names):
+            if c in self.data.columns:
+                out[:, j] = self.data[c].to_numpy()
+        return out
+
+    def _has(self, names) -> bool:
+        return any(c in self.data.columns for c in names)
+
+    @property
+    def t(self) -> np.ndarray:
+        """Sample times, s, shape (n,)."""
+        return self.data["t"].to_numpy()
+
+    @property
+    def input_kind(self) -> str:
+        """``"force"``, ``"thrust"`` or ``"pwm"``."""
+        return self._kind
+
+    @property
+    def input_columns(self) -> list[str]:
+        """Input column names in the order of :attr:`inputs`."""
+        return list(self._input_columns)
+
+    @property
+    def inputs(self) -> np.ndarray:
+        """Inputs, shape (n, k): X,Y,Z,K,M,N (N, N m) or thrust_i (N) or pwm_i (us)."""
+        return self.data[self._input_columns].to_numpy()
+
+    @property
+    def n_thrusters(self) -> int | None:
+        """Number of thrust/pwm columns; None for force inputs."""
+        return None if self._kind == "force" else len(self._input_columns)
+
+    @property
+    def has_position(self) -> bool:
+        return self._has(POSITION_COLUMNS)
+
+    @property
+    def position(self) -> np.ndarray:
+        """NED position x, y, z (m), shape (n, 3); NaN columns for absent axes."""
+        return self._cols(POSITION_COLUMNS)
+
+    @property
+    def has_quaternion(self) -> bool:
+        return self._has(QUAT_COLUMNS)
+
+    @property
+    def has_euler(self) -> bool:
+        return self._has(EULER_COLUMNS)
+
+    @property
+    def has_attitude(self) -> bool:
+        return self.has_quaternion or self.has_euler
+
+    @property
+    def quaternion(self) -> np.ndarray:
+        """Unit quaternion body->NED (qw, qx, qy, qz), shape (n, 4).
+
+        From the qw..qz columns (normalized, sign as logged) or else from
+        roll/pitch/yaw via :func:`uvsim.kinematics.euler_to_quat`.  Rows with
+        any component missing are all NaN; all NaN without attitude columns."""
+        if self.has_quaternion:
+            q = self._cols(QUAT_COLUMNS)
+            return q / np.linalg.norm(q, axis=1, keepdims=True)
+        if self.has_euler:
+            return euler_to_quat(self._cols(EULER_COLUMNS))
+        return np.full((len(self.data), 4), np.nan)
+
+    @property
+    def euler(self) -> np.ndarray:
+        """ZYX Euler angles roll, pitch, yaw (rad), shape (n, 3): the logged
+        columns, or else from the quaternion via :func:`uvsim.kinematics.quat_to_euler`."""
+        if self.has_euler:
+            return self._cols(EULER_COLUMNS)
+        if self.has_quaternion:
+            return quat_to_euler(self.quaternion)
+        return np.full((len(self.data), 3), np.nan)
+
+    @property
+    def has_velocity(self) -> bool:
+        return self._has(VELOCITY_COLUMNS)
+
+    @property
+    def has_rates(self) -> bool:
+        return self._has(RATE_COLUMNS)
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """Body velocities u, v, w (m/s) and rates p, q, r (rad/s), shape (n, 6);
+        NaN columns for absent ones."""
+        return self._cols(VELOCITY_COLUMNS + RATE_COLUMNS)
+
+    @property
+    def measured_columns(self) -> dict[str, list[str]]:
+        """Measured columns present, by signal group, e.g. ``{"position": ["z"],
+        "attitude": ["qw", "qx", "qy", "qz"], "rates": ["p", "q", "r"]}``."""
+        groups = {
+            "position": POSITION_COLUMNS,
+            "attitude": QUAT_COLUMNS + EULER_COLUMNS,
+            "velocity": VELOCITY_COLUMNS,
+            "rates": RATE_COLUMNS,
+        }
+        out = {g: [c for c in names if c in self.data.columns] for g, names in groups.items()}
+        return {g: cols for g, cols in out.items() if cols}
+
+    def signals(self) -> list[str]:
+        """Measured signal groups present, in the order position, attitude,
+        velocity, rates (the axes are in :attr:`measured_columns`)."""
+        return list(self.measured_columns)
+
+    @property
+    def extra_columns(self) -> list[str]:
+        """Columns that are not part of the log format (kept in ``data``)."""
+        known = set(("t",) + MEASURED_COLUMNS) | set(self._input_columns)
+        return [c for c in self.data.columns if c not in known]
+
+
+@dataclass
+class Dataset:
+    """A directory of runs described by ``manifest.yaml``.  ``meta`` holds any
+    manifest keys other than vehicle/description/runs."""
+
+    path: Path
+    vehicle: str | None
+    description: str
+    runs: list[Run]
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def train(self) -> list[Run]:
+        return [r for r in self.runs if r.split == "train"]
+
+    @property
+    def validation(self) -> list[Run]:
+        return [r for r in self.runs if r.split == "validation"]
+
+    @property
+    def vehicle_file(self) -> Path | None:
+        """``vehicle`` as a path (relative to the dataset directory) when it
+        names a .yaml/.yml file; None when it is a built-in name or absent."""
+        if self.vehicle is None or Path(self.vehicle).suffix.lower() not in (".yaml", ".yml"):
+            return None
+        return self.path / self.vehicle
+
+    def by_dof(self, dof: str) -> list[Run]:
+        _check_choice(dof, DOFS, "dof", str(self.path), none_ok=False)
+        return [r for r in self.runs if r.dof == dof]
+
+
+def _have_pyarrow() -> bool:
+    return importlib.util.find_spec("pyarrow") is not None
+
+
+def _need_pyarrow(path: Path, verb: str) -> None:
+    if not _have_pyarrow():
+        raise LogFormatError(
+            f"{path}: {verb} Parquet files needs the optional package pyarrow "
+            "(pip install 'uvsim[parquet]' or pip install pyarrow); CSV works without it"
+        )
+
+
+def _csv_header(path: Path) -> list[str]:
+    with open(path, newline="") as fh:
+        return [h.strip() for h in next(csv.reader(fh), [])]
+
+
+def read_run(path, *, dof=None, weight=1.0, split="train", n_thrusters: int | None = None) -> Run:
+    """Read and validate one run file (.csv or .parquet).
+
+    Parameters
+    ----------
+    path : str or Path
+    dof, weight, split : manifest attributes of the run (validated).
+    n_thrusters : int, optional
+        If given, the run's thrust_i/pwm_i column count must equal it.
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if not path.is_file():
+        raise LogFormatError(f"{path}: run file does not exist (or is not a file)")
+    if suffix == ".csv":
+        header = _csv_header(path)
+        dup = sorted({h for h in header if header.count(h) > 1})
+        if dup:  # pandas would silently rename the second one to 'x.1'
+            raise LogFormatError(f"{path}: column {dup[0]!r} appears more than once")
+        try:
+            # Blank lines are kept as rows so that row i is line i + 2 in messages;
+            # blank lines at the end of the file hold nothing and are removed.
+            df = pd.read_csv(path, skipinitialspace=True, skip_blank_lines=False)
+            filled = np.flatnonzero(df.notna().any(axis=1).to_numpy())
+            df = df.iloc[: filled[-1] + 1 if filled.size else 0]
+        except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as e:
+            raise LogFormatError(f"{path}: cannot parse as CSV: {e}") from e
+    elif suffix == ".parquet":
+        _need_pyarrow(path, "reading")
+        try:
+            df = pd.read_parquet(path, engine="pyarrow")
+        except Exception as e:  # pyarrow raises several unrelated types
+            raise LogFormatError(f"{path}: cannot read as Parquet: {e}") from e
+    else:
+        raise LogFormatError(f"{path}: unknown run file type {path.suffix!r}; expected .csv or .parquet")
+    run = Run(name=path.stem, path=path, data=df, dof=dof, weight=weight, split=split)
+    if n_thrusters is not None and run.n_thrusters != n_thrusters:
+        got = "force inputs X..N" if run.n_thrusters is None else f"{run.n_thrusters} {run.input_kind} columns"
+        raise LogFormatError(f"{path}: expected {n_thrusters} thrusters (thrust_i or pwm_i columns), found {got}")
+    return run
+
+
+def read_dataset(path) -> Dataset:
+    """Read ``manifest.yaml`` in directory ``path`` (or the manifest file
+    itself) and every run it lists."""
+    path = Path(path)
+    manifest = path if path.is_file() else path / MANIFEST
+    root = manifest.parent
+    if not manifest.is_file():
+        raise LogFormatError(f"{manifest}: dataset manifest not found (a dataset is a directory with {MANIFEST})")
+    try:
+        doc = yaml.safe_load(manifest.read_text())
+    except yaml.YAMLError as e:
+        raise LogFormatError(f"{manifest}: cannot parse YAML: {e}") from e
+    if not isinstance(doc, dict):
+        raise LogFormatError(f"{manifest}: expected a mapping with keys vehicle, description, runs")
+    entries = doc.get("runs")
+    if not isinstance(entries, list) or not entries:
+        raise LogFormatError(f"{manifest}: 'runs' must be a non-empty list of {{file: ..., dof: ...}} entries")
+    vehicle = doc.get("vehicle")
+    if vehicle is not None and not isinstance(vehicle, str):
+        raise LogFormatError(f"{manifest}: 'vehicle' must be a vehicle name or file path, got {vehicle!r}")
+    description = doc.get("description") or ""
+    runs, seen_files, seen_names = [], set(), set()
+    for k, entry in enumerate(entries):
+        where = f"{manifest}: runs[{k}]"
+        if not isinstance(entry, dict) or not isinstance(entry.get("file"), str):
+            raise LogFormatError(f"{where}: expected a mapping with a 'file' entry, got {entry!r}")
+        unknown = set(entry) - _RUN_KEYS
+        if unknown:
+            raise LogFormatError(f"{where}: unknown key(s) {sorted(unknown)}; allowed: {sorted(_RUN_KEYS)}")
+        file = root / entry["file"]
+        key = file.resolve()
+        if key in seen_files:
+            raise LogFormatError(f"{where}: file {entry['file']!r} is listed more than once")
+        seen_files.add(key)
+        if not file.is_file():
+            raise LogFormatError(f"{where}: run file {entry['file']!r} does not exist ({file})")
+        _check_choice(entry.get("dof"), DOFS, "dof", where)
+        _check_choice(entry.get("split", "train"), SPLITS, "split", where, none_ok=False)
+        _check_weight(entry.get("weight", 1.0), where)
+        run = read_run(file, dof=entry.get("dof"), weight=entry.get("weight", 1.0),
+                       split=entry.get("split", "train"))
+        if run.name in seen_names:
+            raise LogFormatError(f"{where}: run name {run.name!r} (file stem) is used by two files")
+        seen_names.add(run.name)
+        runs.append(run)
+    meta = {k: v for k, v in doc.items() if k not in ("vehicle", "description", "runs")}
+    return Dataset(path=root, vehicle=vehicle, description=str(description), runs=runs, meta=meta)
+
+
+def write_run(path, data: pd.DataFrame | Run) -> Path:
+    """Write a run as CSV (or Parquet if ``path`` ends in .parquet).
+
+    A DataFrame is validated first (as :class:`Run`), so what is written can be
+    read back.  NaN is written as an empty cell; floats at full precision."""
+    path = Path(path)
+    run = data if isinstance(data, Run) else Run(name=path.stem, path=None, data=data)
+    suffix = path.suffix.lower()
+    if suffix not in (".csv", ".parquet"):
+        raise LogFormatError(f"{path}: unknown run file type {path.suffix!r}; expected .csv or .parquet")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if suffix == ".csv":
+        run.data.to_csv(path, index=False)
+    else:
+        _need_pyarrow(path, "writing")
+        run.data.to_parquet(path, index=False, engine="pyarrow")
+    return path
+
+
+def write_dataset(path, runs: list[Run], *, vehicle: str, description: str = "",
+                  suffix: str = ".csv") -> Path:
+    """Write ``runs`` as ``<name><suffix>`` files plus ``manifest.yaml`` into
+    directory ``path`` (created if needed); returns the directory."""
+    path = Path(path)
+    names = [r.name for r in runs]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise LogFormatError(f"{path}: two runs are named {dup[0]!r}; run names become file names")
+    if not runs:
+        raise LogFormatError(f"{path}: a dataset needs at least one run")
+    entries = []
+    for run in runs:
+        write_run(path / f"{run.name}{suffix}", run)
+        entry = {"file": f"{run.name}{suffix}"}
+        if run.dof is not None:
+            entry["dof"] = run.dof
+        entry.update(weight=float(run.weight), split=run.split)
+        entries.append(entry)
+    doc = {"vehicle": vehicle, "description": description, "runs": entries}
+    (path / MANIFEST).write_text(yaml.safe_dump(doc, sort_keys=False))
+    return path

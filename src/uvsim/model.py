@@ -1,0 +1,305 @@
+"""The equations of motion (Fossen 2021 eq. 10.x; seed 000 eq. 1-2; seed 003 eq. 1-5).
+
+State vector (per trajectory, shape ``(13 + k,)``)::
+
+    y = [x, y, z,  qw, qx, qy, qz,  u, v, w, p, q, r,  term states...]
+
+NED position of the body origin, unit quaternion body -> NED (scalar first) and body
+velocities ``nu``.  Kinematics (seed 003 eq. 1-4)::
+
+    p_dot = R(q) nu_1,     q_dot = 1/2 q (x) [0, nu_2]
+
+Kinetics with an irrotational current ``v_c`` (NED), ``nu_r = nu - nu_c``,
+``nu_c = [R^T v_c; 0]`` (seed 000 eq. 1-2)::
+
+    M_RB nu_dot + C_RB(nu) nu + M_A nu_r_dot + C_A(nu_r) nu_r = sum of terms
+    nu_r_dot = nu_dot - nu_c_dot,   nu_c_dot = [R^T v_c_dot - omega x R^T v_c; 0]
+
+The ``- omega x R^T v_c`` part is how a current that is constant in NED looks from the
+rotating body.  Every other force (restoring, damping, actuators, effects) is a
+:class:`uvsim.forces.ForceTerm`.
+
+:class:`Model` is batched: it holds ``n`` parameter sets at once (arrays with a leading
+axis of length ``n``); ``rhs(t, y, u)`` takes ``y`` of shape ``(n, n_y)``.
+"""
+from __future__ import annotations
+
+from typing import Any, Mapping
+
+import numpy as np
+
+from uvsim.errors import SimulationError, VehicleError
+from uvsim.forces.base import Context
+from uvsim.bilinear import CORIOLIS, CROSS, QRATE, ROT, bilinear
+from uvsim.rigid_body import rigid_body_mass_matrix
+from uvsim.vehicle import ADDED_MASS_NAMES, INERTIA_NAMES, Vehicle, inertia_tensor, load_vehicle
+
+POS, QUAT, NU = slice(0, 3), slice(3, 7), slice(7, 13)
+STATE_NAMES = ["x", "y", "z", "qw", "qx", "qy", "qz", "u", "v", "w", "p", "q", "r"]
+
+
+def _matvec(M: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``M x`` for a shared ``M`` (6, 6) or per-row ``M`` (n, 6, 6); ``x`` (n, 6)."""
+    if M.ndim == 2:
+        return x @ M.T
+    return np.einsum("nij,nj->ni", M, x)
+
+
+class _MatVec:
+    """``M x`` specialised once for the structure of ``M`` (shared / per-row, diagonal or full)."""
+
+    def __init__(self, M: np.ndarray):
+        M = np.asarray(M, float)
+        full = M if M.ndim == 3 else M[None]
+        off = full - np.einsum("nii->ni", full)[:, :, None] * np.eye(full.shape[-1])
+        self.diag = not np.any(off)
+        shared = M.ndim == 2 or bool(np.all(full == full[:1]))
+        if self.diag:
+            d = np.einsum("nii->ni", full)
+            self.d = d[0] if shared else d
+        else:
+            self.M = full[0] if shared else full
+            self.MT = self.M.T if shared else None
+        self.shared = shared
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        if self.diag:
+            return x * self.d
+        if self.shared:
+            return x @ self.MT
+        return np.einsum("nij,nj->ni", self.M, x)
+
+
+# index arrays for C(nu) nu = [w x a; v x a + w x b] (Fossen 2021 eq. 3.46) as 9 products
+_CI1 = np.array([4, 5, 3, 1, 2, 0, 4, 5, 3])
+_CJ1 = np.array([2, 0, 1, 2, 0, 1, 5, 3, 4])
+_CI2 = np.array([5, 3, 4, 2, 0, 1, 5, 3, 4])
+_CJ2 = np.array([1, 2, 0, 1, 2, 0, 4, 5, 3])
+
+
+def coriolis_term(nu: np.ndarray, ab: np.ndarray) -> np.ndarray:
+    """``C(nu) nu`` from ``nu`` (n, 6) and the momentum ``ab = M nu`` (n, 6)."""
+    if nu.shape[0] < 16:
+        return bilinear(nu, ab, CORIOLIS)
+    c = nu[:, _CI1] * ab[:, _CJ1] - nu[:, _CI2] * ab[:, _CJ2]
+    out = c[:, :6]
+    out[:, 3:] += c[:, 6:]
+    return out
+
+
+class Model:
+    """Batched equations of motion for a vehicle and ``n`` parameter sets.
+
+    Parameters
+    ----------
+    vehicle : Vehicle or str
+        The vehicle (or a built-in name / file path).
+    overrides : mapping name -> float or array (n,), optional
+        Named parameters replacing the vehicle's (see :meth:`Vehicle.parameters`);
+        arrays give one value per trajectory of the batch.
+    n : int, optional
+        Batch size; inferred from the override arrays when omitted.
+    input_kind : {"force", "thrust", "pwm"}
+        What the inputs ``u`` are.
+    current : callable, optional
+        ``current(t) -> (v_c (3,) NED m/s, v_c_dot (3,) m/s^2)`` for a time-varying
+        current; when omitted, the constant ``current_n/e/d`` parameters are used.
+    """
+
+    def __init__(self, vehicle, overrides: Mapping[str, Any] | None = None, *, n: int | None = None,
+                 input_kind: str = "force", current=None, extra_terms=()):
+        self.vehicle = vehicle = load_vehicle(vehicle)
+        params: dict[str, Any] = dict(vehicle.parameters())
+        overrides = dict(overrides or {})
+        self.terms = list(vehicle.terms) + list(extra_terms)
+        for t in extra_terms:
+            params.update(t.parameters())
+        unknown = set(overrides) - set(params)
+        if unknown:
+            raise VehicleError(f"unknown parameter(s) {sorted(unknown)} for vehicle {vehicle.name}; known: {sorted(params)}")
+        sizes = {np.size(v) for v in overrides.values() if np.ndim(v) > 0}
+        if n is None:
+            n = max(sizes) if sizes else 1
+        for k, v in overrides.items():
+            a = np.asarray(v, dtype=float)
+            if a.ndim > 1 or (a.ndim == 1 and a.size not in (1, n)):
+                raise VehicleError(f"parameter {k}: expected a number or an array of length {n}, got shape {a.shape}")
+            if not np.all(np.isfinite(a)):
+                raise VehicleError(f"parameter {k}: non-finite value(s) {a}")
+            params[k] = a if a.ndim == 1 and a.size == n else float(a.reshape(-1)[0]) if a.size == 1 else a
+        self.params = params
+        params['g'] = vehicle.g  # environment constant, read by the restoring term
+        self.n = n
+        if input_kind not in ("force", "thrust", "pwm"):
+            raise SimulationError(f"input_kind must be 'force', 'thrust' or 'pwm', got {input_kind!r}")
+        self.input_kind = input_kind
+        self.current_fn = current
+        self.g = vehicle.g
+
+        # --- mass properties -------------------------------------------------
+        def arr(name):
+            return np.broadcast_to(np.asarray(params[name], float), (n,))
+
+        self.mass = arr("m")
+        if np.any(self.mass <= 0):
+            raise VehicleError("parameter m: mass must be positive")
+        self.r_g = np.stack([arr("x_g"), arr("y_g"), arr("z_g")], -1)
+        varying = set(overrides)
+        I = inertia_tensor(*(arr(k) for k in INERTIA_NAMES))
+        shared_rb = not (varying & {"m", "x_g", "y_g", "z_g", *INERTIA_NAMES})
+        shared_am = not (varying & set(ADDED_MASS_NAMES))
+        MA = np.broadcast_to(vehicle.added_mass_matrix, (n, 6, 6)).copy()
+        for i, k in enumerate(ADDED_MASS_NAMES):
+            MA[:, i, i] = arr(k)
+        M_RB = rigid_body_mass_matrix(self.mass, I, self.r_g)
+        self.M_RB = M_RB[0] if shared_rb else M_RB
+        self.M_A = MA[0] if shared_am else MA
+        M = M_RB + MA
+        ev = np.linalg.eigvalsh(M)
+        bad = np.nonzero(ev[:, 0] <= 0)[0]
+        if bad.size:
+            raise VehicleError(
+                f"M = M_RB + M_A is not positive definite for parameter set(s) {bad[:5].tolist()} "
+                f"(smallest eigenvalue {ev[bad[0], 0]:.3g}); check inertia and added-mass values"
+            )
+        Minv = np.linalg.inv(M)
+        self.M = M[0] if (shared_rb and shared_am) else M
+        self.Minv = Minv[0] if (shared_rb and shared_am) else Minv
+        self._M_mv, self._Minv_mv = _MatVec(self.M), _MatVec(self.Minv)
+        self._MRB_mv, self._MA_mv = _MatVec(self.M_RB), _MatVec(self.M_A)
+        self.weight = self.mass * self.g
+        self.current_ned = np.stack([arr(k) for k in ("current_n", "current_e", "current_d")], -1)
+        self.has_current = current is not None or bool(np.any(self.current_ned != 0))
+        self.changes_mass = any(t.changes_mass for t in self.terms)
+
+        # --- terms and their states -------------------------------------------
+        self.preps = [t.prepare(params, n) for t in self.terms]
+        self.state_slices = {}
+        start = 13
+        names = list(STATE_NAMES)
+        for i, t in enumerate(self.terms):
+            if t.n_states:
+                self.state_slices[i] = slice(start, start + t.n_states)
+                names += t.state_names()
+                start += t.n_states
+        self.n_y = start
+        self.state_names = names
+
+    # ------------------------------------------------------------------ helpers
+    def check_inputs(self, k: int, where: str = "inputs") -> None:
+        self.vehicle.actuators.check_inputs(self.input_kind, k, where)
+
+    def initial_state(self, pos=None, q=None, nu=None, u0=None) -> np.ndarray:
+        """Initial state ``(n, n_y)``; ``pos`` (3,) or (n, 3), ``q`` (4,) or (n, 4), ``nu`` (6,) or (n, 6)."""
+        n = self.n
+        y = np.zeros((n, self.n_y))
+        y[:, POS] = np.zeros(3) if pos is None else pos
+        y[:, QUAT] = np.array([1.0, 0, 0, 0]) if q is None else q
+        qn = np.linalg.norm(y[:, QUAT], axis=1)
+        if np.any(np.abs(qn - 1) > 1e-3):
+            raise SimulationError(f"initial quaternion is not unit norm (|q| = {qn.min():.4f}..{qn.max():.4f})")
+        y[:, QUAT] /= qn[:, None]
+        y[:, NU] = np.zeros(6) if nu is None else nu
+        u0 = np.zeros((n, 0)) if u0 is None else np.broadcast_to(u0, (n, np.shape(u0)[-1]))
+        for i, t in enumerate(self.terms):
+            if t.n_states:
+                y[:, self.state_slices[i]] = t.initial_state(self.preps[i], n, u0, self.input_kind)
+        return y
+
+    # ------------------------------------------------------------------ dynamics
+    def rhs(self, t: float, y: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """State derivative ``(n, n_y)`` for states ``y`` (n, n_y) and inputs ``u`` (n, k)."""
+        n = y.shape[0]
+        pos = y[:, 0:3]
+        q = y[:, 3:7]
+        nu = y[:, 7:13]
+        v, w = nu[:, :3], nu[:, 3:]
+        # rotation matrix body -> NED (seed 003 eq. 3) as a bilinear form in q
+        R = bilinear(q, q, ROT).reshape(n, 3, 3)
+
+        # current (seed 000 eq. 2)
+        if self.has_current:
+            if self.current_fn is not None:
+                vc, vc_dot = self.current_fn(t)
+                vc = np.broadcast_to(np.asarray(vc, float), (n, 3))
+                vc_dot = np.broadcast_to(np.asarray(vc_dot, float), (n, 3))
+            else:
+                vc, vc_dot = self.current_ned, None
+            vc_b = (vc[:, None, :] @ R)[:, 0]  # R^T v_c
+            nu_r = nu.copy()
+            nu_r[:, :3] -= vc_b
+            nuc_dot = np.zeros_like(nu)
+            nuc_dot[:, :3] = -bilinear(w, vc_b, CROSS)  # constant NED current seen from the rotating body
+            if vc_dot is not None:
+                nuc_dot[:, :3] += (vc_dot[:, None, :] @ R)[:, 0]
+        else:
+            nu_r = nu
+
+        # mass properties (possibly changed by actuators)
+        mass, weight, r_g = self.mass, self.weight, self.r_g
+        MRB_mv, Minv_mv = self._MRB_mv, self._Minv_mv
+        if self.changes_mass:
+            mass, r_g, M_RB, Minv = self._mass_update(t, y, pos, R, nu, nu_r, u)
+            weight = mass * self.g
+            MRB_mv, Minv_mv = (lambda x: _matvec(M_RB, x)), (lambda x: _matvec(Minv, x))
+        ctx = Context(t, pos, q, R, nu, nu_r, u, self.input_kind, weight, mass, r_g,
+                      {i: y[:, s] for i, s in self.state_slices.items()}, self.params, self.changes_mass)
+
+        tau = None
+        for term, prep in zip(self.terms, self.preps):
+            f = term.forces(ctx, prep)
+            tau = f if tau is None else tau + f
+        # Coriolis-centripetal terms (parameterization-independent form, Fossen 2021 eq. 3.46)
+        if self.has_current:
+            tau = (tau - coriolis_term(nu, MRB_mv(nu))
+                   - coriolis_term(nu_r, self._MA_mv(nu_r))
+                   + self._MA_mv(nuc_dot))
+        elif self.changes_mass:
+            tau = tau - coriolis_term(nu, MRB_mv(nu) + self._MA_mv(nu))
+        else:
+            tau = tau - coriolis_term(nu, self._M_mv(nu))
+        nu_dot = Minv_mv(tau)
+
+        # p_dot = R nu_1;  q_dot = 1/2 q (x) [0, nu_2]  (seed 003 eq. 1-4)
+        pdot = (R @ v[:, :, None])[:, :, 0] if n < 16 else np.einsum("nij,nj->ni", R, v)
+        parts = [pdot, bilinear(q, w, QRATE), nu_dot]
+        for i, s in self.state_slices.items():
+            parts.append(self.terms[i].state_derivative(ctx, self.preps[i], y[:, s]))
+        return np.concatenate(parts, axis=1)
+
+    def _mass_update(self, t, y, pos, R, nu, nu_r, u):
+        """Rebuild M_RB with the mass changes of mass-changing terms (VBS, moving masses)."""
+        n = y.shape[0]
+        mass = self.mass.copy()
+        first = self.mass[:, None] * self.r_g
+        I = inertia_tensor(*(np.broadcast_to(np.asarray(self.params[k], float), (n,)) for k in INERTIA_NAMES)).copy()
+        ctx = Context(t, pos, y[:, 3:7], R, nu, nu_r, u, self.input_kind, self.weight, self.mass, self.r_g,
+                      {i: y[:, s] for i, s in self.state_slices.items()}, self.params, False)
+        for i, term in enumerate(self.terms):
+            if term.changes_mass:
+                s = self.state_slices.get(i)
+                dm, dfirst, dI = term.mass_properties(ctx, self.preps[i], None if s is None else y[:, s])
+                mass = mass + dm
+                first = first + dfirst
+                I = I + dI
+        r_g = first / mass[:, None]
+        M_RB = rigid_body_mass_matrix(mass, I, r_g)
+        Minv = np.linalg.inv(M_RB + self.M_A)
+        return mass, r_g, M_RB, Minv
+
+    # ----------------------------------------------------------------- energy
+    def energy(self, y: np.ndarray) -> np.ndarray:
+        """Kinetic + potential energy (J) of states ``y`` (..., n_y) for parameter set 0
+        (used by tests): ``1/2 nu^T M nu - W z_g_ned + B z_b_ned``."""
+        from uvsim.kinematics import quat_to_rotation
+
+        y = np.asarray(y)
+        nu = y[..., NU]
+        M = self.M if self.M.ndim == 2 else self.M[0]
+        T = 0.5 * np.einsum("...i,ij,...j->...", nu, M, nu)
+        R = quat_to_rotation(y[..., QUAT])
+        zg = y[..., 2] + np.einsum("...j,j->...", R[..., 2, :], self.r_g[0])
+        r_b = np.array([self.params[k] if np.ndim(self.params[k]) == 0 else self.params[k][0] for k in ("x_b", "y_b", "z_b")])
+        zb = y[..., 2] + np.einsum("...j,j->...", R[..., 2, :], r_b)
+        B = self.params["B"] if np.ndim(self.params["B"]) == 0 else self.params["B"][0]
+        return T - self.weight[0] * zg + B * zb

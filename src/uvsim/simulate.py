@@ -1,0 +1,331 @@
+"""Integrators: fixed-step RK4 (single or batched) and adaptive ``solve_ivp``.
+
+Inputs are sampled signals held constant between samples (zero-order hold), as a
+logged run provides them: the input of row ``i`` acts on ``[t_i, t_{i+1})``.  RK4
+takes one step (or ``substeps`` steps) per sample interval and returns the state at
+every sample time.  After each step the quaternion is renormalized.
+
+The batched integrator advances ``n`` trajectories at once with numpy (one parameter
+set and one input sequence per row).  Trajectories of different lengths share one
+call: shorter time grids are padded by repeating their last time, which makes the
+extra steps zero-length (``dt = 0``) so their states stay put.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from uvsim.errors import SimulationError
+from uvsim.kinematics import quat_to_euler
+from uvsim.model import NU, POS, QUAT, Model
+
+#: Speeds beyond which a trajectory is declared blown up (m/s or rad/s): far above
+#: anything an underwater vehicle does (hydrobatic AUVs reach ~5 m/s, seed 003 V-C).
+BLOWUP_SPEED = 1.0e3
+
+
+@dataclass
+class SimulationResult:
+    """Output of :func:`simulate` (python-control style result object).
+
+    Attributes
+    ----------
+    t : (n_t,) sample times, s.
+    y : (n_t, n_y) or (n_batch, n_t, n_y) states.
+    state_names : names of the columns of ``y``.
+    inputs : the inputs used, (n_t, k) or (n_batch, n_t, k).
+    input_kind : "force" | "thrust" | "pwm".
+    """
+
+    t: np.ndarray
+    y: np.ndarray
+    state_names: list
+    inputs: np.ndarray | None = None
+    input_kind: str = "force"
+    input_names: list | None = None
+    vehicle: str = ""
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def position(self) -> np.ndarray:
+        return self.y[..., POS]
+
+    @property
+    def quaternion(self) -> np.ndarray:
+        return self.y[..., QUAT]
+
+    @property
+    def euler(self) -> np.ndarray:
+        """ZYX Euler angles [roll, pitch, yaw] (rad), shape (..., n_t, 3)."""
+        return quat_to_euler(self.y[..., QUAT])
+
+    @property
+    def nu(self) -> np.ndarray:
+        return self.y[..., NU]
+
+    def to_pandas(self, index: int | None = None):
+        """A DataFrame with the LOG_FORMAT columns (t, x, y, z, qw..qz, roll, pitch,
+        yaw, u..r), term states and inputs.  For a batched result give ``index``."""
+        import pandas as pd
+
+        y = self.y if self.y.ndim == 2 else self.y[0 if index is None else index]
+        u = None
+        if self.inputs is not None:
+            u = self.inputs if self.inputs.ndim == 2 else self.inputs[0 if index is None else index]
+        cols = {"t": self.t if self.t.ndim == 1 else self.t[0 if index is None else index]}
+        names = self.state_names
+        for j, nm in enumerate(names[:7]):
+            cols[nm] = y[:, j]
+        e = quat_to_euler(y[:, QUAT])
+        cols["roll"], cols["pitch"], cols["yaw"] = e[:, 0], e[:, 1], e[:, 2]
+        for j, nm in enumerate(names[7:], start=7):
+            cols[nm] = y[:, j]
+        if u is not None and self.input_names:
+            for j, nm in enumerate(self.input_names):
+                cols[nm] = u[:, j]
+        return pd.DataFrame(cols)
+
+
+def input_names(kind: str, k: int) -> list[str]:
+    if kind == "force":
+        return ["X", "Y", "Z", "K", "M", "N"]
+    return [f"{kind}_{i + 1}" for i in range(k)]
+
+
+def _check_time(t: np.ndarray, where: str) -> None:
+    if t.ndim != 1 or t.size < 2:
+        raise SimulationError(f"{where}: need at least two sample times")
+    if not np.all(np.isfinite(t)):
+        raise SimulationError(f"{where}: non-finite sample time")
+    d = np.diff(t)
+    if np.any(d <= 0):
+        i = int(np.argmax(d <= 0)) + 1
+        raise SimulationError(f"{where}: time must be strictly increasing (row {i}: t = {t[i]} after {t[i - 1]})")
+
+
+def _rk4_loop(model: Model, T: np.ndarray, U: np.ndarray, y0: np.ndarray, substeps: int, on_blowup: str,
+              progress=None) -> np.ndarray:
+    """Core RK4 loop.  ``T`` (n, n_t) times, ``U`` (n, n_t, k) inputs, ``y0`` (n, n_y)."""
+    n, n_t = T.shape
+    Y = np.empty((n, n_t, model.n_y))
+    y = y0.copy()
+    Y[:, 0] = y
+    alive = np.ones(n, bool)
+    rhs = model.rhs
+    shared_t = bool(np.all(T == T[:1]))
+    for i in range(n_t - 1):
+        u = U[:, i]
+        if shared_t:
+            h = (T[0, i + 1] - T[0, i]) / substeps
+        else:
+            h = ((T[:, i + 1] - T[:, i]) / substeps)[:, None]
+        t = T[0, i]
+        for _ in range(substeps):
+            k1 = rhs(t, y, u)
+            k2 = rhs(t + 0.5 * h if shared_t else t, y + (0.5 * h) * k1, u)
+            k3 = rhs(t + 0.5 * h if shared_t else t, y + (0.5 * h) * k2, u)
+            k4 = rhs(t + h if shared_t else t, y + h * k3, u)
+            y = y + (h / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
+            q = y[:, 3:7]
+            y[:, 3:7] = q / np.sqrt(np.einsum("ij,ij->i", q, q))[:, None]
+            if shared_t:
+                t = t + h
+        Y[:, i + 1] = y
+        if (i & 15) == 15 or i == n_t - 2:
+            fin = np.isfinite(y).all(axis=1) & (np.abs(y[:, 7:13]).max(axis=1) < BLOWUP_SPEED)
+            bad = alive & ~fin
+            if bad.any():
+                j = int(np.argmax(bad))
+                if on_blowup == "raise":
+                    raise SimulationError(
+                        f"integration blew up in trajectory {j} by t = {T[j, i + 1]:.3f} s (non-finite state or "
+                        f"speed above {BLOWUP_SPEED:g}); check the parameters, the inputs or use a smaller step (substeps)"
+                    )
+                alive &= fin
+                y[bad] = np.nan
+                Y[bad, : i + 2] = np.where(np.isfinite(Y[bad, : i + 2]), Y[bad, : i + 2], np.nan)
+        if progress is not None:
+            progress.update(1)
+    return Y
+
+
+def simulate(vehicle, t, inputs, *, input_kind: str = "force", pos0=None, q0=None, nu0=None,
+             overrides: Mapping[str, Any] | None = None, current=None, method: str = "rk4",
+             substeps: int = 1, rtol: float = 1e-8, atol: float = 1e-10, on_blowup: str = "raise",
+             model: Model | None = None) -> SimulationResult:
+    """Simulate one trajectory.
+
+    Parameters
+    ----------
+    vehicle : Vehicle or str
+        Vehicle object, built-in name or file.
+    t : array_like, shape (n_t,)
+        Sample times, s, strictly increasing.
+    inputs : array_like, shape (n_t, k)
+        Inputs at the sample times, held until the next sample: generalized forces
+        (k = 6: X, Y, Z [N], K, M, N [N m]), per-thruster thrust [N] or PWM [us].
+    input_kind : {"force", "thrust", "pwm"}
+    pos0, q0, nu0 : initial NED position (3,), quaternion (4,), body velocity (6,).
+    overrides : named parameters replacing the vehicle's.
+    current : None, a constant NED current (3,) m/s, or ``f(t) -> (v_c, v_c_dot)``.
+    method : "rk4" (fixed step, one step per sample interval times ``substeps``) or
+        any :func:`scipy.integrate.solve_ivp` method name ("RK45", "DOP853", "LSODA", ...).
+    on_blowup : "raise" (default) or "nan" (mark the trajectory NaN and continue).
+
+    Returns
+    -------
+    SimulationResult
+    """
+    t = np.asarray(t, dtype=float)
+    _check_time(t, "t")
+    U = np.asarray(inputs, dtype=float)
+    if U.ndim == 1:
+        U = U[:, None]
+    if U.shape[0] != t.size:
+        raise SimulationError(f"inputs: {U.shape[0]} rows for {t.size} sample times")
+    if not np.all(np.isfinite(U)):
+        i = int(np.argmax(~np.isfinite(U).all(axis=1)))
+        raise SimulationError(f"inputs: non-finite value at row {i}")
+    if model is None:
+        model = _make_model(vehicle, overrides, input_kind, current, n=1)
+    model.check_inputs(U.shape[1])
+    y0 = model.initial_state(pos0, q0, nu0, U[0][None, :])
+    if method.lower() == "rk4":
+        if substeps < 1:
+            raise SimulationError(f"substeps must be >= 1, got {substeps}")
+        Y = _rk4_loop(model, t[None, :], U[None], y0, substeps, on_blowup)[0]
+    else:
+        Y = _solve_ivp(model, t, U, y0[0], method, rtol, atol, on_blowup)
+    return SimulationResult(t, Y, model.state_names, U, model.input_kind, input_names(model.input_kind, U.shape[1]),
+                            model.vehicle.name, {"method": method})
+
+
+def _make_model(vehicle, overrides, input_kind, current, n=None) -> Model:
+    cur_fn = None
+    ov = dict(overrides or {})
+    if current is not None:
+        if callable(current):
+            cur_fn = current
+        else:
+            c = np.asarray(current, dtype=float)
+            if c.shape != (3,) or not np.all(np.isfinite(c)):
+                raise SimulationError(f"current: expected 3 finite numbers (N, E, D m/s), got {current!r}")
+            ov.update(current_n=c[0], current_e=c[1], current_d=c[2])
+    return Model(vehicle, ov, n=n, input_kind=input_kind, current=cur_fn)
+
+
+def _solve_ivp(model: Model, t, U, y0, method, rtol, atol, on_blowup):
+    from scipy.integrate import solve_ivp
+
+    def fun(tt, yy):
+        i = min(max(int(np.searchsorted(t, tt, side="right")) - 1, 0), len(t) - 1)
+        return model.rhs(tt, yy[None, :], U[i][None, :])[0]
+
+    try:
+        sol = solve_ivp(fun, (t[0], t[-1]), y0, method=method, t_eval=t, rtol=rtol, atol=atol)
+    except ValueError as exc:
+        raise SimulationError(f"solve_ivp ({method}): {exc}") from None
+    if not sol.success or sol.y.shape[1] != t.size:
+        if on_blowup == "raise":
+            raise SimulationError(f"solve_ivp ({method}) failed: {sol.message}")
+        Y = np.full((t.size, y0.size), np.nan)
+        Y[: sol.y.shape[1]] = sol.y.T
+        return Y
+    Y = sol.y.T.copy()
+    Y[:, QUAT] /= np.linalg.norm(Y[:, QUAT], axis=1, keepdims=True)
+    return Y
+
+
+def simulate_batch(vehicle, t, inputs, *, input_kind: str = "force", y0=None, pos0=None, q0=None, nu0=None,
+                   overrides: Mapping[str, Any] | None = None, current=None, substeps: int = 1,
+                   on_blowup: str = "nan", model: Model | None = None, progress: bool = False) -> SimulationResult:
+    """Simulate ``n`` trajectories at once with RK4 (numpy-vectorized).
+
+    Parameters
+    ----------
+    t : (n_t,) shared sample times or (n, n_t) per-trajectory times (pad shorter runs
+        by repeating their last time; the padded steps have zero length).
+    inputs : (n, n_t, k) inputs per trajectory (or (n_t, k), shared).
+    overrides : named parameters, each a float or an array of shape (n,): one
+        parameter set per trajectory.
+    y0 : (n, n_y) full initial states, or give ``pos0`` (n, 3), ``q0`` (n, 4), ``nu0`` (n, 6).
+    on_blowup : "nan" (default; a diverging trajectory becomes NaN from then on and
+        the others continue) or "raise".
+
+    Returns
+    -------
+    SimulationResult with ``y`` of shape (n, n_t, n_y).
+    """
+    T = np.asarray(t, dtype=float)
+    U = np.asarray(inputs, dtype=float)
+    if U.ndim == 2:
+        U = U[None]
+    sizes = [U.shape[0]] + [np.size(v) for v in (overrides or {}).values() if np.ndim(v) > 0]
+    if T.ndim == 2:
+        sizes.append(T.shape[0])
+    if y0 is not None:
+        sizes.append(np.shape(y0)[0])
+    n = max(sizes)
+    if model is None:
+        model = _make_model(vehicle, overrides, input_kind, current, n=n)
+    n = model.n
+    T = np.broadcast_to(T, (n, T.shape[-1])) if T.ndim == 1 else T
+    if T.shape[0] != n:
+        raise SimulationError(f"t: {T.shape[0]} time grids for a batch of {n}")
+    d = np.diff(T, axis=1)
+    if np.any(d < 0) or not np.all(np.isfinite(T)):
+        raise SimulationError("t: times must be finite and non-decreasing along each trajectory")
+    U = np.broadcast_to(U, (n,) + U.shape[1:])
+    if U.shape[1] != T.shape[1]:
+        raise SimulationError(f"inputs: {U.shape[1]} samples for {T.shape[1]} sample times")
+    if not np.all(np.isfinite(U)):
+        raise SimulationError("inputs: non-finite values")
+    model.check_inputs(U.shape[2])
+    if y0 is None:
+        y0 = model.initial_state(pos0, q0, nu0, U[:, 0])
+    y0 = np.asarray(y0, dtype=float)
+    if y0.shape != (n, model.n_y):
+        raise SimulationError(f"y0: expected shape {(n, model.n_y)}, got {y0.shape}")
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=T.shape[1] - 1, desc="simulate", unit="step", leave=False)
+    with np.errstate(all="ignore") if on_blowup == "nan" else np.errstate():
+        Y = _rk4_loop(model, T, U, y0, substeps, on_blowup, bar)
+    if bar is not None:
+        bar.close()
+    return SimulationResult(T[0] if np.all(T == T[:1]) else T, Y, model.state_names, U, model.input_kind,
+                            input_names(model.input_kind, U.shape[2]), model.vehicle.name)
+
+
+def initial_state_from_run(run, *, estimate_missing: bool = False):
+    """(pos0, q0, nu0) from the first row of a logged run: measured values where
+    present, zero velocity / origin / level attitude where absent."""
+    pos0 = np.zeros(3)
+    if run.has_position:
+        p = run.position[0]
+        pos0 = np.where(np.isfinite(p), p, 0.0)
+    q0 = np.array([1.0, 0, 0, 0])
+    if run.has_attitude:
+        qa = run.quaternion
+        ok = np.isfinite(qa).all(axis=1)
+        if ok.any():
+            q0 = qa[int(np.argmax(ok))]
+    nu0 = np.zeros(6)
+    vel = run.velocity
+    if vel is not None:
+        v = vel[0]
+        nu0 = np.where(np.isfinite(v), v, 0.0)
+    return pos0, q0, nu0
+
+
+def simulate_run(vehicle, run, *, current=None, overrides=None, method: str = "rk4", substeps: int = 1,
+                 on_blowup: str = "raise") -> SimulationResult:
+    """Simulate a logged :class:`uvsim.logs.Run`: start from its first measured state
+    (velocities zero where not logged) and apply its inputs."""
+    pos0, q0, nu0 = initial_state_from_run(run)
+    return simulate(vehicle, run.t, run.inputs, input_kind=run.input_kind, pos0=pos0, q0=q0, nu0=nu0,
+                    overrides=overrides, current=current, method=method, substeps=substeps, on_blowup=on_blowup)

@@ -1,0 +1,402 @@
+"""Vehicles are data: YAML files with every number's source beside it.
+
+``load_vehicle("bluerov2_heavy")`` reads ``src/uvsim/vehicles/bluerov2_heavy.yaml``;
+``load_vehicle("path/to/file.yaml")`` reads any file.  Loading validates the file
+(finite numbers, positive mass and inertia, positive-definite ``M = M_RB + M_A``,
+known thruster curves and term types) and every error names the file and field.
+
+File layout (see ``src/uvsim/vehicles/bluerov2_heavy.yaml`` for a commented example)::
+
+    name: ...
+    environment: {g: 9.81, rho: 1000.0, current_ned: [0, 0, 0]}
+    rigid_body:
+      mass: 13.17                  # kg
+      buoyancy: 132.537            # N
+      r_g: [0, 0, 0]               # m, body frame
+      r_b: [0, 0, -0.024]          # m
+      inertia: {I_xx: .., I_yy: .., I_zz: .., I_xy: 0, I_xz: 0, I_yz: 0}   # tensor I_b = [[Ixx,-Ixy,-Ixz],...]
+    added_mass: {X_udot: .., ..., N_rdot: ..}  # positive magnitudes: M_A = diag(...)
+                                               # (optional `matrix:` full symmetric 6x6, positive convention)
+    damping: {type: diagonal, linear: {X_u: ..}, quadratic: {X_uu: ..}}       # paper sign
+    thrusters: {curve: t200_16v, units: [...]}
+    effects: [{type: tether, ...}]              # optional extra force terms
+
+Named parameters (used by calibration and overrides): ``m, B, x_g, y_g, z_g, x_b,
+y_b, z_b, I_xx, I_yy, I_zz, I_xy, I_xz, I_yz, X_udot ... N_rdot, current_n,
+current_e, current_d`` plus those of the damping model and effects.
+"""
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+import yaml
+
+from uvsim.constants import G
+from uvsim.errors import VehicleError
+from uvsim.forces import ForceTerm, make_term
+from uvsim.forces.actuators import Actuators, build_actuators
+from uvsim.rigid_body import rigid_body_mass_matrix
+
+ADDED_MASS_NAMES = ("X_udot", "Y_vdot", "Z_wdot", "K_pdot", "M_qdot", "N_rdot")
+INERTIA_NAMES = ("I_xx", "I_yy", "I_zz", "I_xy", "I_xz", "I_yz")
+RIGID_NAMES = ("m", "B", "x_g", "y_g", "z_g", "x_b", "y_b", "z_b") + INERTIA_NAMES
+CURRENT_NAMES = ("current_n", "current_e", "current_d")
+DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw")
+
+
+def inertia_tensor(Ixx, Iyy, Izz, Ixy=0.0, Ixz=0.0, Iyz=0.0) -> np.ndarray:
+    """Inertia tensor about the body origin with Fossen's product-of-inertia signs
+    (Fossen 2021 eq. 3.34), broadcasting over array arguments -> (..., 3, 3)."""
+    arrs = np.broadcast_arrays(*[np.asarray(a, float) for a in (Ixx, Iyy, Izz, Ixy, Ixz, Iyz)])
+    Ixx, Iyy, Izz, Ixy, Ixz, Iyz = arrs
+    row0 = np.stack([Ixx, -Ixy, -Ixz], -1)
+    row1 = np.stack([-Ixy, Iyy, -Iyz], -1)
+    row2 = np.stack([-Ixz, -Iyz, Izz], -1)
+    return np.stack([row0, row1, row2], -2)
+
+
+@dataclass
+class Vehicle:
+    """A vehicle definition (parameters only; no state, no integrator)."""
+
+    name: str
+    mass: float
+    buoyancy: float
+    r_g: np.ndarray
+    r_b: np.ndarray
+    inertia: dict[str, float]
+    added_mass_matrix: np.ndarray
+    damping: ForceTerm
+    actuators: Actuators
+    effects: list[ForceTerm] = field(default_factory=list)
+    g: float = G
+    rho: float = 1000.0
+    current_ned: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    description: str = ""
+    source: str = "<memory>"
+    raw: dict = field(default_factory=dict, repr=False)
+
+    # -- derived quantities ---------------------------------------------------
+    @property
+    def weight(self) -> float:
+        return self.mass * self.g
+
+    @property
+    def inertia_matrix(self) -> np.ndarray:
+        i = self.inertia
+        return inertia_tensor(i["I_xx"], i["I_yy"], i["I_zz"], i.get("I_xy", 0.0), i.get("I_xz", 0.0), i.get("I_yz", 0.0))
+
+    @property
+    def M_RB(self) -> np.ndarray:
+        return rigid_body_mass_matrix(self.mass, self.inertia_matrix, self.r_g)
+
+    @property
+    def M_A(self) -> np.ndarray:
+        return self.added_mass_matrix.copy()
+
+    @property
+    def M(self) -> np.ndarray:
+        return self.M_RB + self.M_A
+
+    @property
+    def n_thrusters(self) -> int:
+        return self.actuators.n_thrusters
+
+    @property
+    def terms(self) -> list[ForceTerm]:
+        from uvsim.forces.restoring import Restoring
+
+        return [Restoring(), self.damping, self.actuators, *self.effects]
+
+    def parameters(self) -> dict[str, float]:
+        """All named scalar parameters and their values."""
+        p = {"m": self.mass, "B": self.buoyancy}
+        p.update(dict(zip(("x_g", "y_g", "z_g"), map(float, self.r_g))))
+        p.update(dict(zip(("x_b", "y_b", "z_b"), map(float, self.r_b))))
+        for k in INERTIA_NAMES:
+            p[k] = float(self.inertia.get(k, 0.0))
+        for i, k in enumerate(ADDED_MASS_NAMES):
+            p[k] = float(self.added_mass_matrix[i, i])
+        p.update(dict(zip(CURRENT_NAMES, map(float, self.current_ned))))
+        for term in [self.damping, *self.effects]:
+            p.update(term.parameters())
+        return p
+
+    def with_parameters(self, values: Mapping[str, float], *, name: str | None = None) -> "Vehicle":
+        """A new vehicle with some named parameters replaced (validated)."""
+        known = self.parameters()
+        unknown = set(values) - set(known)
+        if unknown:
+            raise VehicleError(f"{self.source}: unknown parameter(s) {sorted(unknown)}")
+        d = self.to_dict()
+        v = {k: float(x) for k, x in values.items()}
+        rb = d["rigid_body"]
+        if "m" in v:
+            rb["mass"] = v["m"]
+        if "B" in v:
+            rb["buoyancy"] = v["B"]
+        for i, k in enumerate(("x_g", "y_g", "z_g")):
+            if k in v:
+                rb["r_g"][i] = v[k]
+        for i, k in enumerate(("x_b", "y_b", "z_b")):
+            if k in v:
+                rb["r_b"][i] = v[k]
+        for k in INERTIA_NAMES:
+            if k in v:
+                rb["inertia"][k] = v[k]
+        am = np.asarray(d["added_mass"]["matrix"], float)
+        for i, k in enumerate(ADDED_MASS_NAMES):
+            if k in v:
+                am[i, i] = v[k]
+        d["added_mass"]["matrix"] = am.tolist()
+        cur = d["environment"]["current_ned"]
+        for i, k in enumerate(CURRENT_NAMES):
+            if k in v:
+                cur[i] = v[k]
+        damping = self.damping.with_parameters(v) if set(v) & set(self.damping.parameters()) else self.damping
+        effects = [e.with_parameters(v) if set(v) & set(e.parameters()) else e for e in self.effects]
+        d["damping"] = damping.to_dict()
+        d["effects"] = [e.to_dict() for e in effects]
+        if name:
+            d["name"] = name
+        return vehicle_from_dict(d, source=self.source, actuators=self.actuators)
+
+    def with_effects(self, effects: list) -> "Vehicle":
+        """A copy with extra force terms appended (dicts or ``ForceTerm`` objects)."""
+        new = copy.copy(self)
+        new.effects = [*self.effects, *[make_term(e) for e in effects]]
+        return new
+
+    def to_dict(self) -> dict:
+        """Vehicle-file dictionary (numbers only; comments with sources live in the
+        shipped YAML files, and :func:`save_vehicle` writes provenance notes)."""
+        d = {
+            "name": self.name,
+            "description": self.description,
+            "environment": {"g": self.g, "rho": self.rho, "current_ned": [float(x) for x in self.current_ned]},
+            "rigid_body": {
+                "mass": float(self.mass),
+                "buoyancy": float(self.buoyancy),
+                "r_g": [float(x) for x in self.r_g],
+                "r_b": [float(x) for x in self.r_b],
+                "inertia": {k: float(self.inertia.get(k, 0.0)) for k in INERTIA_NAMES},
+            },
+            "added_mass": {"matrix": self.added_mass_matrix.tolist()},
+            "damping": self.damping.to_dict(),
+            "effects": [e.to_dict() for e in self.effects],
+        }
+        if self.raw.get("thrusters") is not None:
+            d["thrusters"] = copy.deepcopy(self.raw["thrusters"])
+        if self.raw.get("sources"):
+            d["sources"] = copy.deepcopy(self.raw["sources"])
+        return d
+
+    def summary(self) -> dict:
+        """The numbers ``uvsim vehicle show --json`` prints."""
+        DL, DQ = _damping_diagonals(self.damping)
+        return {
+            "name": self.name,
+            "source": self.source,
+            "mass": self.mass,
+            "weight": self.weight,
+            "buoyancy": self.buoyancy,
+            "r_g": [float(x) for x in self.r_g],
+            "r_b": [float(x) for x in self.r_b],
+            "inertia": self.inertia_matrix.tolist(),
+            "added_mass": self.added_mass_matrix.tolist(),
+            "linear_damping": DL,
+            "quadratic_damping": DQ,
+            "n_thrusters": self.n_thrusters,
+            "effects": [e.kind for e in self.effects],
+        }
+
+
+def _damping_diagonals(term):
+    from uvsim.forces.damping import LINEAR_NAMES, QUADRATIC_NAMES
+
+    p = term.parameters()
+    if all(k in p for k in LINEAR_NAMES):
+        return [p[k] for k in LINEAR_NAMES], [p[k] for k in QUADRATIC_NAMES]
+    if hasattr(term, "DL"):
+        return np.diag(term.DL).tolist(), np.diag(term.DQ).tolist()
+    return None, None
+
+
+# ----------------------------------------------------------------------------- loading
+def builtin_vehicles() -> list[str]:
+    """Names of the vehicle files shipped in ``uvsim/vehicles``."""
+    root = resources.files("uvsim") / "vehicles"
+    return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".yaml"))
+
+
+def vehicle_path(name_or_path: str | Path) -> Path:
+    """Resolve a built-in vehicle name or a file path."""
+    p = Path(name_or_path)
+    if p.suffix in (".yaml", ".yml") or p.exists():
+        if not p.exists():
+            raise VehicleError(f"vehicle file {p} does not exist")
+        return p
+    cand = Path(str(resources.files("uvsim") / "vehicles" / f"{name_or_path}.yaml"))
+    if not cand.exists():
+        raise VehicleError(
+            f"unknown vehicle {str(name_or_path)!r}: not a file and not a built-in "
+            f"(built-ins: {', '.join(builtin_vehicles())})"
+        )
+    return cand
+
+
+def load_vehicle(name_or_path: "str | Path | Vehicle") -> Vehicle:
+    """Load and validate a vehicle by built-in name or file path."""
+    if isinstance(name_or_path, Vehicle):
+        return name_or_path
+    path = vehicle_path(name_or_path)
+    try:
+        d = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise VehicleError(f"{path}: not valid YAML: {exc}") from None
+    if not isinstance(d, dict):
+        raise VehicleError(f"{path}: expected a mapping at the top level")
+    return vehicle_from_dict(d, source=str(path))
+
+
+def _num(d: Mapping, key: str, where: str, *, positive=False, nonneg=False, default: Any = None) -> float:
+    if key not in d or d[key] is None:
+        if default is not None:
+            return float(default)
+        raise VehicleError(f"{where}.{key}: missing (expected a number)")
+    try:
+        v = float(d[key])
+    except (TypeError, ValueError):
+        raise VehicleError(f"{where}.{key}: expected a number, got {d[key]!r}") from None
+    if not np.isfinite(v):
+        raise VehicleError(f"{where}.{key}: expected a finite number, got {v}")
+    if positive and v <= 0:
+        raise VehicleError(f"{where}.{key}: expected a positive number, got {v}")
+    if nonneg and v < 0:
+        raise VehicleError(f"{where}.{key}: expected a non-negative number, got {v}")
+    return v
+
+
+def _vec3(d: Mapping, key: str, where: str, default=None) -> np.ndarray:
+    val = d.get(key, default)
+    try:
+        a = np.asarray(val, dtype=float)
+    except (TypeError, ValueError):
+        raise VehicleError(f"{where}.{key}: expected 3 numbers, got {val!r}") from None
+    if a.shape != (3,) or not np.all(np.isfinite(a)):
+        raise VehicleError(f"{where}.{key}: expected 3 finite numbers, got {val!r}")
+    return a
+
+
+def vehicle_from_dict(d: dict, *, source: str = "<dict>", actuators: Actuators | None = None) -> Vehicle:
+    """Build and validate a :class:`Vehicle` from a vehicle-file dictionary."""
+    f = source
+    for key in ("rigid_body", "added_mass", "damping"):
+        if not isinstance(d.get(key), dict):
+            raise VehicleError(f"{f}: '{key}' section missing or not a mapping")
+    env = d.get("environment") or {}
+    g = _num(env, "g", f"{f}: environment", positive=True, default=G)
+    rho = _num(env, "rho", f"{f}: environment", positive=True, default=1000.0)
+    current = _vec3(env, "current_ned", f"{f}: environment", default=[0.0, 0.0, 0.0])
+
+    rb = d["rigid_body"]
+    w = f"{f}: rigid_body"
+    mass = _num(rb, "mass", w, positive=True)
+    buoyancy = _num(rb, "buoyancy", w, nonneg=True)
+    if not 0.2 < buoyancy / (mass * g) < 5.0 and buoyancy > 0:
+        raise VehicleError(
+            f"{w}.buoyancy = {buoyancy} N is {buoyancy / (mass * g):.2f} times the weight m g = {mass * g:.1f} N; "
+            "expected a value near the weight for an underwater vehicle (check units: buoyancy is a force in N)"
+        )
+    r_g = _vec3(rb, "r_g", w, default=[0, 0, 0])
+    r_b = _vec3(rb, "r_b", w, default=[0, 0, 0])
+    inertia_d = rb.get("inertia")
+    if not isinstance(inertia_d, dict):
+        raise VehicleError(f"{w}.inertia: expected a mapping I_xx, I_yy, I_zz (and optional I_xy, I_xz, I_yz)")
+    inertia = {}
+    for k in INERTIA_NAMES:
+        inertia[k] = _num(inertia_d, k, f"{w}.inertia", positive=k in INERTIA_NAMES[:3], default=None if k in INERTIA_NAMES[:3] else 0.0)
+    I = inertia_tensor(*(inertia[k] for k in INERTIA_NAMES))
+    ev = np.linalg.eigvalsh(I)
+    if ev.min() <= 0:
+        raise VehicleError(f"{w}.inertia: the inertia tensor is not positive definite (eigenvalues {ev})")
+    Ixx, Iyy, Izz = ev  # principal moments must satisfy the triangle inequality
+    if Ixx + Iyy < Izz * (1 - 1e-9):
+        raise VehicleError(f"{w}.inertia: principal moments {ev} violate the triangle inequality (non-physical body)")
+
+    am = d["added_mass"]
+    w = f"{f}: added_mass"
+    if "matrix" in am:
+        MA = np.asarray(am["matrix"], dtype=float)
+        if MA.shape != (6, 6) or not np.all(np.isfinite(MA)):
+            raise VehicleError(f"{w}.matrix: expected a finite 6x6 matrix")
+        if not np.allclose(MA, MA.T, atol=1e-9 * max(1.0, np.abs(MA).max())):
+            raise VehicleError(f"{w}.matrix: must be symmetric (an ideal-fluid added-mass matrix is)")
+    else:
+        MA = np.zeros((6, 6))
+    for i, k in enumerate(ADDED_MASS_NAMES):
+        if k in am:
+            MA[i, i] = _num(am, k, w, nonneg=True)
+    unknown = set(am) - set(ADDED_MASS_NAMES) - {"matrix", "convention"}
+    if unknown:
+        raise VehicleError(f"{w}: unknown key(s) {sorted(unknown)}; expected {', '.join(ADDED_MASS_NAMES)} or matrix")
+    if np.any(np.diag(MA) < 0):
+        raise VehicleError(
+            f"{w}: diagonal added mass must be given as positive magnitudes (M_A = -diag(X_udot, ...) in SNAME sign)"
+        )
+
+    damping = make_term(d["damping"], context=f"{f}: damping")
+    effects_spec = d.get("effects") or []
+    if not isinstance(effects_spec, list):
+        raise VehicleError(f"{f}: effects: expected a list")
+    effects = [make_term(e, context=f"{f}: effects[{i}]") for i, e in enumerate(effects_spec)]
+    if actuators is None:
+        actuators = build_actuators(d.get("thrusters"), f)
+
+    v = Vehicle(
+        name=str(d.get("name", Path(source).stem)),
+        mass=mass,
+        buoyancy=buoyancy,
+        r_g=r_g,
+        r_b=r_b,
+        inertia=inertia,
+        added_mass_matrix=MA,
+        damping=damping,
+        actuators=actuators,
+        effects=effects,
+        g=g,
+        rho=rho,
+        current_ned=current,
+        description=str(d.get("description", "")),
+        source=source,
+        raw=d,
+    )
+    M = v.M
+    ev = np.linalg.eigvalsh(0.5 * (M + M.T))
+    if ev.min() <= 0:
+        raise VehicleError(f"{f}: M = M_RB + M_A is not positive definite (eigenvalues {np.round(ev, 6)})")
+    return v
+
+
+def save_vehicle(vehicle: Vehicle, path: str | Path, *, header: str = "", annotations: Mapping[str, str] | None = None) -> Path:
+    """Write ``vehicle`` as YAML.  ``annotations`` maps a parameter name to a comment
+    placed beside it (e.g. its previous value and uncertainty after a fit)."""
+    path = Path(path)
+    text = yaml.safe_dump(vehicle.to_dict(), sort_keys=False, default_flow_style=None, width=120)
+    if annotations:
+        lines = []
+        for line in text.splitlines():
+            key = line.strip().split(":", 1)[0]
+            if key in annotations and ":" in line:
+                line = f"{line}  # {annotations[key]}"
+            lines.append(line)
+        text = "\n".join(lines) + "\n"
+    if header:
+        text = "".join(f"# {h}\n" for h in header.splitlines()) + text
+    path.write_text(text)
+    return path
