@@ -68,3 +68,10 @@ QRATE = _tensor(_quat_rate, 4, 3)
 CORIOLIS = _tensor(_coriolis, 6, 6)
 #: (9, 3): bilinear(a, b, CROSS) = a x b
 CROSS = _tensor(_cross, 3, 3)
+
+#: (40, 13): bilinear(q, [q, nu], ROT_QRATE) = [R(q) row-major (9), q_dot (4)]; the
+#: linear-velocity part of nu does not enter.
+ROT_QRATE = np.zeros((4, 10, 13))
+ROT_QRATE[:, :4, :9] = ROT.reshape(4, 4, 9)
+ROT_QRATE[:, 7:, 9:] = QRATE.reshape(4, 3, 4)
+ROT_QRATE = ROT_QRATE.reshape(40, 13)

@@ -103,8 +103,10 @@ def quat_conjugate(q: np.ndarray) -> np.ndarray:
 def attitude_error_angle(q_a: np.ndarray, q_b: np.ndarray) -> np.ndarray:
     """Angle (rad, in [0, pi]) of the rotation taking attitude ``q_b`` to ``q_a``;
     the attitude error used in every RMSE.  Shapes ``(..., 4)`` -> ``(...)``."""
-    d = np.abs(np.sum(np.asarray(q_a) * np.asarray(q_b), axis=-1))
-    return 2.0 * np.arccos(np.clip(d, 0.0, 1.0))
+    # 2 atan2(|vec(q_a^* q_b)|, |scalar(q_a^* q_b)|): well conditioned for small angles,
+    # unlike 2 arccos(|q_a . q_b|), whose round-off floor is ~3e-8 rad
+    d = quat_multiply(quat_conjugate(q_a), q_b)
+    return 2.0 * np.arctan2(np.linalg.norm(d[..., 1:], axis=-1), np.abs(d[..., 0]))
 
 
 def unwrap_angles(angles: np.ndarray, axis: int = 0) -> np.ndarray:

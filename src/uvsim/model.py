@@ -30,7 +30,7 @@ import numpy as np
 
 from uvsim.errors import SimulationError, VehicleError
 from uvsim.forces.base import Context
-from uvsim.bilinear import CORIOLIS, CROSS, QRATE, ROT, bilinear
+from uvsim.bilinear import CORIOLIS, CROSS, ROT_QRATE, bilinear
 from uvsim.rigid_body import rigid_body_mass_matrix
 from uvsim.vehicle import ADDED_MASS_NAMES, INERTIA_NAMES, Vehicle, inertia_tensor, load_vehicle
 
@@ -112,6 +112,9 @@ class Model:
         params: dict[str, Any] = dict(vehicle.parameters())
         overrides = dict(overrides or {})
         self.terms = list(vehicle.terms) + list(extra_terms)
+        # terms that need the vehicle (e.g. its thruster allocation) or their own index in
+        # ctx.states get a bound copy: ``term.bind(vehicle, index) -> ForceTerm`` (uvsim.effects)
+        self.terms = [t.bind(vehicle, i) if hasattr(t, "bind") else t for i, t in enumerate(self.terms)]
         for t in extra_terms:
             params.update(t.parameters())
         unknown = set(overrides) - set(params)
@@ -214,8 +217,10 @@ class Model:
         q = y[:, 3:7]
         nu = y[:, 7:13]
         v, w = nu[:, :3], nu[:, 3:]
-        # rotation matrix body -> NED (seed 003 eq. 3) as a bilinear form in q
-        R = bilinear(q, q, ROT).reshape(n, 3, 3)
+        # rotation matrix body -> NED (seed 003 eq. 3) and quaternion rate (eq. 2, 4), both
+        # bilinear in q and [q, w]: one outer product and one matrix product
+        rq = bilinear(q, y[:, 3:13], ROT_QRATE)
+        R = rq[:, :9].reshape(n, 3, 3)
 
         # current (seed 000 eq. 2)
         if self.has_current:
@@ -242,8 +247,9 @@ class Model:
             mass, r_g, M_RB, Minv = self._mass_update(t, y, pos, R, nu, nu_r, u)
             weight = mass * self.g
             MRB_mv, Minv_mv = (lambda x: _matvec(M_RB, x)), (lambda x: _matvec(Minv, x))
-        ctx = Context(t, pos, q, R, nu, nu_r, u, self.input_kind, weight, mass, r_g,
-                      {i: y[:, s] for i, s in self.state_slices.items()}, self.params, self.changes_mass)
+        states = {i: y[:, s] for i, s in self.state_slices.items()} if self.state_slices else {}
+        ctx = Context(t, pos, q, R, nu, nu_r, u, self.input_kind, weight, mass, r_g, states, self.params,
+                      self.changes_mass)
 
         tau = None
         for term, prep in zip(self.terms, self.preps):
@@ -262,7 +268,7 @@ class Model:
 
         # p_dot = R nu_1;  q_dot = 1/2 q (x) [0, nu_2]  (seed 003 eq. 1-4)
         pdot = (R @ v[:, :, None])[:, :, 0] if n < 16 else np.einsum("nij,nj->ni", R, v)
-        parts = [pdot, bilinear(q, w, QRATE), nu_dot]
+        parts = [pdot, rq[:, 9:], nu_dot]
         for i, s in self.state_slices.items():
             parts.append(self.terms[i].state_derivative(ctx, self.preps[i], y[:, s]))
         return np.concatenate(parts, axis=1)

@@ -32,17 +32,20 @@ def plot_table(table, out_dir, n_re: int = 5, prefix: str | None = None) -> list
     for key in ("CL", "CD", "CM"):
         fig, ax = plt.subplots(figsize=(8, 4.5))
         vals = getattr(table, key)
+        seen = set()
         for j in rows:
             ax.plot(deg, vals[j], color="0.6", lw=0.8, zorder=1)
             meth = table.method[j].astype(str)
             for m in np.unique(meth):
                 sel = meth == m
                 ax.scatter(deg[sel], vals[j, sel], s=6, color=METHOD_COLOURS.get(m, "k"), zorder=2,
-                           label=m if j == rows[0] else None)
+                           label=m if m not in seen else None)
+                seen.add(m)
             sm = table.smoothed[j]
             if np.any(sm):
                 ax.scatter(deg[sm], vals[j, sm], s=14, facecolors="none", edgecolors="k", lw=0.5, zorder=3,
-                           label="makima-smoothed" if j == rows[0] else None)
+                           label="makima-smoothed" if "smoothed" not in seen else None)
+                seen.add("smoothed")
         ax.set_xlabel("angle of attack (deg)")
         ax.set_ylabel(key)
         ax.set_xlim(-180, 180)

@@ -54,9 +54,10 @@ def inertia_tensor(Ixx, Iyy, Izz, Ixy=0.0, Ixz=0.0, Iyz=0.0) -> np.ndarray:
     (Fossen 2021 eq. 3.34), broadcasting over array arguments -> (..., 3, 3)."""
     arrs = np.broadcast_arrays(*[np.asarray(a, float) for a in (Ixx, Iyy, Izz, Ixy, Ixz, Iyz)])
     Ixx, Iyy, Izz, Ixy, Ixz, Iyz = arrs
-    row0 = np.stack([Ixx, -Ixy, -Ixz], -1)
-    row1 = np.stack([-Ixy, Iyy, -Iyz], -1)
-    row2 = np.stack([-Ixz, -Iyz, Izz], -1)
+    Ixy, Ixz, Iyz = Ixy + 0.0, Ixz + 0.0, Iyz + 0.0
+    row0 = np.stack([Ixx, 0.0 - Ixy, 0.0 - Ixz], -1)
+    row1 = np.stack([0.0 - Ixy, Iyy, 0.0 - Iyz], -1)
+    row2 = np.stack([0.0 - Ixz, 0.0 - Iyz, Izz], -1)
     return np.stack([row0, row1, row2], -2)
 
 
@@ -383,11 +384,24 @@ def vehicle_from_dict(d: dict, *, source: str = "<dict>", actuators: Actuators |
     return v
 
 
+class _VehicleDumper(yaml.SafeDumper):
+    """Block-style mappings (one parameter per line, so a comment can sit beside it) and
+    flow-style lists of numbers (vectors, matrix rows)."""
+
+
+def _represent_list(dumper, data):
+    flow = all(not isinstance(x, (dict, list)) for x in data)
+    return dumper.represent_sequence("tag:yaml.org,2002:seq", data, flow_style=flow)
+
+
+_VehicleDumper.add_representer(list, _represent_list)
+
+
 def save_vehicle(vehicle: Vehicle, path: str | Path, *, header: str = "", annotations: Mapping[str, str] | None = None) -> Path:
     """Write ``vehicle`` as YAML.  ``annotations`` maps a parameter name to a comment
     placed beside it (e.g. its previous value and uncertainty after a fit)."""
     path = Path(path)
-    text = yaml.safe_dump(vehicle.to_dict(), sort_keys=False, default_flow_style=None, width=120)
+    text = yaml.dump(vehicle.to_dict(), Dumper=_VehicleDumper, sort_keys=False, width=120)
     if annotations:
         lines = []
         for line in text.splitlines():

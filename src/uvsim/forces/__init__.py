@@ -47,9 +47,12 @@ def make_term(spec, *, context: str = "effects") -> ForceTerm:
         return cls(**kwargs)
     except TypeError as exc:
         raise VehicleError(f"{context} ({kind}): {exc}") from None
+    except VehicleError as exc:
+        raise VehicleError(f"{context}: {exc}") from None
 
 
-_BUILTIN_MODULES = ["uvsim.forces.restoring", "uvsim.forces.damping", "uvsim.forces.actuators", "uvsim.effects"]
+_BUILTIN_MODULES = ["uvsim.forces.restoring", "uvsim.forces.damping", "uvsim.forces.actuators", "uvsim.effects",
+                    "uvsim.sam.buildup", "uvsim.sam.subsystems"]
 _loaded = False
 
 

@@ -114,6 +114,14 @@ def build_actuators(spec, where: str) -> Actuators:
     """
     if spec is None:
         return Actuators()
+    if isinstance(spec, dict) and "type" in spec:
+        # a registered Actuators subclass (e.g. SAM's command inputs, uvsim.sam.subsystems)
+        from uvsim.forces import make_term
+
+        term = make_term(spec, context=f"{where}: thrusters")
+        if not isinstance(term, Actuators):
+            raise VehicleError(f"{where}: thrusters.type {spec['type']!r} is not an actuator term")
+        return term
     if not isinstance(spec, dict):
         raise VehicleError(f"{where}: thrusters: expected a mapping with 'units' or 'configuration_matrix'")
     default_curve = spec.get("curve")

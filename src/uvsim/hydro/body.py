@@ -125,3 +125,31 @@ class BodyModel:
 
     def re_from_speed(self, speed: float) -> float:
         return float(speed) * self.L / self.nu
+
+
+def total_incidence(u, v, w):
+    """Total incidence angle and cross-flow plane angle of a body of revolution.
+
+    Parameters
+    ----------
+    u, v, w : array_like
+        Body-frame velocity of the component relative to the water, m/s (x fwd, y stbd, z down).
+
+    Returns
+    -------
+    alpha_t : ndarray
+        ``atan2(sqrt(v^2 + w^2), u)`` in [0, pi], rad; the angle to look the body table up with
+        (axial symmetry: beta is handled by the same table).
+    phi : ndarray
+        ``atan2(v, w)``, rad: direction of the cross-flow velocity in the body y-z plane
+        (0: cross flow along +z, i.e. positive alpha; pi/2: along +y, i.e. positive beta).
+        A positive ``CN`` from the table acts against the cross flow, along
+        ``-(0, sin phi, cos phi)``.
+    """
+    u, v, w = (np.asarray(x, float) for x in (u, v, w))
+    return np.arctan2(np.hypot(v, w), u), np.arctan2(v, w)
+
+
+def reynolds(speed, length: float, nu: float = NU_WATER):
+    """``Re = |speed| length / nu`` (-)."""
+    return np.abs(np.asarray(speed, float)) * float(length) / float(nu)

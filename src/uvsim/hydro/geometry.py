@@ -303,11 +303,8 @@ def load_hull(name_or_path: str | Path) -> HullGeometry:
 def hull_from_stl(path: str | Path, axis: int = 0, n_stations: int = 200, name: str | None = None) -> HullGeometry:
     """Hull stations from an STL mesh (CAD workflow of seed 003 sec. IV-A).
 
-    Slices the mesh with planes normal to ``axis`` and takes, at each station, the
-    largest distance from the axis of the slice's edge crossings as the radius.
-    Only meaningful for (nearly) axisymmetric bodies whose axis is the mesh ``axis``
-    through the origin of the other two coordinates.  Needs the optional package
-    ``numpy-stl`` (``pip install uvsim[cad]``).
+    Needs the optional package ``numpy-stl`` (``pip install 'uvsim[cad]'``); the slicing itself is
+    :func:`hull_from_triangles`.
     """
     try:
         from stl import mesh as stl_mesh  # type: ignore
@@ -317,17 +314,31 @@ def hull_from_stl(path: str | Path, axis: int = 0, n_stations: int = 200, name: 
     if not path.exists():
         raise HydroError(f"STL file {str(path)!r} does not exist")
     m = stl_mesh.Mesh.from_file(str(path))
-    tri = np.asarray(m.vectors, float)  # (n_tri, 3, 3)
-    if tri.size == 0:
-        raise HydroError(f"STL file {str(path)!r} holds no triangles")
+    return hull_from_triangles(np.asarray(m.vectors, float), axis=axis, n_stations=n_stations,
+                               name=name or path.stem, source=f"STL {path.name}")
+
+
+def hull_from_triangles(tri, axis: int = 0, n_stations: int = 200, name: str = "mesh",
+                        source: str = "") -> HullGeometry:
+    """Hull stations from a triangle mesh, array of shape (n_tri, 3 vertices, 3 coordinates), m.
+
+    Slices the mesh with planes normal to ``axis`` and takes, at each station, the largest
+    distance from the axis of the slice's edge crossings as the radius.  Only meaningful for
+    (nearly) axisymmetric bodies whose axis is the mesh ``axis`` through the origin of the other
+    two coordinates.
+    """
+    tri = np.asarray(tri, float)
+    if tri.ndim != 3 or tri.shape[1:] != (3, 3) or tri.shape[0] == 0:
+        raise HydroError(f"mesh {name!r}: expected triangles of shape (n, 3, 3), got {tri.shape}")
+    if axis not in (0, 1, 2):
+        raise HydroError(f"mesh {name!r}: axis must be 0, 1 or 2, got {axis!r}")
     others = [i for i in range(3) if i != axis]
     p0 = tri.reshape(-1, 3)
     xmin, xmax = p0[:, axis].min(), p0[:, axis].max()
     if xmax <= xmin:
-        raise HydroError(f"STL file {str(path)!r}: zero extent along axis {axis}")
+        raise HydroError(f"mesh {name!r}: zero extent along axis {axis}")
     xs = np.linspace(xmin, xmax, n_stations)
-    # edges of all triangles
-    a = np.concatenate([tri[:, 0], tri[:, 1], tri[:, 2]])
+    a = np.concatenate([tri[:, 0], tri[:, 1], tri[:, 2]])  # edges of all triangles
     b = np.concatenate([tri[:, 1], tri[:, 2], tri[:, 0]])
     radii = np.zeros(n_stations)
     for i, xi in enumerate(xs):
@@ -337,8 +348,8 @@ def hull_from_stl(path: str | Path, axis: int = 0, n_stations: int = 200, name: 
             continue
         aa, bb = a[cross], b[cross]
         den = bb[:, axis] - aa[:, axis]
-        t = np.where(np.abs(den) > 0, (xi - aa[:, axis]) / np.where(den == 0, 1, den), 0.0)
+        safe = np.where(den == 0, 1.0, den)
+        t = np.where(den != 0, (xi - aa[:, axis]) / safe, 0.0)
         pts = aa + t[:, None] * (bb - aa)
         radii[i] = np.max(np.hypot(pts[:, others[0]], pts[:, others[1]]))
-    return HullGeometry(x=xs - xmin, r=radii, name=name or path.stem, source=f"STL {path.name}",
-                        meta={"kind": "stl"})
+    return HullGeometry(x=xs - xmin, r=radii, name=name, source=source, meta={"kind": "mesh"})

@@ -1,0 +1,244 @@
+"""Simulate many logged runs (times many parameter sets) in one batched call.
+
+:class:`RunBatch` holds a list of :class:`uvsim.logs.Run` padded to a common
+length: shorter runs repeat their last time stamp (zero-length RK4 steps, see
+:func:`uvsim.simulate_batch`) and their last input.  Each run's initial state is
+built from what it measured (partial initial state, issue 7):
+
+* position: the first valid sample of each logged axis, 0 for axes not logged
+  (they are not compared either);
+* attitude: the first valid attitude, level (identity) when none is logged;
+* velocities / rates: the first logged sample where present; where absent,
+  ``initial_velocity="zero"`` (default, seed 000: runs start at rest),
+  ``"differentiate"`` (a Savitzky-Golay derivative of the smoothed logged
+  positions / attitude at the start, :func:`uvsim.calibration.derivatives`) or a
+  value given per run (e.g. estimated with the parameters by the refinement).
+
+:func:`simulate_dataset` and :func:`residuals` are the general entry points used
+by calibration and diagnosis.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from uvsim.errors import CalibrationError
+from uvsim.metrics import (
+    normalized_residuals,
+    run_metrics,
+    signals_from_run,
+    signals_from_states,
+    weighted_abs_error,
+)
+from uvsim.simulate import simulate_batch
+from uvsim.vehicle import load_vehicle
+
+INITIAL_VELOCITY_MODES = ("zero", "differentiate")
+
+
+@dataclass
+class RunBatch:
+    """Runs padded to one length, ready for :func:`uvsim.simulate_batch`.
+
+    Attributes
+    ----------
+    runs : the runs, in order.
+    t : (R, L) times, s (padded by repeating the last time).
+    inputs : (R, L, k) inputs (padded by repeating the last row).
+    lengths : (R,) true number of samples of each run.
+    input_kind : shared input kind ("force", "thrust" or "pwm").
+    pos0, q0, nu0 : (R, 3), (R, 4), (R, 6) initial states.
+    nu0_known : (R, 6) bool, which initial velocity components were logged.
+    measured : per run, its measured signals (:func:`uvsim.metrics.signals_from_run`).
+    """
+
+    runs: list
+    t: np.ndarray
+    inputs: np.ndarray
+    lengths: np.ndarray
+    input_kind: str
+    pos0: np.ndarray
+    q0: np.ndarray
+    nu0: np.ndarray
+    nu0_known: np.ndarray
+    measured: list = field(repr=False)
+
+    @property
+    def n_runs(self) -> int:
+        return len(self.runs)
+
+    @property
+    def names(self) -> list[str]:
+        return [r.name for r in self.runs]
+
+    def subset(self, index: Sequence[int]) -> "RunBatch":
+        """The batch of runs ``index`` (padding kept as is)."""
+        idx = np.asarray(index, int)
+        return RunBatch([self.runs[i] for i in idx], self.t[idx], self.inputs[idx], self.lengths[idx],
+                        self.input_kind, self.pos0[idx], self.q0[idx], self.nu0[idx], self.nu0_known[idx],
+                        [self.measured[i] for i in idx])
+
+
+def _first_valid(a: np.ndarray) -> np.ndarray:
+    """First finite value of each column of ``a`` (n, k); NaN where none."""
+    out = np.full(a.shape[1], np.nan)
+    for j in range(a.shape[1]):
+        ok = np.flatnonzero(np.isfinite(a[:, j]))
+        if ok.size:
+            out[j] = a[ok[0], j]
+    return out
+
+
+def initial_state(run, *, initial_velocity: str = "zero") -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(pos0 (3,), q0 (4,), nu0 (6,), nu0_known (6,) bool) of one run (module doc)."""
+    if initial_velocity not in INITIAL_VELOCITY_MODES:
+        raise CalibrationError(f"initial_velocity {initial_velocity!r}: expected one of {INITIAL_VELOCITY_MODES}")
+    pos = _first_valid(run.position)
+    pos0 = np.where(np.isfinite(pos), pos, 0.0)
+    q0 = np.array([1.0, 0.0, 0.0, 0.0])
+    if run.has_attitude:
+        q = run.quaternion
+        ok = np.isfinite(q).all(axis=1)
+        if ok.any():
+            q0 = q[int(np.argmax(ok))]
+    vel = run.velocity
+    v0 = vel[0]
+    known = np.isfinite(v0)
+    nu0 = np.where(known, v0, 0.0)
+    if initial_velocity == "differentiate" and not known.all():
+        from uvsim.calibration.derivatives import initial_velocity_estimate
+
+        est = initial_velocity_estimate(run)
+        nu0 = np.where(known, nu0, np.where(np.isfinite(est), est, 0.0))
+    return pos0, q0, nu0, known
+
+
+def prepare_runs(runs: Sequence, *, initial_velocity: str = "zero") -> RunBatch:
+    """Pad ``runs`` (:class:`uvsim.logs.Run`) into a :class:`RunBatch`.
+
+    All runs must share one input kind and input count (they are simulated in
+    one call); raises :class:`CalibrationError` otherwise or for an empty list."""
+    runs = list(runs)
+    if not runs:
+        raise CalibrationError("no runs to simulate (empty list; check the dataset's dof/split selection)")
+    kinds = {(r.input_kind, r.inputs.shape[1]) for r in runs}
+    if len(kinds) > 1:
+        detail = ", ".join(f"{r.name}: {r.input_kind} x{r.inputs.shape[1]}" for r in runs)
+        raise CalibrationError(f"runs mix input kinds/counts and cannot share one batch ({detail})")
+    kind = runs[0].input_kind
+    lengths = np.array([len(r.t) for r in runs])
+    L = int(lengths.max())
+    k = runs[0].inputs.shape[1]
+    T = np.empty((len(runs), L))
+    U = np.empty((len(runs), L, k))
+    P0, Q0, N0, K0 = [], [], [], []
+    for i, r in enumerate(runs):
+        n = lengths[i]
+        T[i, :n] = r.t
+        T[i, n:] = r.t[-1]
+        U[i, :n] = r.inputs
+        U[i, n:] = r.inputs[-1]
+        p, q, nu, kn = initial_state(r, initial_velocity=initial_velocity)
+        P0.append(p), Q0.append(q), N0.append(nu), K0.append(kn)
+    return RunBatch(runs, T, U, lengths, kind, np.array(P0), np.array(Q0), np.array(N0), np.array(K0),
+                    [signals_from_run(r) for r in runs])
+
+
+def simulate_rows(vehicle, batch: RunBatch, run_index: np.ndarray, overrides: Mapping[str, np.ndarray] | None = None,
+                  nu0: np.ndarray | None = None, model=None) -> np.ndarray:
+    """Simulate rows: row ``j`` is run ``run_index[j]`` with parameter values
+    ``overrides[name][j]``.
+
+    Parameters
+    ----------
+    vehicle : Vehicle (or name/file).
+    batch : the runs.
+    run_index : (N,) int, which run each row simulates.
+    overrides : name -> float or (N,) array.
+    nu0 : optional (N, 6) initial velocities replacing the batch's.
+
+    Returns
+    -------
+    y : (N, L, n_y) states (NaN rows for diverged simulations); only the first
+    ``batch.lengths[run_index[j]]`` samples of row j are meaningful.
+    """
+    idx = np.asarray(run_index, int)
+    res = simulate_batch(vehicle, batch.t[idx], batch.inputs[idx], input_kind=batch.input_kind,
+                         pos0=batch.pos0[idx], q0=batch.q0[idx],
+                         nu0=batch.nu0[idx] if nu0 is None else nu0,
+                         overrides=overrides, on_blowup="nan", model=model)
+    return res.y
+
+
+def _with_effects(vehicle, effects):
+    veh = load_vehicle(vehicle)
+    return veh.with_effects(list(effects)) if effects else veh
+
+
+def simulate_dataset(vehicle, runs, overrides: Mapping[str, float] | None = None, effects=None, *,
+                     initial_velocity: str = "zero") -> list[dict[str, np.ndarray]]:
+    """Simulate every run of ``runs`` (a list of Runs, a Dataset or a RunBatch)
+    with one parameter set, in one batched call.
+
+    Parameters
+    ----------
+    vehicle : Vehicle, built-in name or file.
+    runs : list of :class:`uvsim.logs.Run`, a :class:`uvsim.logs.Dataset` or a :class:`RunBatch`.
+    overrides : named parameter values (floats) replacing the vehicle's.
+    effects : extra force terms (dicts or ForceTerm objects) added to the vehicle.
+
+    Returns
+    -------
+    list, one per run, of predicted signals (:func:`uvsim.metrics.signals_from_states`)
+    cut to the run's length, plus ``"states"`` (n, n_y) and ``"t"`` (n,).
+    """
+    batch = as_batch(runs, initial_velocity=initial_velocity)
+    veh = _with_effects(vehicle, effects)
+    y = simulate_rows(veh, batch, np.arange(batch.n_runs), overrides)
+    out = []
+    for i in range(batch.n_runs):
+        n = batch.lengths[i]
+        d = signals_from_states(y[i, :n])
+        d["states"] = y[i, :n]
+        d["t"] = batch.t[i, :n]
+        out.append(d)
+    return out
+
+
+def as_batch(runs, *, initial_velocity: str = "zero") -> RunBatch:
+    """A :class:`RunBatch` from a RunBatch, a Dataset (all runs) or a list of Runs."""
+    if isinstance(runs, RunBatch):
+        return runs
+    if hasattr(runs, "runs") and not isinstance(runs, (list, tuple)):
+        runs = runs.runs
+    return prepare_runs(runs, initial_velocity=initial_velocity)
+
+
+def residuals(vehicle, runs, overrides: Mapping[str, float] | None = None, effects=None, *,
+              scales: Mapping[str, float] | None = None, weights: Mapping[str, float] | None = None,
+              predicted: list | None = None, initial_velocity: str = "zero") -> dict:
+    """Residuals and metrics of ``runs`` under one parameter set.
+
+    Returns
+    -------
+    dict with
+      ``per_run``: {run name: :func:`uvsim.metrics.run_metrics` output};
+      ``vector``: concatenated normalized residuals (:func:`uvsim.metrics.normalized_residuals`,
+      scales from ``scales`` or the measured spread, run weights from the manifest);
+      ``fitness``: seed 000's weighted mean absolute normalized error summed over runs;
+      ``predicted``: the simulated signals (as :func:`simulate_dataset`).
+    """
+    from uvsim.metrics import signal_scales
+
+    batch = as_batch(runs, initial_velocity=initial_velocity)
+    pred = predicted if predicted is not None else simulate_dataset(vehicle, batch, overrides, effects)
+    scales = dict(scales) if scales is not None else signal_scales(batch.measured)
+    per_run, vec, fit = {}, [], 0.0
+    for r, m, p in zip(batch.runs, batch.measured, pred):
+        per_run[r.name] = run_metrics(m, p)
+        vec.append(normalized_residuals(m, p, scales, weights, run_weight=r.weight, fill=1e3))
+        fit += r.weight * float(weighted_abs_error(m, p, scales, weights))
+    return {"per_run": per_run, "vector": np.concatenate(vec), "fitness": fit, "predicted": pred,
+            "scales": scales}

@@ -1,0 +1,287 @@
+"""The genetic algorithm of seed 000 (sec. 4.4, Table 4) on DEAP.
+
+One population per DOF (each DOF is optimized individually), evolved in lock
+step so that every generation's evaluations of all DOFs go through one map call
+(one batched simulation per block, :mod:`uvsim.calibration.evaluation`).
+
+Per generation and DOF (DEAP's ``eaSimple`` scheme, Table 4 settings):
+
+1. selection: ``tools.selTournament`` (tournament size 5), as many as the population;
+2. variation: ``algorithms.varAnd`` with two-point crossover (``tools.cxTwoPoint``,
+   probability 0.5) and Gaussian mutation (``tools.mutGaussian``, probability
+   0.25 per offspring, ``indpb`` per gene, ``sigma`` in units of the bound width);
+   genes live in [0, 1] (scaled bounds) and are clipped back into them;
+3. evaluation of the changed individuals; the offspring replace the population;
+4. a hall of fame keeps the fittest individual found ("returned the fittest
+   solution found", sec. 4.4 vi).
+
+Initialization (sec. 4.4 i): ``seeded_fraction`` of the first generation is built
+from the initial (experimental) values - one exact copy, the rest with a small
+Gaussian spread ``seeded_sigma`` - the rest uniformly at random within the bounds.
+
+Randomness: DEAP's operators draw from Python's :mod:`random`; it and numpy are
+seeded explicitly from ``seed`` and their states are saved in each checkpoint, so
+an interrupted run resumed from its checkpoint continues exactly as if it had not
+been interrupted.  The DEAP classes are defined here (subclassing
+``deap.base.Fitness`` directly), not through the global ``deap.creator``.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import pickle
+import random
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+from deap import algorithms, base, tools
+
+from uvsim.errors import CalibrationError
+
+CHECKPOINT_VERSION = 1
+
+
+class FitnessMin(base.Fitness):
+    """Single-objective fitness to minimize (weighted absolute error)."""
+
+    weights = (-1.0,)
+
+
+class Individual(list):
+    """Genes in [0, 1] (scaled parameter bounds) plus the DOF they belong to."""
+
+    def __init__(self, genes=(), dof: str = ""):
+        super().__init__(genes)
+        self.dof = dof
+        self.fitness = FitnessMin()
+
+    def __reduce__(self):
+        return (_rebuild_individual, (list(self), self.dof, self.fitness.values))
+
+
+def _rebuild_individual(genes, dof, values):
+    ind = Individual(genes, dof)
+    if values:
+        ind.fitness.values = values
+    return ind
+
+
+@dataclass
+class GASettings:
+    """seed 000 Table 4 (population 60, 30 generations, tournament 5, two-point
+    crossover 0.5, Gaussian mutation 0.25) plus the details the paper does not give."""
+
+    population: int = 60
+    generations: int = 30
+    tournament: int = 5
+    crossover: float = 0.5
+    mutation: float = 0.25
+    mutation_indpb: float = 0.5    # per-gene probability inside a mutated individual (our choice)
+    mutation_sigma: float = 0.1    # Gaussian sigma, fraction of the bound width (our choice)
+    seeded_fraction: float = 0.1   # share of generation 0 built from the initial values (our choice)
+    seeded_sigma: float = 0.02     # spread of the seeded individuals, fraction of bound width
+    seed: int = 0
+
+    def validate(self):
+        if self.population < 2:
+            raise CalibrationError(f"population must be >= 2, got {self.population}")
+        if self.generations < 0:
+            raise CalibrationError(f"generations must be >= 0, got {self.generations}")
+        if not 1 <= self.tournament:
+            raise CalibrationError(f"tournament size must be >= 1, got {self.tournament}")
+        for k in ("crossover", "mutation", "mutation_indpb", "seeded_fraction"):
+            v = getattr(self, k)
+            if not 0 <= v <= 1:
+                raise CalibrationError(f"{k} must be a probability in [0, 1], got {v}")
+        if self.mutation_sigma <= 0 or self.seeded_sigma < 0:
+            raise CalibrationError("mutation_sigma must be > 0 and seeded_sigma >= 0")
+
+
+def _clip(ind):
+    for i, g in enumerate(ind):
+        ind[i] = min(1.0, max(0.0, g))
+    return ind
+
+
+def make_toolbox(settings: GASettings, hook) -> base.Toolbox:
+    tb = base.Toolbox()
+    tb.register("mate", tools.cxTwoPoint)
+    tb.register("mutate", tools.mutGaussian, mu=0.0, sigma=settings.mutation_sigma, indpb=settings.mutation_indpb)
+    tb.register("select", tools.selTournament, tournsize=settings.tournament)
+    tb.register("map", hook)
+    return tb
+
+
+def initial_population(dof: str, p: int, initial_genes: np.ndarray, settings: GASettings) -> list:
+    """Generation 0 of one DOF (module doc)."""
+    n_seed = max(1, int(round(settings.seeded_fraction * settings.population))) if settings.seeded_fraction > 0 else 0
+    pop = []
+    for i in range(settings.population):
+        if i == 0 and n_seed:
+            genes = list(map(float, initial_genes))
+        elif i < n_seed:
+            genes = [min(1.0, max(0.0, g + random.gauss(0.0, settings.seeded_sigma))) for g in initial_genes]
+        else:
+            genes = [random.random() for _ in range(p)]
+        pop.append(Individual(genes, dof))
+    return pop
+
+
+def fingerprint(obj) -> str:
+    """Stable hash of settings + problem description, stored in checkpoints."""
+    return hashlib.sha256(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
+def _stats():
+    s = tools.Statistics(lambda ind: ind.fitness.values[0])
+    s.register("min", np.min)
+    s.register("avg", np.mean)
+    s.register("max", np.max)
+    s.register("std", np.std)
+    return s
+
+
+def _record(logbook, gen, pop, nevals, wall):
+    fits = np.array([ind.fitness.values[0] for ind in pop])
+    finite = fits[np.isfinite(fits)]
+    logbook.record(gen=gen, nevals=nevals, min=float(fits.min()),
+                   avg=float(finite.mean()) if finite.size else float("inf"),
+                   max=float(fits.max()), std=float(finite.std()) if finite.size else float("nan"),
+                   wall_s=round(wall, 3))
+
+
+def _save_checkpoint(path: Path, state: dict) -> None:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp")
+    with open(tmp, "wb") as fh:
+        pickle.dump(state, fh, protocol=pickle.HIGHEST_PROTOCOL)
+    os.replace(tmp, path)
+
+
+def load_checkpoint(path) -> dict:
+    path = Path(path)
+    if not path.is_file():
+        raise CalibrationError(f"checkpoint {path} does not exist")
+    try:
+        with open(path, "rb") as fh:
+            state = pickle.load(fh)
+    except Exception as exc:  # corrupted or foreign pickle
+        raise CalibrationError(f"checkpoint {path} cannot be read: {exc}") from None
+    if not isinstance(state, dict) or state.get("version") != CHECKPOINT_VERSION:
+        raise CalibrationError(f"checkpoint {path} is not a uvsim calibration checkpoint (version {CHECKPOINT_VERSION})")
+    return state
+
+
+def run_ga(problems: dict, evaluator, hook, settings: GASettings, *, checkpoint=None, resume=None,
+           progress: bool = False, problem_key: str = "", stop_after: int | None = None) -> dict:
+    """Evolve one population per DOF in lock step.
+
+    Parameters
+    ----------
+    problems : dof -> :class:`uvsim.calibration.evaluation.DofProblem`.
+    evaluator : the fitness callable (a :class:`BatchEvaluator`).
+    hook : DEAP map hook (SerialMap / ProcessMap / DaskMap).
+    checkpoint : path written after every generation (None: no checkpoints).
+    resume : path of a checkpoint to continue from (must match settings and problem).
+    problem_key : fingerprint of the dataset/vehicle/problem, checked on resume.
+    stop_after : stop after this generation (for tests of resume); None = run all.
+
+    Returns
+    -------
+    dict with ``best`` (dof -> genes), ``best_fitness`` (dof -> float),
+    ``logbooks`` (dof -> deap.tools.Logbook), ``evaluations`` (int),
+    ``generations_run`` (int), ``wall_s`` (float, including time before a resume).
+    """
+    settings.validate()
+    dofs = list(problems)
+    key = fingerprint({"settings": asdict(settings), "problem": problem_key, "dofs": dofs})
+    tb = make_toolbox(settings, hook)
+    tb.register("evaluate", evaluator)
+    t_start = time.perf_counter()
+    if resume is not None:
+        st = load_checkpoint(resume)
+        if st["key"] != key:
+            raise CalibrationError(
+                f"checkpoint {resume} was written for different settings, data or DOFs; resume needs the same "
+                "--data, --vehicle, --dof, --seed, --population, --generations and GA settings")
+        pops = st["populations"]
+        hofs = st["halls"]
+        logbooks = st["logbooks"]
+        evaluations = st["evaluations"]
+        gen0 = st["generation"] + 1
+        prior_wall = st["wall_s"]
+        random.setstate(st["random_state"])
+        np.random.set_state(st["numpy_state"])
+    else:
+        random.seed(settings.seed)
+        np.random.seed(settings.seed % (2 ** 32))
+        pops = {d: initial_population(d, len(problems[d].names), problems[d].encode(problems[d].initial), settings)
+                for d in dofs}
+        hofs = {d: tools.HallOfFame(1) for d in dofs}
+        logbooks = {}
+        for d in dofs:
+            lb = tools.Logbook()
+            lb.header = ["gen", "nevals", "min", "avg", "max", "std", "wall_s"]
+            logbooks[d] = lb
+        evaluations = 0
+        gen0 = 0
+        prior_wall = 0.0
+
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=settings.generations + 1, initial=gen0, desc="GA", unit="gen")
+
+    def wall():
+        return prior_wall + time.perf_counter() - t_start
+
+    last = gen0 - 1
+    for gen in range(gen0, settings.generations + 1):
+        last = gen
+        t_gen = time.perf_counter()
+        if gen == 0:
+            offspring = pops
+        else:
+            offspring = {}
+            for d in dofs:
+                off = tb.select(pops[d], len(pops[d]))
+                off = algorithms.varAnd(off, tb, settings.crossover, settings.mutation)
+                offspring[d] = [_clip(ind) for ind in off]
+        invalid = [ind for d in dofs for ind in offspring[d] if not ind.fitness.valid]
+        fits = tb.map(tb.evaluate, invalid)
+        for ind, fit in zip(invalid, fits):
+            ind.fitness.values = fit
+        evaluations += len(invalid)
+        for d in dofs:
+            pops[d] = offspring[d]
+            hofs[d].update(pops[d])
+            _record(logbooks[d], gen, pops[d], sum(1 for i in invalid if i.dof == d), wall())
+        if checkpoint is not None:
+            _save_checkpoint(checkpoint, {
+                "version": CHECKPOINT_VERSION, "key": key, "generation": gen, "populations": pops,
+                "halls": hofs, "logbooks": logbooks, "evaluations": evaluations, "wall_s": wall(),
+                "random_state": random.getstate(), "numpy_state": np.random.get_state(),
+                "settings": asdict(settings), "dofs": dofs,
+            })
+        if bar is not None:
+            dt = time.perf_counter() - t_gen
+            best = sum(h[0].fitness.values[0] for h in hofs.values())
+            bar.set_postfix(best=f"{best:.4g}", evals_per_s=f"{len(invalid) / dt if dt > 0 else 0:.0f}")
+            bar.update(1)
+        if stop_after is not None and gen >= stop_after:
+            break
+    if bar is not None:
+        bar.close()
+    return {
+        "best": {d: list(hofs[d][0]) for d in dofs},
+        "best_fitness": {d: float(hofs[d][0].fitness.values[0]) for d in dofs},
+        "logbooks": logbooks,
+        "evaluations": evaluations,
+        "generations_run": last,
+        "wall_s": wall(),
+    }

@@ -1,0 +1,89 @@
+"""Which parameters each degree of freedom fits, and their search bounds.
+
+Seed 000 Table 3: linear DOFs fit added mass, linear and quadratic damping;
+rotational DOFs also the moment of inertia.  Bounds are "chosen from the
+initial values ... with some reasonable margin up and down" (sec. 4.4); here the
+default margin is +-50 % of each initial value (Table 5 moved values by up to
+25 %), overridable per parameter.
+"""
+from __future__ import annotations
+
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from uvsim.errors import CalibrationError
+
+#: seed 000 Table 3, in the order inertia, added mass, linear, quadratic damping.
+DOF_PARAMETERS = {
+    "surge": ("X_udot", "X_u", "X_uu"),
+    "sway": ("Y_vdot", "Y_v", "Y_vv"),
+    "heave": ("Z_wdot", "Z_w", "Z_ww"),
+    "roll": ("I_xx", "K_pdot", "K_p", "K_pp"),
+    "pitch": ("I_yy", "M_qdot", "M_q", "M_qq"),
+    "yaw": ("I_zz", "N_rdot", "N_r", "N_rr"),
+}
+CALIBRATION_DOFS = tuple(DOF_PARAMETERS)
+#: Rigid-body inertia and added-mass parameter of each DOF: in decoupled runs they
+#: only enter as their sum (the effective mass / inertia).
+EFFECTIVE_INERTIA = {
+    "surge": ("m", "X_udot"), "sway": ("m", "Y_vdot"), "heave": ("m", "Z_wdot"),
+    "roll": ("I_xx", "K_pdot"), "pitch": ("I_yy", "M_qdot"), "yaw": ("I_zz", "N_rdot"),
+}
+LINEAR_DAMPING = {"surge": "X_u", "sway": "Y_v", "heave": "Z_w", "roll": "K_p", "pitch": "M_q", "yaw": "N_r"}
+QUADRATIC_DAMPING = {"surge": "X_uu", "sway": "Y_vv", "heave": "Z_ww", "roll": "K_pp", "pitch": "M_qq",
+                     "yaw": "N_rr"}
+DEFAULT_MARGIN = 0.5
+
+
+def parse_dofs(dofs) -> list[str]:
+    """A list of DOF names from "surge,yaw" or a sequence; validated."""
+    if dofs is None:
+        return list(CALIBRATION_DOFS)
+    if isinstance(dofs, str):
+        dofs = [d.strip() for d in dofs.split(",") if d.strip()]
+    dofs = list(dofs)
+    bad = [d for d in dofs if d not in DOF_PARAMETERS]
+    if bad or not dofs:
+        raise CalibrationError(f"dof(s) {bad or dofs!r}: expected a non-empty subset of {', '.join(CALIBRATION_DOFS)}")
+    if len(set(dofs)) != len(dofs):
+        raise CalibrationError(f"dofs {dofs}: a DOF is listed twice")
+    return dofs
+
+
+def parameter_bounds(names: Sequence[str], initial: Mapping[str, float], *, margin: float = DEFAULT_MARGIN,
+                     bounds: Mapping[str, Sequence[float]] | None = None) -> np.ndarray:
+    """(p, 2) lower/upper bounds: ``initial * (1 -+ margin)`` (ordered) unless given.
+
+    Raises :class:`CalibrationError` for an initial value of 0 without explicit
+    bounds (a relative margin has no width), for bounds not containing the initial
+    value, or for a bound crossing zero on a damping (sign-constrained) parameter."""
+    bounds = dict(bounds or {})
+    if not 0 < margin < 1:
+        raise CalibrationError(f"margin {margin!r}: expected a fraction between 0 and 1 (0.5 = +-50 %)")
+    out = []
+    for k in names:
+        v = float(initial[k])
+        if k in bounds:
+            b = bounds[k]
+            try:
+                lo, hi = (float(b[0]), float(b[1]))
+            except (TypeError, ValueError, IndexError):
+                raise CalibrationError(f"bounds for {k}: expected (low, high), got {b!r}") from None
+        else:
+            if v == 0:
+                raise CalibrationError(f"parameter {k} starts at 0, so a relative margin gives no search range; "
+                                       "give its bounds explicitly (bounds={'%s': (low, high)})" % k)
+            lo, hi = sorted((v * (1 - margin), v * (1 + margin)))
+        if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+            raise CalibrationError(f"bounds for {k}: need finite low < high, got ({lo}, {hi})")
+        if not lo <= v <= hi:
+            raise CalibrationError(f"bounds for {k}: ({lo}, {hi}) do not contain the initial value {v}")
+        if k in LINEAR_DAMPING.values() or k in QUADRATIC_DAMPING.values():
+            if hi > 0:
+                raise CalibrationError(f"bounds for {k}: ({lo}, {hi}) allow a positive damping coefficient "
+                                       "(paper sign: damping is <= 0)")
+        elif lo <= 0 and (k.startswith("I_") or k.endswith("dot")):
+            raise CalibrationError(f"bounds for {k}: ({lo}, {hi}) allow a non-positive inertia/added mass")
+        out.append((lo, hi))
+    return np.array(out, float).reshape(-1, 2)

@@ -1,0 +1,1 @@
+"""Sub-commands of the ``uvsim`` CLI (one module each, see :mod:`uvsim.cli`)."""

@@ -1,0 +1,91 @@
+"""``tether``: pull and drag of an umbilical cable attached to the vehicle.
+
+Seed 000 (sec. 5 and 6) names the umbilical among the unmodelled effects of the
+tethered BlueROV2 ("disturbances introduced by the tether"); seed 002 lists
+"tether dynamics not considered" among its assumptions.  This is the simplest
+physical model with the right signatures (a quasi-static cable, no cable
+dynamics; see Eidsvik & Schjolberg 2016, seed 000 ref. 16, for beam models).
+
+Geometry.  The cable leaves the vehicle at the attachment point ``r_a`` (m,
+body) and runs straight to an anchor ``p_0`` (m, NED; the spool, the tank edge
+or the surface float).  With the attachment point in NED ``p_a = p + R r_a``::
+
+    d = p_0 - p_a,   L = |d|,   e = d / L          (unit vector towards the anchor)
+
+Pull.  A constant tension ``T_0`` (spool / float pull) plus an elastic part when
+the cable is stretched beyond its slack length ``L_s`` (stiffness ``k``)::
+
+    F_pull = (T_0 + k max(0, L - L_s)) e                                   (NED)
+
+so the pull grows with the distance from the anchor (the "growing with distance
+from the start" signature).
+
+Drag.  The part of the attachment-point velocity relative to the water that is
+normal to the cable, ``v_n = v_a - (v_a . e) e`` with ``v_a = R (nu_r1 + omega x
+r_a)``, drags a cable of diameter ``D`` and length ``l``.  The normal speed grows
+linearly from 0 at the anchor to ``|v_n|`` at the vehicle, so the cable's total
+cross-flow drag (quadratic drag, Morison form) is ``1/3`` of a cable moving
+uniformly; all of it is carried by the vehicle (an upper bound)::
+
+    F_drag = -1/2 rho C_d D (l / 3) |v_n| v_n                             (NED)
+
+Generalized force on the vehicle (body frame)::
+
+    f = R^T (F_pull + F_drag),     tau = [f;  r_a x f]
+
+Defaults: ``C_d = 1.2`` (circular cylinder in cross-flow at subcritical Re,
+Hoerner 1965 "Fluid-Dynamic Drag" ch. 3), ``D = 0.0076`` m (Blue Robotics Fathom
+slim tether, 7.6 mm, bluerobotics.com product page), ``rho = 1000`` kg/m^3.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from uvsim.effects.base import Effect, Field
+from uvsim.forces import register
+from uvsim.rigid_body import cross
+
+
+@register("tether")
+class Tether(Effect):
+    """Umbilical pull (tension + stiffness beyond slack) and cross-flow drag."""
+
+    FIELDS = (
+        Field("attach_x", "m", -5.0, 5.0, 0.0, "the body x position of the tether attachment"),
+        Field("attach_y", "m", -5.0, 5.0, 0.0, "the body y position of the tether attachment"),
+        Field("attach_z", "m", -5.0, 5.0, 0.0, "the body z position of the tether attachment"),
+        Field("anchor_n", "m", -1000.0, 1000.0, 0.0, "the NED north position of the tether anchor"),
+        Field("anchor_e", "m", -1000.0, 1000.0, 0.0, "the NED east position of the tether anchor"),
+        Field("anchor_d", "m", -1000.0, 1000.0, 0.0, "the NED down position of the tether anchor"),
+        Field("tension", "N", 0.0, 1000.0, 0.0, "the constant tether pull"),
+        Field("stiffness", "N/m", 0.0, 1.0e4, 0.0, "the tether pull per metre beyond the slack length"),
+        Field("slack_length", "m", 0.0, 1.0e4, 0.0, "the distance to the anchor at which the tether becomes taut"),
+        Field("cd", "-", 0.0, 3.0, 1.2, "the cross-flow drag coefficient of the cable"),
+        Field("diameter", "m", 0.0, 0.2, 0.0076, "the cable diameter"),
+        Field("length", "m", 0.0, 1.0e4, 0.0, "the wetted cable length"),
+        Field("rho", "kg/m^3", 900.0, 1100.0, 1000.0, "the water density"),
+    )
+
+    def prepare(self, params, n):
+        g = {f.key: self.p(params, f.key, n) for f in self.FIELDS}
+        r_a = np.stack([g["attach_x"], g["attach_y"], g["attach_z"]], -1)
+        p0 = np.stack([g["anchor_n"], g["anchor_e"], g["anchor_d"]], -1)
+        c_drag = 0.5 * g["rho"] * g["cd"] * g["diameter"] * g["length"] / 3.0
+        return r_a, p0, g["tension"], g["stiffness"], g["slack_length"], c_drag
+
+    def forces(self, ctx, prep):
+        r_a, p0, T0, k, Ls, c_drag = prep
+        R = ctx.R
+        p_a = ctx.pos + np.einsum("nij,nj->ni", R, np.broadcast_to(r_a, ctx.pos.shape))
+        d = p0 - p_a
+        L = np.linalg.norm(d, axis=1)
+        e = d / np.maximum(L, 1e-9)[:, None]
+        pull = T0 + k * np.maximum(0.0, L - Ls)
+        F = pull[:, None] * e
+        if np.any(c_drag):
+            v_b = ctx.nu_r[:, :3] + cross(ctx.nu_r[:, 3:], np.broadcast_to(r_a, ctx.pos.shape))
+            v_a = np.einsum("nij,nj->ni", R, v_b)
+            v_n = v_a - np.sum(v_a * e, axis=1, keepdims=True) * e
+            F = F - (c_drag * np.linalg.norm(v_n, axis=1))[:, None] * v_n
+        f = np.einsum("nji,nj->ni", R, F)  # R^T F
+        return np.concatenate([f, cross(np.broadcast_to(r_a, f.shape), f)], axis=1)

@@ -1,0 +1,154 @@
+"""Thruster effects: ``thruster_lag`` (first-order actuator dynamics) and
+``thrust_asymmetry`` (reverse thrust weaker than forward).
+
+Both act on what the actuators deliver, so they are bound to the vehicle's
+thruster allocation ``B`` (6 x n, :mod:`uvsim.forces.actuators`) when a
+:class:`uvsim.model.Model` is built (``bind``).  With per-thruster inputs
+(``thrust`` or ``pwm``, mapped by the thruster curves to the commanded thrust
+``f_c``) they act on each thruster; with generalized-force inputs (``force``)
+they act on each component of ``tau_c``.
+
+``thruster_lag`` (seed 002 sec. 6: "the difference in the response is due to the
+thrusters dynamics that are not included in the simulation"; seed 000 sec. 6:
+differences "particularly in the transient response").  Each thruster's thrust
+follows its command with a first-order lag of time constant ``T`` (s), the usual
+motor + propeller-inflow model (Fossen 2021 sec. 6.7; Yoerger et al. 1990 give a
+more detailed, nonlinear model)::
+
+    T f_dot = f_c - f,            tau_act = B f
+
+The effect holds ``f`` as internal states (one per thruster; six for force
+inputs) and contributes ``B (f - f_c)``, so with the ``actuators`` term (which
+contributes ``B f_c``) the total is ``B f``.  Initial state: ``start: steady``
+(default, ``f = f_c`` at the first sample, no artificial transient at the start
+of a log) or ``start: zero`` (thrusters off before the log starts).  RK4 needs
+``T`` above about ``dt / 2.8`` to stay stable; a smaller ``T`` is no lag at all at
+the log's sample rate.
+
+``thrust_asymmetry`` (seed 002 sec. 5 remarks on propeller interaction; the
+T200's reverse branch gives roughly 80 % of the forward thrust at the same PWM
+offset, Blue Robotics T200 performance data).  Negative (reverse) thrusts are
+scaled by ``ratio``::
+
+    f_eff = f_c            if f_c >= 0
+    f_eff = ratio * f_c    if f_c < 0
+    contribution = B (f_eff - f_c) = (ratio - 1) B min(f_c, 0)
+
+A ``ratio`` below 1 means reverse thrust is weaker than the thrust curve (or the
+force inputs) claim.  The residual it leaves is "sign-dependent on the input".
+"""
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+
+from uvsim.effects.base import Effect, Field
+from uvsim.errors import SimulationError, VehicleError
+from uvsim.forces import register
+
+
+class _ActuatorEffect(Effect):
+    """An effect bound to the vehicle's actuators (see module docstring)."""
+
+    _act = None
+    _index = None
+
+    def bind(self, vehicle, index):
+        new = copy.copy(self)
+        new._act = vehicle.actuators
+        new._index = index
+        return new
+
+    def _command_prep(self, params, n):
+        if self._act is None:
+            raise SimulationError(f"effects ({self.kind}): not bound to a vehicle; use it inside a uvsim Model")
+        groups = self._act.prepare(params, n)["groups"] if self._act.matrix is not None else []
+        return {"groups": groups, "u": None, "fc": None}
+
+    def commanded(self, ctx, cache):
+        """Commanded thrusts ``f_c`` (n, n_thr) or forces ``tau_c`` (n, 6); cached per input array."""
+        if cache["u"] is ctx.u:
+            return cache["fc"]
+        if ctx.input_kind == "force":
+            fc = ctx.u
+        else:
+            fc = self._act.thrusts(ctx.u, ctx.input_kind, cache["groups"])
+        cache["u"], cache["fc"] = ctx.u, fc
+        return fc
+
+    def to_tau(self, ctx, f):
+        """Generalized force of per-thruster forces ``f`` (or ``f`` itself for force inputs)."""
+        if ctx.input_kind == "force":
+            return f
+        return f @ self._act.matrix.T
+
+
+@register("thruster_lag")
+class ThrusterLag(_ActuatorEffect):
+    """First-order thruster dynamics ``T f_dot = f_c - f`` (see module docstring)."""
+
+    FIELDS = (
+        Field("time_constant", "s", 0.0, 10.0, None, "the thruster time constant", lo_open=True),
+    )
+    OPTIONS = {"start": "steady"}
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        if self.options["start"] not in ("steady", "zero"):
+            raise VehicleError(
+                f"effects (thruster_lag).start = {self.options['start']!r}: expected 'steady' or 'zero'")
+
+    @property
+    def n_states(self):
+        n_thr = 0 if self._act is None else self._act.n_thrusters
+        return max(6, n_thr)
+
+    def state_names(self):
+        return [f"thrust_lag_{i + 1}" for i in range(self.n_states)]
+
+    def prepare(self, params, n):
+        prep = self._command_prep(params, n)
+        prep["T"] = self.p(params, "time_constant", n)[:, None]
+        return prep
+
+    def _width(self, ctx):
+        return 6 if ctx.input_kind == "force" else self._act.n_thrusters
+
+    def forces(self, ctx, prep):
+        fc = self.commanded(ctx, prep)
+        f = ctx.states[self._index][:, : fc.shape[1]]
+        return self.to_tau(ctx, f - fc)
+
+    def state_derivative(self, ctx, prep, x):
+        fc = self.commanded(ctx, prep)
+        k = fc.shape[1]
+        out = np.zeros_like(x)
+        out[:, :k] = (fc - x[:, :k]) / prep["T"]
+        return out
+
+    def initial_state(self, prep, n, u0, input_kind):
+        x = np.zeros((n, self.n_states))
+        if self.options["start"] == "steady" and u0 is not None and np.shape(u0)[-1]:
+            u0 = np.broadcast_to(np.asarray(u0, float), (n, np.shape(u0)[-1]))
+            fc = u0 if input_kind == "force" else self._act.thrusts(u0, input_kind, prep["groups"])
+            x[:, : fc.shape[1]] = fc
+        return x
+
+
+@register("thrust_asymmetry")
+class ThrustAsymmetry(_ActuatorEffect):
+    """Reverse thrust scaled by ``ratio`` (see module docstring)."""
+
+    FIELDS = (
+        Field("ratio", "-", 0.0, 2.0, None, "the ratio of actual to modelled reverse thrust", lo_open=True),
+    )
+
+    def prepare(self, params, n):
+        prep = self._command_prep(params, n)
+        prep["ratio"] = self.p(params, "ratio", n)[:, None]
+        return prep
+
+    def forces(self, ctx, prep):
+        fc = self.commanded(ctx, prep)
+        return self.to_tau(ctx, (prep["ratio"] - 1.0) * np.minimum(fc, 0.0))

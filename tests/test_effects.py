@@ -1,0 +1,212 @@
+"""Effects catalogue: forces by hand computation, validation, vehicle-file round
+trip, and simulate() with the effect in the vehicle file."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import uvsim
+from uvsim.effects import CATALOGUE
+from uvsim.errors import VehicleError
+from uvsim.forces import make_term
+from uvsim.model import Model
+
+VEH = uvsim.load_vehicle("bluerov2_heavy")
+
+
+def effect_force(effect, *, pos=(0, 0, 1.0), q=(1, 0, 0, 0), nu=(0, 0, 0, 0, 0, 0), u=None, kind="force",
+                 states=None):
+    """Generalized force the effect adds, from the model's accelerations:
+    ``M (nu_dot_with - nu_dot_without)`` at the same state (inertia and Coriolis cancel)."""
+    u = np.zeros(6 if kind == "force" else 8) if u is None else np.asarray(u, float)
+    base = Model(VEH, input_kind=kind)
+    with_eff = Model(VEH.with_effects([effect]), input_kind=kind)
+    y0 = base.initial_state(pos, q, nu)
+    y1 = with_eff.initial_state(pos, q, nu, u[None])
+    if states is not None:
+        y1[0, 13:13 + len(states)] = states
+    d = with_eff.rhs(0.0, y1, u[None])[0, 7:13] - base.rhs(0.0, y0, u[None])[0, 7:13]
+    return VEH.M @ d
+
+
+def test_catalogue_names_registered():
+    from uvsim.forces import registered
+
+    for name in ("current", "tether", "thruster_lag", "ballast", "thrust_asymmetry", "coupled_damping"):
+        assert name in registered()
+        assert name in CATALOGUE
+
+
+def test_ballast_force_and_moment_by_hand():
+    tau = effect_force({"type": "ballast", "weight": 2.0, "x": 0.1, "y": -0.05})
+    # f = w k, k = [0, 0, 1] level; m = r x f = [y w, -x w, 0]
+    np.testing.assert_allclose(tau, [0, 0, 2.0, -0.05 * 2.0, -0.1 * 2.0, 0], atol=1e-9)
+    # rolled 90 deg to starboard: NED down is body -y ... k = R^T e3 = [0, sin(phi), cos(phi)] -> [0, 1, 0]
+    phi = np.pi / 2
+    q = [np.cos(phi / 2), np.sin(phi / 2), 0, 0]
+    tau = effect_force({"type": "ballast", "weight": 2.0, "x": 0.1}, q=q)
+    np.testing.assert_allclose(tau[:3], [0, 2.0, 0], atol=1e-9)
+    np.testing.assert_allclose(tau[3:], np.cross([0.1, 0, 0], [0, 2.0, 0]), atol=1e-9)
+
+
+def test_tether_pull_and_moment_by_hand():
+    eff = {"type": "tether", "anchor_n": -3.0, "anchor_d": 1.0, "stiffness": 2.0, "slack_length": 1.0,
+           "attach_z": -0.1, "length": 0.0}
+    tau = effect_force(eff, pos=(0, 0, 1.1))  # attachment at NED (0, 0, 1.0): 3 m from the anchor
+    # pull = k (L - L_s) = 2 (3 - 1) = 4 N towards -x; moment r_a x f = [0, 0, -0.1] x [-4, 0, 0] = [0, 0.4, 0]
+    np.testing.assert_allclose(tau, [-4.0, 0, 0, 0, 0.4, 0], atol=1e-9)
+    # constant tension only, slack: 5 N towards the anchor
+    tau = effect_force({"type": "tether", "anchor_n": -3.0, "anchor_d": 1.0, "tension": 5.0, "slack_length": 10.0})
+    np.testing.assert_allclose(tau, [-5.0, 0, 0, 0, 0, 0], atol=1e-9)
+
+
+def test_tether_drag_by_hand():
+    # cable along x, vehicle moving in sway at 0.5 m/s: normal speed 0.5
+    eff = {"type": "tether", "anchor_n": -3.0, "anchor_d": 1.0, "length": 6.0, "cd": 1.2, "diameter": 0.0076}
+    tau = effect_force(eff, nu=(0, 0.5, 0, 0, 0, 0))
+    expected = -0.5 * 1000 * 1.2 * 0.0076 * (6.0 / 3) * 0.5 * 0.5
+    np.testing.assert_allclose(tau, [0, expected, 0, 0, 0, 0], atol=1e-9)
+    # motion along the cable: no cross-flow drag
+    tau = effect_force(eff, nu=(0.5, 0, 0, 0, 0, 0))
+    np.testing.assert_allclose(tau, 0, atol=1e-9)
+
+
+def test_current_acts_through_relative_velocity():
+    # at rest in a 0.2 m/s northward current, heading north: u_r = -0.2, so the damping pushes forward
+    tau = effect_force({"type": "current", "n": 0.2})
+    p = VEH.parameters()
+    ur = -0.2
+    expected = p["X_u"] * ur + p["X_uu"] * abs(ur) * ur  # damping on the relative velocity (paper sign)
+    assert expected > 0
+    np.testing.assert_allclose(tau, [expected, 0, 0, 0, 0, 0], atol=1e-6)
+    assert VEH.with_effects([{"type": "current", "e": 0.1}]).parameters()["current_e"] == 0.1
+
+
+def test_thruster_lag_force_and_states():
+    B = VEH.actuators.matrix
+    f_c = np.array([10.0, 10, 10, 10, 0, 0, 0, 0])
+    eff = {"type": "thruster_lag", "time_constant": 0.5, "start": "zero"}
+    tau = effect_force(eff, u=f_c, kind="thrust")
+    np.testing.assert_allclose(tau, -B @ f_c, atol=1e-9)  # lagged thrust 0: cancels the command
+    lagged = np.array([4.0, 4, 4, 4, 0, 0, 0, 0])
+    tau = effect_force(eff, u=f_c, kind="thrust", states=lagged)
+    np.testing.assert_allclose(tau, B @ (lagged - f_c), atol=1e-9)
+    m = Model(VEH.with_effects([eff]), input_kind="thrust")
+    y = m.initial_state([0, 0, 1], None, None, f_c[None])
+    y[0, 13:21] = lagged
+    dx = m.rhs(0.0, y, f_c[None])[0, 13:21]
+    np.testing.assert_allclose(dx, (f_c - lagged) / 0.5)
+    # steady start: no effect at t0
+    tau = effect_force({"type": "thruster_lag", "time_constant": 0.5}, u=f_c, kind="thrust")
+    np.testing.assert_allclose(tau, 0, atol=1e-9)
+    # force inputs: lags tau itself
+    tau_c = np.array([5.0, 0, 2, 0, 0, 1])
+    tau = effect_force(eff, u=tau_c, kind="force")
+    np.testing.assert_allclose(tau, -tau_c, atol=1e-9)
+
+
+def test_thrust_asymmetry_by_hand():
+    B = VEH.actuators.matrix
+    f = np.array([-10.0, 10, 0, 0, -4, 0, 0, 0])
+    tau = effect_force({"type": "thrust_asymmetry", "ratio": 0.7}, u=f, kind="thrust")
+    np.testing.assert_allclose(tau, B @ ((0.7 - 1) * np.minimum(f, 0)), atol=1e-9)
+    tau = effect_force({"type": "thrust_asymmetry", "ratio": 0.7}, u=[-5.0, 3, 0, 0, 0, 0], kind="force")
+    np.testing.assert_allclose(tau, [1.5, 0, 0, 0, 0, 0], atol=1e-9)
+
+
+def test_coupled_damping_by_hand():
+    tau = effect_force({"type": "coupled_damping", "K_vv": -2.0, "M_u": 0.5}, nu=(0.2, 0.5, 0, 0, 0, 0))
+    np.testing.assert_allclose(tau, [0, 0, 0, -2.0 * 0.25, 0.5 * 0.2, 0], atol=1e-9)
+
+
+@pytest.mark.parametrize("spec, field", [
+    ({"type": "thruster_lag", "time_constant": 0.0}, "time_constant"),
+    ({"type": "thruster_lag", "time_constant": 100.0}, "time_constant"),
+    ({"type": "thruster_lag"}, "time_constant"),
+    ({"type": "thruster_lag", "time_constant": 0.2, "start": "later"}, "start"),
+    ({"type": "current", "n": 50.0}, ".n"),
+    ({"type": "ballast", "weight": 1e5}, "weight"),
+    ({"type": "ballast", "weight": "heavy"}, "weight"),
+    ({"type": "tether", "stiffness": -1.0}, "stiffness"),
+    ({"type": "tether", "diameter": 0.5}, "diameter"),
+    ({"type": "tether", "anchr_n": 1.0}, "anchr_n"),
+    ({"type": "thrust_asymmetry", "ratio": 0.0}, "ratio"),
+    ({"type": "thrust_asymmetry", "ratio": float("nan")}, "ratio"),
+    ({"type": "coupled_damping", "K_pp": -1.0}, "K_pp"),
+    ({"type": "coupled_damping", "Q_u": 1.0}, "Q_u"),
+    ({"type": "coupled_damping", "K_v": 1e9}, "K_v"),
+])
+def test_absurd_values_rejected_naming_the_field(spec, field):
+    with pytest.raises(VehicleError, match=field.replace(".", r"\.")):
+        make_term(spec)
+
+
+EXAMPLES = [
+    {"type": "current", "n": 0.05, "e": -0.03, "d": 0.0},
+    {"type": "tether", "anchor_n": -3.0, "stiffness": 2.0, "tension": 1.0, "length": 5.0, "attach_z": -0.1},
+    {"type": "thruster_lag", "time_constant": 0.3, "start": "zero"},
+    {"type": "thrust_asymmetry", "ratio": 0.75},
+    {"type": "ballast", "weight": 1.5, "x": 0.1, "y": 0.0, "z": 0.05},
+    {"type": "coupled_damping", "K_vv": -2.0, "M_u": 0.4},
+]
+
+
+@pytest.mark.parametrize("spec", EXAMPLES, ids=[e["type"] for e in EXAMPLES])
+def test_vehicle_file_round_trip(spec, tmp_path):
+    veh = VEH.with_effects([spec])
+    path = uvsim.save_vehicle(veh, tmp_path / "v.yaml")
+    back = uvsim.load_vehicle(path)
+    assert [e.to_dict() for e in back.effects] == [e.to_dict() for e in veh.effects]
+    term = back.effects[0]
+    for k, v in spec.items():
+        if k != "type":
+            assert term.to_dict()[k] == v
+    assert back.parameters() == veh.parameters()
+    # named parameters can be changed like any other (what calibration / diagnosis do)
+    name = next(iter(term.parameters()))
+    newval = term.parameters()[name] * 0.9 + 0.01
+    changed = back.with_parameters({name: newval})
+    assert changed.parameters()[name] == pytest.approx(newval)
+
+
+def _surge_pwm(t, level=80.0, sign=1.0):
+    pwm = np.full((t.size, 8), 1500.0)
+    on = (t >= 1.0) & (t < 6.0)
+    pwm[on, :4] = 1500.0 + sign * level
+    return pwm
+
+
+def _sim(veh, t, pwm, **kw):
+    return uvsim.simulate(veh, t, pwm, input_kind="pwm", pos0=[0, 0, 1.0], **kw)
+
+
+def test_simulate_with_effects_in_vehicle_file(tmp_path):
+    t = np.arange(0, 10, 0.02)
+    fwd, rev = _surge_pwm(t), _surge_pwm(t, sign=-1)
+    base_f, base_r = _sim(VEH, t, fwd), _sim(VEH, t, rev)
+
+    def load(spec):
+        return uvsim.load_vehicle(uvsim.save_vehicle(VEH.with_effects([spec]), tmp_path / f"{spec['type']}.yaml"))
+
+    # current: the vehicle at rest drifts with the water (north)
+    rest = np.full((t.size, 8), 1500.0)
+    r = _sim(load({"type": "current", "n": 0.1}), t, rest)
+    assert 0.3 < r.position[-1, 0] < 1.0 and abs(r.position[-1, 1]) < 1e-6
+    # tether anchored behind: surges less far than without
+    r = _sim(load({"type": "tether", "anchor_n": -3.0, "anchor_d": 1.0, "stiffness": 2.0}), t, fwd)
+    assert r.position[-1, 0] < base_f.position[-1, 0] - 0.05
+    # thruster lag: slower start of the surge motion, similar end speed
+    r = _sim(load({"type": "thruster_lag", "time_constant": 0.5}), t, fwd)
+    i = np.searchsorted(t, 1.5)
+    assert r.nu[i, 0] < 0.8 * base_f.nu[i, 0]
+    # reverse weaker: the reverse run goes less far, the forward run is unchanged
+    v = load({"type": "thrust_asymmetry", "ratio": 0.7})
+    np.testing.assert_allclose(_sim(v, t, fwd).y, base_f.y)
+    assert abs(_sim(v, t, rev).position[-1, 0]) < 0.9 * abs(base_r.position[-1, 0])
+    # extra weight: sinks relative to the baseline (positively buoyant BlueROV2 rises)
+    r = _sim(load({"type": "ballast", "weight": 5.0, "x": 0.05}), t, rest)
+    assert r.position[-1, 2] > base_f.position[0, 2] + 0.1
+    assert r.euler[-1, 1] < -0.01  # weight forward of the CG: nose down (negative pitch)
+    # coupled damping: surge motion now pitches the vehicle
+    r = _sim(load({"type": "coupled_damping", "M_uu": 3.0}), t, fwd)
+    assert r.euler[:, 1].max() > base_f.euler[:, 1].max() + 0.01
