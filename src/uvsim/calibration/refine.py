@@ -1,0 +1,267 @@
+"""Local refinement after the GA, uncertainty and identifiability.
+
+:func:`refine_dof` minimizes the sum of squared normalized residuals
+(:func:`uvsim.metrics.normalized_residuals`, each run weighted by its fitness
+weight) of one DOF's training runs with :func:`scipy.optimize.least_squares`
+(trust-region reflective, within the GA bounds), starting from the GA's best
+individual.  The Jacobian is a forward-difference Jacobian computed in one
+batched simulation (base point + one perturbed copy per parameter, times every
+run).
+
+Uncertainty: the Gauss-Newton covariance ``cov = s^2 (J^T J)^+`` at the solution
+with ``s^2 = sum r^2 / (m - p)`` (m residuals, p parameters), the usual
+nonlinear-least-squares estimate; it assumes independent residuals (true for
+white measurement noise and a correct model; optimistic otherwise).
+
+Identifiability: the singular values of the column-scaled Jacobian of *all* of
+the DOF's parameters.  A direction whose relative singular value is below
+``NULL_TOL`` changes no residual: the data cannot separate the parameters along
+it.  In decoupled single-DOF runs the rigid-body inertia and the added inertia
+(e.g. ``I_xx`` and ``K_pdot``) only enter as their sum, so only ``I_xx + K_pdot``
+is identifiable.  When such a pair is found (``merge_inertia="auto"``) the
+refinement fits the sum and keeps the GA's split between the two; their
+individual uncertainties are then reported as ``None`` and the sum's as the
+effective-inertia uncertainty.
+"""
+from __future__ import annotations
+
+from typing import Mapping
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from uvsim.calibration.batching import RunBatch, simulate_rows
+from uvsim.calibration.params import EFFECTIVE_INERTIA
+from uvsim.errors import CalibrationError
+from uvsim.metrics import normalized_residuals, signals_from_states
+
+#: Relative singular value below which a parameter direction counts as not identifiable.
+NULL_TOL = 1e-3
+#: |correlation| above which two parameters are reported as strongly correlated.
+CORR_REPORT = 0.9
+#: Initial-velocity axis of each DOF (index into nu).
+DOF_AXIS = {"surge": 0, "sway": 1, "heave": 2, "roll": 3, "pitch": 4, "yaw": 5}
+NU0_SCALE = 0.1  # m/s or rad/s, scale of the initial-velocity unknowns
+FD_STEP = 1e-6   # forward-difference step in scaled parameters
+
+
+class _Residuals:
+    """Batched residual vectors of one DOF's runs for parameter vectors x (B, n_x)."""
+
+    def __init__(self, vehicle, batch: RunBatch, problem, columns, base: Mapping[str, float]):
+        self.vehicle, self.batch, self.problem = vehicle, batch, problem
+        self.columns = columns  # list of (kind, payload, scale): kind "param" | "sum" | "nu0"
+        self.base = dict(base)
+
+    def values(self, x: np.ndarray) -> tuple[dict, dict]:
+        """Physical parameter values and initial-velocity overrides for one x (n_x,)."""
+        vals, nu0 = {}, {}
+        for xi, (kind, payload, scale) in zip(x, self.columns):
+            v = xi * scale
+            if kind == "param":
+                vals[payload] = v
+            elif kind == "sum":
+                (a, b), rho = payload
+                vals[a], vals[b] = rho * v, (1 - rho) * v
+            else:
+                nu0[payload] = v
+        return vals, nu0
+
+    def __call__(self, X: np.ndarray) -> np.ndarray:
+        X = np.atleast_2d(X)
+        prob, batch = self.problem, self.batch
+        R = len(prob.run_index)
+        rows = np.tile(prob.run_index, len(X))
+        ov = {k: np.empty(len(rows)) for k in self.base}
+        nu0 = batch.nu0[rows].copy()
+        for b, x in enumerate(X):
+            vals, nu = self.values(x)
+            sl = slice(b * R, (b + 1) * R)
+            for k in self.base:
+                ov[k][sl] = vals.get(k, self.base[k])
+            for r, v in nu.items():
+                nu0[b * R + r, DOF_AXIS[prob.dof]] = v
+        y = simulate_rows(self.vehicle, batch, rows, ov, nu0=nu0)
+        out = []
+        for b in range(len(X)):
+            parts = []
+            for j, r in enumerate(prob.run_index):
+                n = batch.lengths[r]
+                pred = signals_from_states(y[b * R + j, :n])
+                parts.append(normalized_residuals(batch.measured[r], pred, prob.scales, prob.signal_weights,
+                                                  run_weight=float(prob.run_weights[j]), fill=1e3))
+            out.append(np.concatenate(parts))
+        return np.array(out)
+
+
+def _jacobian(F: _Residuals, x: np.ndarray, step: float = FD_STEP) -> tuple[np.ndarray, np.ndarray]:
+    h = step * np.maximum(1.0, np.abs(x))
+    X = np.vstack([x, x + np.diag(h)])
+    Y = F(X)
+    return Y[0], ((Y[1:] - Y[0]) / h[:, None]).T
+
+
+def identifiability(vehicle, batch: RunBatch, problem, values: Mapping[str, float]) -> dict:
+    """Identifiability of all of ``problem``'s parameters at ``values``.
+
+    Returns
+    -------
+    dict with ``parameters``, ``relative_singular_values``, ``condition_number``,
+    ``correlations`` (pairs with |r| > CORR_REPORT), ``not_identifiable`` (list of
+    {"direction": {name: coefficient}, "relative_singular_value"}) and
+    ``identifiable_combinations`` (human-readable list, e.g. ``"I_xx + K_pdot"``).
+    """
+    names = list(problem.names)
+    scale = np.array([abs(values[k]) or 1.0 for k in names])
+    cols = [("param", k, s) for k, s in zip(names, scale)]
+    F = _Residuals(vehicle, batch, problem, cols, {k: values[k] for k in names})
+    x = np.array([values[k] for k in names]) / scale
+    _, J = _jacobian(F, x)
+    Jn = J / np.maximum(np.linalg.norm(J, axis=0), 1e-300)
+    _, s, Vt = np.linalg.svd(Jn, full_matrices=False)
+    srel = s / s[0] if s[0] > 0 else s
+    cov = np.linalg.pinv(J.T @ J)
+    d = np.sqrt(np.maximum(np.diag(cov), 1e-300))
+    corr = cov / np.outer(d, d)
+    corr_pairs = {}
+    for i in range(len(names)):
+        for j in range(i + 1, len(names)):
+            if abs(corr[i, j]) > CORR_REPORT:
+                corr_pairs[f"{names[i]}~{names[j]}"] = float(corr[i, j])
+    null, comb, involved_all = [], [], set()
+    colnorm = np.linalg.norm(J, axis=0)
+    for k in np.flatnonzero(srel < NULL_TOL):
+        v = Vt[k] / np.maximum(colnorm, 1e-300)  # back to x (scaled) units
+        v = v * scale  # physical units
+        v = v / np.max(np.abs(v))
+        if v[np.argmax(np.abs(v))] < 0:
+            v = -v
+        direction = {names[i]: float(round(v[i], 4)) for i in range(len(names)) if abs(v[i]) > 0.05}
+        null.append({"direction": direction, "relative_singular_value": float(srel[k])})
+        inv = [i for i in range(len(names)) if abs(v[i]) > 0.05]
+        involved_all.update(inv)
+        if len(inv) == 2:
+            a, b = v[inv[1]], -v[inv[0]]
+            m = max(abs(a), abs(b))
+            a, b = a / m, b / m
+            if a < 0:
+                a, b = -a, -b
+            ta = names[inv[0]] if abs(a - 1) < 1e-3 else f"{a:.3g}*{names[inv[0]]}"
+            tb = names[inv[1]] if abs(abs(b) - 1) < 1e-3 else f"{abs(b):.3g}*{names[inv[1]]}"
+            comb.append(f"{ta} {'+' if b >= 0 else '-'} {tb}")
+        else:
+            comb.append("combinations orthogonal to " + " ".join(f"{c:+.3g}*{n}" for n, c in direction.items()))
+    comb += [names[i] for i in range(len(names)) if i not in involved_all]
+    return {
+        "parameters": names,
+        "relative_singular_values": [float(v) for v in srel],
+        "condition_number": float(srel[0] / srel[-1]) if srel[-1] > 0 else float("inf"),
+        "correlations": corr_pairs,
+        "not_identifiable": null,
+        "identifiable_combinations": comb,
+    }
+
+
+def refine_dof(vehicle, batch: RunBatch, problem, start: Mapping[str, float], *, merge_inertia: str = "auto",
+               estimate_initial_velocity: bool = False, max_nfev: int = 40, ident: dict | None = None) -> dict:
+    """Least-squares refinement of one DOF from ``start`` values (module doc).
+
+    Parameters
+    ----------
+    merge_inertia : "auto" (fit the inertia + added-inertia sum when the data cannot
+        separate them), "always" or "never".
+    estimate_initial_velocity : also fit the unknown (not logged) initial velocity of
+        the DOF's own axis in each run.
+    ident : output of :func:`identifiability` at ``start`` (computed if None).
+
+    Returns
+    -------
+    dict with ``values`` (name -> fitted value), ``uncertainty`` (name -> 1-sigma or
+    None), ``merged`` (the summed pair or None), ``effective_inertia_sigma``,
+    ``initial_velocity`` (run name -> fitted value), ``cost``, ``nfev``, ``message``.
+    """
+    if merge_inertia not in ("auto", "always", "never"):
+        raise CalibrationError(f"merge_inertia {merge_inertia!r}: expected auto, always or never")
+    names = list(problem.names)
+    lower = dict(zip(names, problem.lower))
+    upper = dict(zip(names, problem.upper))
+    pair = EFFECTIVE_INERTIA.get(problem.dof)
+    merged = None
+    if pair and all(p in names for p in pair) and merge_inertia != "never":
+        if merge_inertia == "always":
+            merged = pair
+        else:
+            ident = ident if ident is not None else identifiability(vehicle, batch, problem, start)
+            for nd in ident["not_identifiable"]:
+                if set(nd["direction"]) == set(pair):
+                    merged = pair
+    init = dict(zip(names, problem.initial))
+    cols, x0, lb, ub = [], [], [], []
+    for k in names:
+        if merged and k in merged:
+            continue
+        s = abs(init[k]) or 1.0
+        cols.append(("param", k, s))
+        x0.append(start[k] / s)
+        lb.append(lower[k] / s)
+        ub.append(upper[k] / s)
+    if merged:
+        a, b = merged
+        S = start[a] + start[b]
+        rho = start[a] / S
+        s = abs(init[a] + init[b])
+        cols.append(("sum", ((a, b), rho), s))
+        x0.append(S / s)
+        lb.append((lower[a] + lower[b]) / s)
+        ub.append((upper[a] + upper[b]) / s)
+    nu_runs = []
+    if estimate_initial_velocity:
+        ax = DOF_AXIS[problem.dof]
+        for j, r in enumerate(problem.run_index):
+            if not batch.nu0_known[r, ax]:
+                cols.append(("nu0", j, NU0_SCALE))
+                x0.append(batch.nu0[r, ax] / NU0_SCALE)
+                lb.append(-10.0)
+                ub.append(10.0)
+                nu_runs.append(j)
+    x0 = np.clip(np.array(x0, float), lb, ub)
+    F = _Residuals(vehicle, batch, problem, cols, {k: start[k] for k in names})
+
+    def fun(x):
+        return F(x[None])[0]
+
+    def jac(x):
+        return _jacobian(F, x)[1]
+
+    res = least_squares(fun, x0, jac=jac, bounds=(np.array(lb), np.array(ub)), method="trf",
+                        max_nfev=max_nfev, x_scale=1.0)
+    vals, nu = F.values(res.x)
+    values = {k: start[k] for k in names}
+    values.update(vals)
+    m, p = res.fun.size, res.x.size
+    s2 = float(res.fun @ res.fun) / max(m - p, 1)
+    J = _jacobian(F, res.x)[1]
+    cov = s2 * np.linalg.pinv(J.T @ J)
+    scales = np.array([c[2] for c in cols])
+    sig = np.sqrt(np.maximum(np.diag(cov), 0.0)) * scales
+    unc: dict = {}
+    eff_sigma = None
+    nu_fit = {}
+    for (kind, payload, _), sg in zip(cols, sig):
+        if kind == "param":
+            unc[payload] = float(sg)
+        elif kind == "sum":
+            unc[payload[0][0]] = unc[payload[0][1]] = None
+            eff_sigma = float(sg)
+        else:
+            nu_fit[batch.runs[problem.run_index[payload]].name] = float(nu[payload])
+    if eff_sigma is None and pair and all(p in names for p in pair):
+        ia, ib = [next(i for i, c in enumerate(cols) if c[1] == p) for p in pair]
+        eff_sigma = float(np.sqrt(max(cov[ia, ia] * scales[ia] ** 2 + cov[ib, ib] * scales[ib] ** 2
+                                      + 2 * cov[ia, ib] * scales[ia] * scales[ib], 0.0)))
+    elif eff_sigma is None and pair and pair[1] in names:
+        eff_sigma = unc.get(pair[1])  # m is fixed: sigma(m + X_udot) = sigma(X_udot)
+    return {"values": {k: float(v) for k, v in values.items()}, "uncertainty": unc,
+            "merged": list(merged) if merged else None, "effective_inertia_sigma": eff_sigma,
+            "initial_velocity": nu_fit, "cost": float(res.cost), "nfev": int(res.nfev),
+            "message": str(res.message), "residual_rms": float(np.sqrt(np.mean(res.fun ** 2)))}
