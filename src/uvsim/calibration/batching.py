@@ -5,9 +5,10 @@ length: shorter runs repeat their last time stamp (zero-length RK4 steps, see
 :func:`uvsim.simulate_batch`) and their last input.  Each run's initial state is
 built from what it measured (partial initial state, issue 7):
 
-* position: the first valid sample of each logged axis, 0 for axes not logged
+* position: each logged axis smoothed over the first :data:`INITIAL_WINDOW_S`
+  seconds (quadratic fit evaluated at the first sample), 0 for axes not logged
   (they are not compared either);
-* attitude: the first valid attitude, level (identity) when none is logged;
+* attitude: the same for the (unwrapped) Euler angles, level when none is logged;
 * velocities / rates: the first logged sample where present; where absent,
   ``initial_velocity="zero"`` (default, seed 000: runs start at rest),
   ``"differentiate"`` (a Savitzky-Golay derivative of the smoothed logged
@@ -25,6 +26,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from uvsim.errors import CalibrationError
+from uvsim.kinematics import euler_to_quat
 from uvsim.metrics import (
     normalized_residuals,
     run_metrics,
@@ -81,28 +83,50 @@ class RunBatch:
                         [self.measured[i] for i in idx])
 
 
-def _first_valid(a: np.ndarray) -> np.ndarray:
-    """First finite value of each column of ``a`` (n, k); NaN where none."""
+#: Window (s) over which the initial position and attitude are estimated by a
+#: quadratic least-squares fit evaluated at the first sample: a single noisy
+#: sample (2-5 mm, 5-10 mrad) as initial state biases a whole 14-s simulation.
+INITIAL_WINDOW_S = 0.5
+
+
+def _initial_value(t: np.ndarray, a: np.ndarray, window_s: float) -> np.ndarray:
+    """Per column of ``a`` (n, k): quadratic fit over the valid samples in the first
+    ``window_s`` seconds evaluated at ``t[0]`` (>= 5 samples), else the first valid
+    value; NaN for columns with no valid sample."""
     out = np.full(a.shape[1], np.nan)
     for j in range(a.shape[1]):
         ok = np.flatnonzero(np.isfinite(a[:, j]))
-        if ok.size:
+        if not ok.size:
+            continue
+        sel = ok[t[ok] <= t[ok[0]] + window_s]
+        if window_s > 0 and sel.size >= 5:
+            c = np.polyfit(t[sel] - t[0], a[sel, j], 2)
+            out[j] = np.polyval(c, 0.0)
+        else:
             out[j] = a[ok[0], j]
     return out
 
 
-def initial_state(run, *, initial_velocity: str = "zero") -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(pos0 (3,), q0 (4,), nu0 (6,), nu0_known (6,) bool) of one run (module doc)."""
+def initial_state(run, *, initial_velocity: str = "zero", window_s: float = INITIAL_WINDOW_S
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(pos0 (3,), q0 (4,), nu0 (6,), nu0_known (6,) bool) of one run (module doc).
+
+    Position and attitude (as unwrapped Euler angles) are smoothed over the first
+    ``window_s`` seconds (:data:`INITIAL_WINDOW_S`; 0 = first sample as logged);
+    logged velocities are taken as the first sample."""
     if initial_velocity not in INITIAL_VELOCITY_MODES:
         raise CalibrationError(f"initial_velocity {initial_velocity!r}: expected one of {INITIAL_VELOCITY_MODES}")
-    pos = _first_valid(run.position)
+    t = run.t
+    pos = _initial_value(t, run.position, window_s)
     pos0 = np.where(np.isfinite(pos), pos, 0.0)
     q0 = np.array([1.0, 0.0, 0.0, 0.0])
     if run.has_attitude:
-        q = run.quaternion
-        ok = np.isfinite(q).all(axis=1)
+        e = run.euler
+        ok = np.isfinite(e).all(axis=1)
         if ok.any():
-            q0 = q[int(np.argmax(ok))]
+            eu = np.full_like(e, np.nan)
+            eu[ok] = np.unwrap(e[ok], axis=0)
+            q0 = euler_to_quat(_initial_value(t, eu, window_s))
     vel = run.velocity
     v0 = vel[0]
     known = np.isfinite(v0)

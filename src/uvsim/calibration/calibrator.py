@@ -1,0 +1,334 @@
+"""``Calibrator``: seed 000's GA calibration plus refinement, as one estimator.
+
+>>> from uvsim.calibration import Calibrator
+>>> cal = Calibrator(dofs="surge,yaw", population=60, generations=30, seed=1).fit(
+...     "path/to/dataset", "bluerov2_heavy_initial")               # doctest: +SKIP
+>>> cal.params_["X_udot"], cal.uncertainty_["X_udot"]            # doctest: +SKIP
+>>> cal.report_["validation_rmse"]                                 # doctest: +SKIP
+
+Fit = for every DOF: build the :class:`DofProblem` (Table 3 parameters, bounds
+around the initial values, signal scales from the DOF's training runs), run the
+GA (:func:`uvsim.calibration.ga.run_ga`) for all DOFs in lock step, refine each
+DOF's best individual by least squares (:func:`uvsim.calibration.refine.refine_dof`),
+assemble the fitted vehicle and evaluate it on the training and validation runs.
+"""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Mapping
+
+import numpy as np
+
+from uvsim.calibration.batching import prepare_runs, simulate_dataset
+from uvsim.calibration.evaluation import DEFAULT_BATCH_ROWS, BatchEvaluator, DaskMap, DofProblem, ProcessMap, SerialMap
+from uvsim.calibration.ga import GASettings, fingerprint, run_ga
+from uvsim.calibration.params import (
+    DOF_PARAMETERS,
+    EFFECTIVE_INERTIA,
+    LINEAR_DAMPING,
+    QUADRATIC_DAMPING,
+    parameter_bounds,
+    parse_dofs,
+)
+from uvsim.calibration.refine import identifiability, refine_dof
+from uvsim.errors import CalibrationError
+from uvsim.logs import Dataset, read_dataset
+from uvsim.metrics import GROUPS, pooled_rmse, run_metrics, signal_scales
+from uvsim.vehicle import load_vehicle
+
+
+def _as_dataset(data) -> Dataset:
+    if isinstance(data, Dataset):
+        return data
+    if isinstance(data, (str, Path)):
+        return read_dataset(data)
+    runs = list(data)
+    if not runs:
+        raise CalibrationError("no runs given")
+    return Dataset(path=Path("."), vehicle=None, description="runs given in memory", runs=runs)
+
+
+def _resolve_vehicle(vehicle, ds: Dataset):
+    if vehicle is None:
+        if ds.vehicle is None:
+            raise CalibrationError(f"{ds.path}: no vehicle given and the manifest names none")
+        vehicle = ds.vehicle_file or ds.vehicle
+    return load_vehicle(vehicle)
+
+
+def _group_amplitude(measured, scales) -> float:
+    """RMS over logged groups of (the run's spread / group scale): how much the run moves."""
+    sc = signal_scales([measured])
+    vals = [sc[g] / scales[g] for g in sc if g in scales]
+    return float(np.sqrt(np.mean(np.square(vals)))) if vals else 1.0
+
+
+class Calibrator:
+    """Calibrate a vehicle's inertia, added mass and damping to logged runs.
+
+    Parameters
+    ----------
+    dofs : "surge,yaw" or a list; default: every DOF with training runs.
+    population, generations, tournament, crossover, mutation : seed 000 Table 4
+        (60, 30, 5, 0.5, 0.25).
+    mutation_indpb, mutation_sigma, seeded_fraction, seeded_sigma : GA details the
+        paper does not give (see :class:`uvsim.calibration.ga.GASettings`).
+    seed : random seed; the same seed gives the identical result (also with workers).
+    margin : default relative search range around each initial value (0.5 = +-50 %).
+    bounds : {name: (low, high)} explicit bounds.
+    signal_weights : {"position"|"attitude"|"velocity"|"rates": weight} (default 1).
+    noise : {group: 1-sigma noise} used as normalization scale instead of the
+        measured spread.
+    low_speed_exponent : run weight = manifest weight x (amplitude / median
+        amplitude) ** -low_speed_exponent; 0 (default) uses the manifest weights
+        only (seed 000: "weights ... to improve the low-speed movements").
+    refine : run the least-squares refinement after the GA (default True).
+    merge_inertia : "auto" | "always" | "never" (see :mod:`uvsim.calibration.refine`).
+    estimate_initial_velocity : fit each run's unknown initial velocity (DOF axis) in
+        the refinement.
+    initial_velocity : "zero" | "differentiate" for unknown initial velocities.
+    workers : local processes for the GA evaluations (1 = serial).
+    dask : dask.distributed scheduler address or "local".
+    batch_rows : largest number of trajectories per batched simulation.
+    checkpoint : file written after every generation; resume : checkpoint to continue.
+    progress : tqdm bar per generation.
+    effects : extra force terms added to the vehicle (dicts or ForceTerm objects).
+    max_nfev : least-squares function-evaluation limit per DOF.
+
+    Attributes (after :meth:`fit`)
+    ------------------------------
+    params_ : {name: fitted value} of every fitted parameter.
+    uncertainty_ : {name: 1-sigma or None (not separately identifiable)}.
+    ga_params_ : GA best values before refinement.
+    vehicle_ : the fitted :class:`uvsim.vehicle.Vehicle`.
+    initial_vehicle_ : the starting vehicle.
+    logbook_ : {dof: deap.tools.Logbook}.
+    identifiability_ : {dof: identifiability analysis}.
+    report_ : the JSON-ready report (keys of issue 5).
+    evaluations_, wall_seconds_ : GA fitness evaluations and total fit time.
+    """
+
+    def __init__(self, *, dofs=None, population: int = 60, generations: int = 30, seed: int = 0,
+                 tournament: int = 5, crossover: float = 0.5, mutation: float = 0.25, mutation_indpb: float = 0.5,
+                 mutation_sigma: float = 0.1, seeded_fraction: float = 0.1, seeded_sigma: float = 0.02,
+                 margin: float = 0.5, bounds: Mapping | None = None, signal_weights: Mapping | None = None,
+                 noise: Mapping | None = None, low_speed_exponent: float = 0.0, refine: bool = True,
+                 merge_inertia: str = "auto", estimate_initial_velocity: bool = False,
+                 initial_velocity: str = "zero", workers: int = 1, dask: str | None = None,
+                 batch_rows: int = DEFAULT_BATCH_ROWS, checkpoint=None, resume=None, progress: bool = False,
+                 effects=None, max_nfev: int = 40):
+        self.dofs = dofs
+        self.population, self.generations, self.seed = population, generations, seed
+        self.tournament, self.crossover, self.mutation = tournament, crossover, mutation
+        self.mutation_indpb, self.mutation_sigma = mutation_indpb, mutation_sigma
+        self.seeded_fraction, self.seeded_sigma = seeded_fraction, seeded_sigma
+        self.margin, self.bounds = margin, bounds
+        self.signal_weights, self.noise, self.low_speed_exponent = signal_weights, noise, low_speed_exponent
+        self.refine, self.merge_inertia = refine, merge_inertia
+        self.estimate_initial_velocity, self.initial_velocity = estimate_initial_velocity, initial_velocity
+        self.workers, self.dask, self.batch_rows = workers, dask, batch_rows
+        self.checkpoint, self.resume, self.progress = checkpoint, resume, progress
+        self.effects, self.max_nfev = effects, max_nfev
+
+    # ------------------------------------------------------------------ helpers
+    def get_params(self, deep: bool = True) -> dict:
+        """Constructor arguments (scikit-learn convention)."""
+        import inspect
+
+        return {k: getattr(self, k) for k in inspect.signature(type(self).__init__).parameters if k != "self"}
+
+    def _settings(self) -> GASettings:
+        return GASettings(population=int(self.population), generations=int(self.generations),
+                          tournament=int(self.tournament), crossover=float(self.crossover),
+                          mutation=float(self.mutation), mutation_indpb=float(self.mutation_indpb),
+                          mutation_sigma=float(self.mutation_sigma), seeded_fraction=float(self.seeded_fraction),
+                          seeded_sigma=float(self.seeded_sigma), seed=int(self.seed))
+
+    def _hook(self, evaluator):
+        if self.dask:
+            return DaskMap(evaluator, self.dask, workers=self.workers if self.workers > 1 else None)
+        if self.workers is None or int(self.workers) <= 1:
+            if self.workers is not None and int(self.workers) < 1:
+                raise CalibrationError(f"workers must be >= 1, got {self.workers}")
+            return SerialMap()
+        return ProcessMap(evaluator, int(self.workers))
+
+    # ------------------------------------------------------------------ fit
+    def fit(self, dataset, vehicle=None) -> "Calibrator":
+        """Fit to ``dataset`` (a :class:`uvsim.logs.Dataset`, a dataset directory or a
+        list of Runs) starting from ``vehicle`` (name, file or Vehicle; default the
+        manifest's vehicle).  Returns self."""
+        t0 = time.perf_counter()
+        ds = _as_dataset(dataset)
+        veh = _resolve_vehicle(vehicle, ds)
+        if self.effects:
+            veh = veh.with_effects(list(self.effects))
+        self.initial_vehicle_ = veh
+        train = [r for r in ds.runs if r.split == "train"]
+        present = [d for d in DOF_PARAMETERS if any(r.dof == d for r in train)]
+        if self.dofs is None:
+            dofs = present
+            if not dofs:
+                raise CalibrationError(f"{ds.path}: no training run is marked with a dof "
+                                       f"({', '.join(DOF_PARAMETERS)}); nothing to calibrate")
+        else:
+            dofs = parse_dofs(self.dofs)
+            missing = [d for d in dofs if d not in present]
+            if missing:
+                raise CalibrationError(f"{ds.path}: no training runs for dof(s) {missing} "
+                                       f"(training runs exist for: {present or 'none'})")
+        if self.signal_weights:
+            bad = set(self.signal_weights) - set(GROUPS)
+            if bad:
+                raise CalibrationError(f"signal_weights: unknown signal group(s) {sorted(bad)}; expected {list(GROUPS)}")
+        runs = [r for d in dofs for r in train if r.dof == d]
+        batch = prepare_runs(runs, initial_velocity=self.initial_velocity)
+        base = veh.parameters()
+        problems = {}
+        for d in dofs:
+            idx = np.array([i for i, r in enumerate(runs) if r.dof == d])
+            measured = [batch.measured[i] for i in idx]
+            scales = signal_scales(measured, self.noise)
+            w = np.array([runs[i].weight for i in idx], float)
+            if self.low_speed_exponent:
+                amp = np.array([_group_amplitude(m, scales) for m in measured])
+                w = w * (amp / np.median(amp)) ** (-float(self.low_speed_exponent))
+            names = DOF_PARAMETERS[d]
+            b = parameter_bounds(names, base, margin=self.margin, bounds=self.bounds)
+            problems[d] = DofProblem(d, names, b[:, 0], b[:, 1], np.array([base[k] for k in names]), idx, w,
+                                     scales, dict(self.signal_weights or {}))
+        evaluator = BatchEvaluator(veh, batch, problems, self.batch_rows)
+        settings = self._settings()
+        problem_key = fingerprint({
+            "vehicle": veh.to_dict(), "runs": [(r.name, r.dof, r.weight, float(np.nansum(r.data.to_numpy())))
+                                               for r in runs],
+            "scales": {d: p.scales for d, p in problems.items()}, "bounds": {d: p.lower.tolist() + p.upper.tolist()
+                                                                             for d, p in problems.items()},
+            "weights": {d: p.run_weights.tolist() for d, p in problems.items()},
+            "signal_weights": self.signal_weights, "initial_velocity": self.initial_velocity})
+        hook = self._hook(evaluator)
+        try:
+            ga = run_ga(problems, evaluator, hook, settings, checkpoint=self.checkpoint, resume=self.resume,
+                        progress=self.progress, problem_key=problem_key)
+        finally:
+            hook.close()
+        t_ga = time.perf_counter()
+        ga_values = {}
+        for d in dofs:
+            ga_values.update(dict(zip(problems[d].names, map(float, problems[d].decode(ga["best"][d])))))
+        params = dict(ga_values)
+        unc: dict = {k: None for k in params}
+        ident, refine_info, eff_sigma = {}, {}, {}
+        for d in dofs:
+            start = {k: ga_values[k] for k in problems[d].names}
+            a = identifiability(veh, batch, problems[d], start)
+            if self.refine:
+                ref = refine_dof(veh, batch, problems[d], start, merge_inertia=self.merge_inertia,
+                                 estimate_initial_velocity=self.estimate_initial_velocity,
+                                 max_nfev=self.max_nfev, ident=a)
+                params.update(ref["values"])
+                unc.update(ref["uncertainty"])
+                eff_sigma[d] = ref["effective_inertia_sigma"]
+                refine_info[d] = {k: ref[k] for k in ("merged", "initial_velocity", "cost", "nfev", "message",
+                                                     "residual_rms")}
+                a = identifiability(veh, batch, problems[d], {k: params[k] for k in problems[d].names})
+            ident[d] = a
+        t_ref = time.perf_counter()
+        self.ga_params_ = ga_values
+        self.params_ = params
+        self.uncertainty_ = unc
+        self.identifiability_ = ident
+        self.logbook_ = ga["logbooks"]
+        self.evaluations_ = ga["evaluations"]
+        self.vehicle_ = veh.with_parameters(params)
+        self.dofs_ = dofs
+        self._train_runs = runs
+        self.report_ = self._report(ds, dofs, problems, ga, ga_values, refine_info, eff_sigma, t0, t_ga, t_ref)
+        self.wall_seconds_ = self.report_["wall_seconds"]
+        return self
+
+    # ------------------------------------------------------------------ evaluation
+    def predict(self, runs) -> list[dict]:
+        """Simulated signals of ``runs`` with the fitted vehicle (:func:`simulate_dataset`)."""
+        self._check_fitted()
+        return simulate_dataset(self.vehicle_, runs, initial_velocity=self.initial_velocity)
+
+    def _check_fitted(self):
+        if not hasattr(self, "vehicle_"):
+            raise CalibrationError("this Calibrator is not fitted yet; call fit(dataset, vehicle) first")
+
+    def _evaluate(self, vehicle, runs) -> dict:
+        """{run name: run_metrics} for runs (grouped by input kind for batching)."""
+        out = {}
+        groups: dict = {}
+        for r in runs:
+            groups.setdefault((r.input_kind, r.inputs.shape[1]), []).append(r)
+        for grp in groups.values():
+            batch = prepare_runs(grp, initial_velocity=self.initial_velocity)
+            pred = simulate_dataset(vehicle, batch)
+            for r, m, p in zip(grp, batch.measured, pred):
+                out[r.name] = (m, p)
+        return out
+
+    def _report(self, ds, dofs, problems, ga, ga_values, refine_info, eff_sigma, t0, t_ga, t_ref) -> dict:
+        fitted = self._evaluate(self.vehicle_, ds.runs)
+        initial = self._evaluate(self.initial_vehicle_, ds.runs)
+
+        def pooled(pairs, split):
+            sel = [pairs[r.name] for r in ds.runs if r.split == split]
+            return pooled_rmse(sel) if sel else {}
+
+        per_run = {}
+        for r in ds.runs:
+            m = run_metrics(*fitted[r.name])
+            m0 = run_metrics(*initial[r.name])
+            per_run[r.name] = {
+                "dof": r.dof, "split": r.split, "weight": r.weight,
+                "rmse": {k: v for k, v in m.items() if k not in ("channels", "groups")},
+                "nrmse": {c: v["nrmse"] for c, v in m["channels"].items()},
+                "fit_percent": {**{c: v["fit_percent"] for c, v in m["channels"].items()},
+                                **{g: v["fit_percent"] for g, v in m["groups"].items()}},
+                "initial_rmse": {k: v for k, v in m0.items() if k not in ("channels", "groups")},
+                "channels": m["channels"],
+            }
+        p = self.vehicle_.parameters()
+        eff = {d: p[a] + p[b] for d, (a, b) in EFFECTIVE_INERTIA.items()}
+        settings = self._settings()
+        return {
+            "vehicle": self.initial_vehicle_.name,
+            "dataset": str(ds.path),
+            "dofs": dofs,
+            "parameters": dict(self.params_),
+            "uncertainty": dict(self.uncertainty_),
+            "initial_parameters": {k: float(self.initial_vehicle_.parameters()[k]) for k in self.params_},
+            "ga_parameters": dict(ga_values),
+            "bounds": {k: [float(lo), float(hi)] for d in dofs
+                       for k, lo, hi in zip(problems[d].names, problems[d].lower, problems[d].upper)},
+            "effective_inertia": eff,
+            "effective_inertia_uncertainty": {d: eff_sigma.get(d) for d in dofs},
+            "linear_damping": {d: p[k] for d, k in LINEAR_DAMPING.items()},
+            "quadratic_damping": {d: p[k] for d, k in QUADRATIC_DAMPING.items()},
+            "validation_rmse": pooled(fitted, "validation"),
+            "training_rmse": pooled(fitted, "train"),
+            "initial_validation_rmse": pooled(initial, "validation"),
+            "initial_training_rmse": pooled(initial, "train"),
+            "per_run": per_run,
+            "identifiability": self.identifiability_,
+            "refinement": refine_info,
+            "signal_scales": {d: problems[d].scales for d in dofs},
+            "run_weights": {self._train_runs[int(i)].name: float(w) for d in dofs
+                            for i, w in zip(problems[d].run_index, problems[d].run_weights)},
+            "evaluations": int(ga["evaluations"]),
+            "generations_run": int(ga["generations_run"]),
+            "ga_seconds": float(ga["wall_s"]),
+            "refine_seconds": float(t_ref - t_ga),
+            "wall_seconds": float(time.perf_counter() - t0),
+            "settings": {**settings.__dict__, "margin": self.margin, "workers": self.workers, "dask": self.dask,
+                         "batch_rows": self.batch_rows, "low_speed_exponent": self.low_speed_exponent,
+                         "signal_weights": dict(self.signal_weights or {}), "noise": dict(self.noise or {}),
+                         "refine": self.refine, "merge_inertia": self.merge_inertia,
+                         "initial_velocity": self.initial_velocity,
+                         "estimate_initial_velocity": self.estimate_initial_velocity},
+            "logbook": {d: [dict(rec) for rec in lb] for d, lb in ga["logbooks"].items()},
+        }
