@@ -320,7 +320,10 @@ def signal_scales(measured_runs: Iterable[Mapping[str, np.ndarray]],
                     continue
                 q0 = a[int(np.argmax(ok))]
                 a = np.where(ok[:, None], rotation_vector_error(q0, a), np.nan)
-            dev = a - np.nanmean(np.where(np.isfinite(a), a, np.nan), axis=0) if np.isfinite(a).any() else a
+            a = a[:, np.isfinite(a).any(axis=0)]  # logged axes only (a depth-only run has no x, y)
+            if a.size == 0:
+                continue
+            dev = a - np.nanmean(a, axis=0)
             ok = np.isfinite(dev)
             ss[g] = ss.get(g, 0.0) + float(np.sum(dev[ok] ** 2))
             nn[g] = nn.get(g, 0) + int(ok.sum())
@@ -340,14 +343,43 @@ def signal_scales(measured_runs: Iterable[Mapping[str, np.ndarray]],
     return out
 
 
+def component_weights(group: str, weights: Mapping[str, float] | None) -> np.ndarray:
+    """Weights (3,) of a group's components: ``weights[group]`` (default 1) times
+    ``weights[channel]`` (default 1) for each of its channels (e.g. ``{"attitude": 2,
+    "roll": 0}``).  Attitude components are the error rotation vector's body x, y, z
+    parts, which are the roll, pitch, yaw errors for small tilts."""
+    weights = weights or {}
+    g = float(weights.get(group, 1.0))
+    return np.array([g * float(weights.get(c, 1.0)) for c in GROUPS[group]])
+
+
+def check_weights(weights: Mapping[str, float] | None, where: str = "signal_weights") -> dict:
+    """Validate a weight mapping (keys: groups or channels; values >= 0)."""
+    weights = dict(weights or {})
+    known = set(GROUPS) | {c for cs in GROUPS.values() for c in cs}
+    bad = sorted(set(weights) - known)
+    if bad:
+        raise CalibrationError(f"{where}: unknown signal(s) {bad}; expected groups {list(GROUPS)} or channels "
+                               f"{[c for cs in GROUPS.values() for c in cs]}")
+    for k, v in weights.items():
+        try:
+            ok = float(v) >= 0 and np.isfinite(float(v))
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise CalibrationError(f"{where}: weight of {k!r} must be a non-negative number, got {v!r}")
+    return {k: float(v) for k, v in weights.items()}
+
+
 def normalized_residuals(measured: Mapping[str, np.ndarray], predicted: Mapping[str, np.ndarray],
                          scales: Mapping[str, float], weights: Mapping[str, float] | None = None,
                          *, run_weight: float = 1.0, fill: float | None = None) -> np.ndarray:
     """One residual vector for least squares.
 
     Each present group's components (:func:`residual_components`) are divided by
-    ``scales[group]`` and multiplied by ``sqrt(weights[group] * run_weight)``
-    (weights default to 1), then the entries where the measurement exists are
+    ``scales[group]`` and multiplied by ``sqrt(w * run_weight)`` with ``w`` from
+    :func:`component_weights` (default 1), then the entries where the measurement exists and
+    the weight is non-zero are
     concatenated in a fixed order (so the vector length does not depend on the
     parameters).  Non-finite predictions (a diverged simulation) are replaced by
     ``fill`` (default: raise :class:`CalibrationError`).  Batch axes are not
@@ -359,8 +391,9 @@ def normalized_residuals(measured: Mapping[str, np.ndarray], predicted: Mapping[
         key = _SIGNAL_KEY[g]
         m = np.asarray(measured[key])
         valid = np.isfinite(m).all(axis=-1, keepdims=True) if g == "attitude" else np.isfinite(m)
-        valid = np.broadcast_to(valid, e.shape)
-        r = e[valid] / scales[g] * np.sqrt(weights.get(g, 1.0) * run_weight)
+        w = component_weights(g, weights)
+        valid = np.broadcast_to(valid, e.shape) & (w > 0)
+        r = (e / scales[g] * np.sqrt(w * run_weight))[valid]
         bad = ~np.isfinite(r)
         if bad.any():
             if fill is None:
@@ -376,7 +409,8 @@ def weighted_abs_error(measured: Mapping[str, np.ndarray], predicted: Mapping[st
 
     Seed 000's fitness ("sum of absolute differences between the simulated and
     real data", sec. 4.4 ii) divided by the number of valid samples: for each
-    present group, ``weights[g] * sum_valid |component| / scales[g] / n_valid``,
+    present group, ``sum_valid w_c |component_c| / scales[g] / n_valid`` (``w_c``
+    from :func:`component_weights`, ``n_valid`` the number of valid samples),
     summed over groups.  ``predicted`` arrays may have leading batch axes
     (P, n, k); returns shape (P,) (``inf`` for rows whose simulation diverged)."""
     weights = dict(weights or {})
@@ -385,9 +419,12 @@ def weighted_abs_error(measured: Mapping[str, np.ndarray], predicted: Mapping[st
     for g, e in comps.items():
         m = np.asarray(measured[_SIGNAL_KEY[g]])
         valid = np.isfinite(m).all(axis=-1, keepdims=True) if g == "attitude" else np.isfinite(m)
-        valid = np.broadcast_to(valid, m.shape[:-1] + (e.shape[-1],))
-        n = max(int(valid.sum()), 1)
-        a = np.where(valid, np.abs(e), 0.0)
-        total = total + weights.get(g, 1.0) * a.sum(axis=(-2, -1)) / scales[g] / n
+        w = component_weights(g, weights)
+        valid = np.broadcast_to(valid, m.shape[:-1] + (e.shape[-1],)) & (w > 0)
+        if not valid.any():
+            continue
+        n = max(int(valid.any(axis=-1).sum()), 1)
+        a = np.where(valid, np.abs(e) * w, 0.0)
+        total = total + a.sum(axis=(-2, -1)) / scales[g] / n
     total = np.asarray(total, float)
     return np.where(np.isfinite(total), total, np.inf)

@@ -29,13 +29,20 @@ from uvsim.calibration.params import (
     LINEAR_DAMPING,
     QUADRATIC_DAMPING,
     parameter_bounds,
+    default_channel_weights,
     parse_dofs,
 )
-from uvsim.calibration.refine import identifiability, refine_dof
+from uvsim.calibration.refine import identifiability, joint_residuals, refine_dof, refine_joint
 from uvsim.errors import CalibrationError
 from uvsim.logs import Dataset, read_dataset
-from uvsim.metrics import GROUPS, pooled_rmse, run_metrics, signal_scales
+from uvsim.metrics import channel_mask, check_weights, component_weights, pooled_rmse, run_metrics, signal_scales
 from uvsim.vehicle import load_vehicle
+
+
+#: The joint refinement's Jacobian copies are evaluated in this many chunks (spread
+#: over the workers); a constant, so that serial and parallel runs compute the same
+#: batches and give identical results.
+JOINT_CHUNKS = 2
 
 
 def _as_dataset(data) -> Dataset:
@@ -77,7 +84,10 @@ class Calibrator:
     seed : random seed; the same seed gives the identical result (also with workers).
     margin : default relative search range around each initial value (0.5 = +-50 %).
     bounds : {name: (low, high)} explicit bounds.
-    signal_weights : {"position"|"attitude"|"velocity"|"rates": weight} (default 1).
+    signal_weights : weights by signal group ("position", "attitude", "velocity",
+        "rates") and/or channel ("x", ..., "yaw", "u", ..., "r"), used for every DOF.
+        Default: each DOF uses only its own channels (:data:`DOF_CHANNELS`, e.g.
+        x and u for surge, roll and p for roll).
     noise : {group: 1-sigma noise} used as normalization scale instead of the
         measured spread.
     low_speed_exponent : run weight = manifest weight x (amplitude / median
@@ -94,7 +104,16 @@ class Calibrator:
     checkpoint : file written after every generation; resume : checkpoint to continue.
     progress : tqdm bar per generation.
     effects : extra force terms added to the vehicle (dicts or ForceTerm objects).
-    max_nfev : least-squares function-evaluation limit per DOF.
+    max_nfev : least-squares function-evaluation limit per DOF and sweep.
+    refine_sweeps : Jacobi sweeps of the per-DOF refinement (the DOFs of a sweep run
+        in parallel on the workers): each DOF is refined with the other DOFs' values
+        from the previous sweep, because the "decoupled" runs
+        are not fully decoupled (e.g. a positively buoyant vehicle rises during a
+        surge run, so the surge trajectory depends on the heave parameters through
+        the Coriolis / Munk terms).  The GA itself is per DOF, as in seed 000.
+    joint : after the sweeps, refine all DOFs' parameters together on every logged
+        channel of all training runs (:func:`uvsim.calibration.refine.refine_joint`).
+    joint_weights : signal weights of the joint fit (default: all channels 1).
 
     Attributes (after :meth:`fit`)
     ------------------------------
@@ -117,7 +136,8 @@ class Calibrator:
                  merge_inertia: str = "auto", estimate_initial_velocity: bool = False,
                  initial_velocity: str = "zero", workers: int = 1, dask: str | None = None,
                  batch_rows: int = DEFAULT_BATCH_ROWS, checkpoint=None, resume=None, progress: bool = False,
-                 effects=None, max_nfev: int = 40):
+                 effects=None, max_nfev: int = 40, refine_sweeps: int = 1, joint: bool = True,
+                 joint_weights: Mapping | None = None):
         self.dofs = dofs
         self.population, self.generations, self.seed = population, generations, seed
         self.tournament, self.crossover, self.mutation = tournament, crossover, mutation
@@ -129,7 +149,8 @@ class Calibrator:
         self.estimate_initial_velocity, self.initial_velocity = estimate_initial_velocity, initial_velocity
         self.workers, self.dask, self.batch_rows = workers, dask, batch_rows
         self.checkpoint, self.resume, self.progress = checkpoint, resume, progress
-        self.effects, self.max_nfev = effects, max_nfev
+        self.effects, self.max_nfev, self.refine_sweeps = effects, max_nfev, refine_sweeps
+        self.joint, self.joint_weights = joint, joint_weights
 
     # ------------------------------------------------------------------ helpers
     def get_params(self, deep: bool = True) -> dict:
@@ -178,10 +199,7 @@ class Calibrator:
             if missing:
                 raise CalibrationError(f"{ds.path}: no training runs for dof(s) {missing} "
                                        f"(training runs exist for: {present or 'none'})")
-        if self.signal_weights:
-            bad = set(self.signal_weights) - set(GROUPS)
-            if bad:
-                raise CalibrationError(f"signal_weights: unknown signal group(s) {sorted(bad)}; expected {list(GROUPS)}")
+        user_weights = check_weights(self.signal_weights) if self.signal_weights is not None else None
         runs = [r for d in dofs for r in train if r.dof == d]
         batch = prepare_runs(runs, initial_velocity=self.initial_velocity)
         base = veh.parameters()
@@ -196,8 +214,17 @@ class Calibrator:
                 w = w * (amp / np.median(amp)) ** (-float(self.low_speed_exponent))
             names = DOF_PARAMETERS[d]
             b = parameter_bounds(names, base, margin=self.margin, bounds=self.bounds)
+            sw = user_weights if user_weights is not None else default_channel_weights(d)
+            used = [g for g in scales if np.any(component_weights(g, sw) > 0)
+                    and any(np.any(channel_mask(m).get(g, np.zeros(3, bool)) & (component_weights(g, sw) > 0))
+                            for m in measured)]
+            if not used:
+                raise CalibrationError(
+                    f"dof {d}: its training runs log none of the signals the fitness uses "
+                    f"({[k for k, v in sw.items() if v > 0]}); logged: "
+                    f"{sorted({g for m in measured for g in channel_mask(m)})}; set signal_weights")
             problems[d] = DofProblem(d, names, b[:, 0], b[:, 1], np.array([base[k] for k in names]), idx, w,
-                                     scales, dict(self.signal_weights or {}))
+                                     scales, sw)
         evaluator = BatchEvaluator(veh, batch, problems, self.batch_rows)
         settings = self._settings()
         problem_key = fingerprint({
@@ -211,29 +238,13 @@ class Calibrator:
         try:
             ga = run_ga(problems, evaluator, hook, settings, checkpoint=self.checkpoint, resume=self.resume,
                         progress=self.progress, problem_key=problem_key)
+            t_ga = time.perf_counter()
+            ga_values = {}
+            for d in dofs:
+                ga_values.update(dict(zip(problems[d].names, map(float, problems[d].decode(ga["best"][d])))))
+            params, unc, ident, refine_info, eff_sigma = self._refine(hook, evaluator, dofs, ga_values)
         finally:
             hook.close()
-        t_ga = time.perf_counter()
-        ga_values = {}
-        for d in dofs:
-            ga_values.update(dict(zip(problems[d].names, map(float, problems[d].decode(ga["best"][d])))))
-        params = dict(ga_values)
-        unc: dict = {k: None for k in params}
-        ident, refine_info, eff_sigma = {}, {}, {}
-        for d in dofs:
-            start = {k: ga_values[k] for k in problems[d].names}
-            a = identifiability(veh, batch, problems[d], start)
-            if self.refine:
-                ref = refine_dof(veh, batch, problems[d], start, merge_inertia=self.merge_inertia,
-                                 estimate_initial_velocity=self.estimate_initial_velocity,
-                                 max_nfev=self.max_nfev, ident=a)
-                params.update(ref["values"])
-                unc.update(ref["uncertainty"])
-                eff_sigma[d] = ref["effective_inertia_sigma"]
-                refine_info[d] = {k: ref[k] for k in ("merged", "initial_velocity", "cost", "nfev", "message",
-                                                     "residual_rms")}
-                a = identifiability(veh, batch, problems[d], {k: params[k] for k in problems[d].names})
-            ident[d] = a
         t_ref = time.perf_counter()
         self.ga_params_ = ga_values
         self.params_ = params
@@ -247,6 +258,46 @@ class Calibrator:
         self.report_ = self._report(ds, dofs, problems, ga, ga_values, refine_info, eff_sigma, t0, t_ga, t_ref)
         self.wall_seconds_ = self.report_["wall_seconds"]
         return self
+
+    def _refine(self, hook, evaluator, dofs, ga_values):
+        """Jacobi sweeps of per-DOF refinements (in the workers when there are any):
+        in each sweep every DOF is refined with the other DOFs' values of the previous sweep."""
+        params = dict(ga_values)
+        unc: dict = {k: None for k in params}
+        ident, refine_info, eff_sigma = {}, {}, {}
+        merge = {d: self.merge_inertia for d in dofs}
+        for sweep in range(int(self.refine_sweeps) if self.refine else 0):
+            args = [(d, dict(params), merge[d], self.estimate_initial_velocity, self.max_nfev) for d in dofs]
+            results = hook.run_tasks(evaluator, _refine_task, args)
+            for d, ref in zip(dofs, results):
+                merge[d] = "always" if ref["merged"] else "never"
+                params.update(ref["values"])
+                unc.update(ref["uncertainty"])
+                eff_sigma[d] = ref["effective_inertia_sigma"]
+                refine_info[d] = {k: ref[k] for k in ("merged", "initial_velocity", "cost", "nfev", "message",
+                                                     "residual_rms")}
+                refine_info[d]["sweeps"] = sweep + 1
+        if self.refine and self.joint and len(dofs) > 1:
+            all_measured = [evaluator.batch.measured[i] for p in evaluator.problems.values() for i in p.run_index]
+            jw = check_weights(self.joint_weights, "joint_weights") if self.joint_weights is not None else None
+            merged = {d: (refine_info[d]["merged"] if d in refine_info else None) for d in dofs}
+            jscales = signal_scales(all_measured, self.noise)
+            n_chunks = JOINT_CHUNKS
+
+            def evaluate(cols, base, X):
+                chunks = [c for c in np.array_split(X, min(n_chunks, len(X))) if len(c)]
+                out = hook.run_tasks(evaluator, _joint_task, [(cols, base, jscales, jw, c) for c in chunks])
+                return np.vstack(out)
+
+            ref = refine_joint(evaluator.vehicle, evaluator.batch, evaluator.problems, params, merged, jscales,
+                               weights=jw, max_nfev=self.max_nfev, evaluate=evaluate)
+            params.update(ref["values"])
+            unc.update(ref["uncertainty"])
+            eff_sigma.update(ref["effective_inertia_sigma"])
+            refine_info["joint"] = {k: ref[k] for k in ("cost", "nfev", "message", "residual_rms")}
+        results = hook.run_tasks(evaluator, _ident_task, [(d, dict(params)) for d in dofs])
+        ident = dict(zip(dofs, results))
+        return params, unc, ident, refine_info, eff_sigma
 
     # ------------------------------------------------------------------ evaluation
     def predict(self, runs) -> list[dict]:
@@ -326,9 +377,36 @@ class Calibrator:
             "wall_seconds": float(time.perf_counter() - t0),
             "settings": {**settings.__dict__, "margin": self.margin, "workers": self.workers, "dask": self.dask,
                          "batch_rows": self.batch_rows, "low_speed_exponent": self.low_speed_exponent,
-                         "signal_weights": dict(self.signal_weights or {}), "noise": dict(self.noise or {}),
+                         "signal_weights": {d: problems[d].signal_weights for d in dofs},
+                         "noise": dict(self.noise or {}),
                          "refine": self.refine, "merge_inertia": self.merge_inertia,
+                         "refine_sweeps": self.refine_sweeps, "max_nfev": self.max_nfev, "joint": self.joint,
                          "initial_velocity": self.initial_velocity,
                          "estimate_initial_velocity": self.estimate_initial_velocity},
             "logbook": {d: [dict(rec) for rec in lb] for d, lb in ga["logbooks"].items()},
         }
+
+
+def _vehicle_for(evaluator, dof, params):
+    names = evaluator.problems[dof].names
+    return evaluator.vehicle.with_parameters({k: v for k, v in params.items() if k not in names})
+
+
+def _refine_task(evaluator, dof, params, merge, estimate_iv, max_nfev):
+    """One DOF's refinement (runs in a worker): the other DOFs at ``params``."""
+    prob = evaluator.problems[dof]
+    veh_d = _vehicle_for(evaluator, dof, params)
+    start = {k: params[k] for k in prob.names}
+    a = identifiability(veh_d, evaluator.batch, prob, start) if merge == "auto" else None
+    return refine_dof(veh_d, evaluator.batch, prob, start, merge_inertia=merge,
+                      estimate_initial_velocity=estimate_iv, max_nfev=max_nfev, ident=a)
+
+
+def _ident_task(evaluator, dof, params):
+    prob = evaluator.problems[dof]
+    return identifiability(_vehicle_for(evaluator, dof, params), evaluator.batch, prob,
+                           {k: params[k] for k in prob.names})
+
+
+def _joint_task(evaluator, cols, base, scales, weights, X):
+    return joint_residuals(evaluator.vehicle, evaluator.batch, evaluator.problems, cols, base, scales, weights, X)

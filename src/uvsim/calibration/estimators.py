@@ -26,6 +26,8 @@ Where ``w``/``r`` or their derivatives are not logged they come from
 """
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from uvsim.calibration.derivatives import body_acceleration, body_velocity, smooth_derivative
@@ -113,9 +115,13 @@ def heave_regression(vehicle, runs, *, quadratic: bool = True, bias: bool = True
         acc = body_acceleration(run, nu, window_s=window_s)
         w, wd = nu[:, 2], acc[:, 2]
         Z = generalized_forces(vehicle, run)[:, 2]
-        cols = [Z, -w]
+        # w_dot is a Savitzky-Golay derivative, i.e. a smoothed quantity: smooth the
+        # regressors with the same filter so both sides of eq. 20 see the same smoothing
+        # (otherwise the force steps, sharp in Z but blurred in w_dot, bias alpha)
+        sm = functools.partial(smooth_derivative, run.t, deriv=0, window_s=window_s, what=f"{run.name}: regressor")
+        cols = [sm(Z), -sm(w)]
         if quadratic:
-            cols.append(-np.abs(w) * w)
+            cols.append(-sm(np.abs(w) * w))
         if bias:
             cols.append(np.ones_like(w))
         Hs.append(np.stack(cols, -1))
@@ -235,6 +241,7 @@ def yaw_inertia_sinusoid(vehicle, run, N_r: float, N_rr: float, *, window_s: flo
     rd = smooth_derivative(run.t, r, window_s=window_s, what=f"{run.name}: r")
     N = generalized_forces(veh, run)[:, 5]
     dN = N + N_r * r + N_rr * np.abs(r) * r
+    dN = smooth_derivative(run.t, dN, deriv=0, window_s=window_s, what=f"{run.name}: moment")  # same filter as r_dot
     ok = np.isfinite(rd) & np.isfinite(dN)
     J_ls = float(np.sum(rd[ok] * dN[ok]) / np.sum(rd[ok] ** 2))
     pk = ok & (np.abs(rd) >= peak_fraction * np.nanmax(np.abs(rd)))

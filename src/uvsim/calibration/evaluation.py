@@ -170,6 +170,11 @@ class SerialMap:
     def _run(self, ev, blocks):
         return _serial_blocks(ev, blocks)
 
+    def run_tasks(self, evaluator, fn, args_list) -> list:
+        """``[fn(evaluator, *args) for args in args_list]``, in the workers when
+        there are any (``fn`` must be a module-level function)."""
+        return [fn(evaluator, *a) for a in args_list]
+
     def close(self):
         pass
 
@@ -184,6 +189,11 @@ def _init_worker(evaluator):
 
 def _worker_block(block):
     return _WORKER_EVALUATOR.evaluate_block(block)
+
+
+def _worker_task(fn_args):
+    fn, args = fn_args
+    return fn(_WORKER_EVALUATOR, *args)
 
 
 class ProcessMap(SerialMap):
@@ -204,6 +214,9 @@ class ProcessMap(SerialMap):
 
     def _run(self, ev, blocks):
         return list(self._pool.map(_worker_block, blocks))
+
+    def run_tasks(self, evaluator, fn, args_list) -> list:
+        return list(self._pool.map(_worker_task, [(fn, a) for a in args_list]))
 
     def close(self):
         self._pool.shutdown(wait=True, cancel_futures=True)
@@ -240,6 +253,10 @@ class DaskMap(SerialMap):
 
     def _run(self, ev, blocks):
         futs = [self._client.submit(_dask_block, self._ev, b, pure=False) for b in blocks]
+        return self._client.gather(futs)
+
+    def run_tasks(self, evaluator, fn, args_list) -> list:
+        futs = [self._client.submit(fn, self._ev, *a, pure=False) for a in args_list]
         return self._client.gather(futs)
 
     def close(self):

@@ -46,7 +46,10 @@ FD_STEP = 1e-6   # forward-difference step in scaled parameters
 
 
 class _Residuals:
-    """Batched residual vectors of one DOF's runs for parameter vectors x (B, n_x)."""
+    """Batched residual vectors of a set of runs for parameter vectors x (B, n_x).
+
+    ``problem`` supplies run_index, run_weights, scales, signal_weights and dof
+    (a :class:`DofProblem` or any object with those attributes)."""
 
     def __init__(self, vehicle, batch: RunBatch, problem, columns, base: Mapping[str, float]):
         self.vehicle, self.batch, self.problem = vehicle, batch, problem
@@ -265,3 +268,100 @@ def refine_dof(vehicle, batch: RunBatch, problem, start: Mapping[str, float], *,
             "merged": list(merged) if merged else None, "effective_inertia_sigma": eff_sigma,
             "initial_velocity": nu_fit, "cost": float(res.cost), "nfev": int(res.nfev),
             "message": str(res.message), "residual_rms": float(np.sqrt(np.mean(res.fun ** 2)))}
+
+
+class _Joint:
+    """Problem-like view of all training runs for the joint refinement."""
+
+    def __init__(self, problems: dict, scales: dict, weights: dict | None):
+        self.dof = None
+        idx, w = [], []
+        for p in problems.values():
+            idx += list(p.run_index)
+            w += list(p.run_weights)
+        self.run_index = np.array(idx, int)
+        self.run_weights = np.array(w, float)
+        self.scales = scales
+        self.signal_weights = weights
+
+
+def joint_residuals(vehicle, batch, problems, columns, base, scales, weights, X) -> np.ndarray:
+    """Residual vectors (B, m) of all training runs for scaled parameter vectors X (B, n_x)."""
+    F = _Residuals(vehicle, batch, _Joint(problems, dict(scales), dict(weights or {})), columns, base)
+    return F(X)
+
+
+def refine_joint(vehicle, batch: RunBatch, problems: dict, start: Mapping[str, float], merged: Mapping,
+                 scales: Mapping[str, float], *, weights: Mapping[str, float] | None = None,
+                 max_nfev: int = 30, evaluate=None) -> dict:
+    """Least squares over every DOF's parameters at once on all training runs.
+
+    The tank runs are not fully decoupled (a positively buoyant vehicle rises
+    during every run; sway runs excite yaw through the Munk moment), so a final
+    joint fit on all logged channels (``weights``, default all 1; ``scales`` one
+    per group over all runs) removes the bias the per-DOF fits leave.  Pairs in
+    ``merged`` (dof -> (inertia, added inertia) or None) are fitted as sums.
+    ``evaluate(columns, base, X) -> (B, m)`` may spread the batched residual
+    evaluations (the Jacobian's perturbed copies) over worker processes; default:
+    :func:`joint_residuals` in this process.  Returns the same keys as
+    :func:`refine_dof` (per parameter)."""
+    init = {}
+    for p in problems.values():
+        init.update(dict(zip(p.names, p.initial)))
+    lower, upper = {}, {}
+    for p in problems.values():
+        lower.update(dict(zip(p.names, p.lower)))
+        upper.update(dict(zip(p.names, p.upper)))
+    cols, x0, lb, ub = [], [], [], []
+    for d, p in problems.items():
+        pair = merged.get(d)
+        for k in p.names:
+            if pair and k in pair:
+                continue
+            s = abs(init[k]) or 1.0
+            cols.append(("param", k, s))
+            x0.append(start[k] / s)
+            lb.append(lower[k] / s)
+            ub.append(upper[k] / s)
+        if pair:
+            a, b = pair
+            S = start[a] + start[b]
+            s = abs(init[a] + init[b])
+            cols.append(("sum", ((a, b), start[a] / S), s))
+            x0.append(S / s)
+            lb.append((lower[a] + lower[b]) / s)
+            ub.append((upper[a] + upper[b]) / s)
+    x0 = np.clip(np.array(x0, float), lb, ub)
+    base = {k: start[k] for k in init}
+    F = _Residuals(vehicle, batch, _Joint(problems, dict(scales), dict(weights or {})), cols, base)
+    if evaluate is not None:
+        def Fx(X):
+            return evaluate(cols, base, X)
+    else:
+        Fx = F
+    res = least_squares(lambda x: F(x[None])[0], x0, jac=lambda x: _jacobian(Fx, x)[1],
+                        bounds=(np.array(lb), np.array(ub)), method="trf", max_nfev=max_nfev)
+    vals, _ = F.values(res.x)
+    values = {k: float(start[k]) for k in init}
+    values.update({k: float(v) for k, v in vals.items()})
+    m, p_ = res.fun.size, res.x.size
+    s2 = float(res.fun @ res.fun) / max(m - p_, 1)
+    J = res.jac
+    cov = s2 * np.linalg.pinv(J.T @ J)
+    sc = np.array([c[2] for c in cols])
+    sig = np.sqrt(np.maximum(np.diag(cov), 0.0)) * sc
+    unc, eff = {}, {}
+    for (kind, payload, _), sg in zip(cols, sig):
+        if kind == "param":
+            unc[payload] = float(sg)
+        else:
+            unc[payload[0][0]] = unc[payload[0][1]] = None
+            dof = next(d for d, pr in merged.items() if pr and tuple(pr) == tuple(payload[0]))
+            eff[dof] = float(sg)
+    for d, p in problems.items():
+        if d not in eff:
+            pair = EFFECTIVE_INERTIA[d]
+            eff[d] = unc.get(pair[1]) if pair[0] not in p.names else None
+    return {"values": values, "uncertainty": unc, "effective_inertia_sigma": eff, "cost": float(res.cost),
+            "nfev": int(res.nfev), "message": str(res.message),
+            "residual_rms": float(np.sqrt(np.mean(res.fun ** 2)))}

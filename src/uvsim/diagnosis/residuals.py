@@ -17,14 +17,17 @@ Two kinds, both per run and over time:
   constant.
 
 Smoothing and differentiation (:mod:`uvsim.calibration.derivatives`): a
-Savitzky-Golay filter (cubic, 0.5 s window) differentiates the logged position
+Savitzky-Golay filter (cubic, 1 s window, ``FORCE_WINDOW_S``) differentiates the logged position
 (rotated into the body frame with the logged attitude) and the unwrapped ZYX
 Euler angles (converted to body rates, Fossen 2021 eq. 2.28); logged velocities
 and rates are used as they are; ``nu_dot`` is the Savitzky-Golay derivative of
-``nu``.  Components of ``nu`` that cannot be formed from the log (e.g. ``u, v`` of
+``nu``; the model's acceleration ``f(eta, nu, u)`` is passed through the same
+(zero-phase) filter, so that both sides of the difference are equally smoothed
+and input steps leave no filter artefact.  Components of ``nu`` that cannot be formed from the log (e.g. ``u, v`` of
 a depth-only run) are taken from the simulation and the residual components
 that depend on them are masked (NaN): forces need all of ``u, v, w``, moments all
-of ``p, q, r``.
+of ``p, q, r``.  The first and last half window are masked too (there the filter
+extrapolates).
 
 Measurement noise (:func:`noise_levels`): per signal group, from second
 differences of the raw signal, ``sigma = 1.4826 MAD(d2) / sqrt(6)`` (for white
@@ -38,7 +41,7 @@ from __future__ import annotations
 import numpy as np
 
 from uvsim.calibration.batching import simulate_dataset
-from uvsim.calibration.derivatives import body_acceleration, body_velocity
+from uvsim.calibration.derivatives import body_acceleration, body_velocity, smooth_derivative
 from uvsim.errors import CalibrationError
 from uvsim.kinematics import quat_to_rotation
 from uvsim.metrics import present_groups, residual_components, signals_from_run
@@ -94,14 +97,21 @@ def output_residuals(runs, predicted) -> list[dict[str, np.ndarray]]:
     return out
 
 
-def measured_motion(run) -> tuple[np.ndarray, np.ndarray, str | None]:
+#: Savitzky-Golay window (s) for the inverse dynamics: longer than the 0.5 s used to
+#: estimate initial velocities because the second derivative amplifies noise
+#: (2 mm position noise at 20 Hz); still short against the 1-3 s time constants of
+#: the tank runs.
+FORCE_WINDOW_S = 1.0
+
+
+def measured_motion(run, window_s: float = FORCE_WINDOW_S) -> tuple[np.ndarray, np.ndarray, str | None]:
     """``(nu, nu_dot, problem)``: body velocities (n, 6) and accelerations (n, 6)
     from the smoothed log (NaN where not available); ``problem`` says why none
     could be formed (non-uniform time, gaps), else None."""
     n = len(run.t)
     try:
-        nu = body_velocity(run)
-        nu_dot = body_acceleration(run, nu)
+        nu = body_velocity(run, window_s=window_s)
+        nu_dot = body_acceleration(run, nu, window_s=window_s)
     except CalibrationError as exc:
         return np.full((n, 6), np.nan), np.full((n, 6), np.nan), str(exc)
     return nu, nu_dot, None
@@ -155,10 +165,18 @@ def force_residual(vehicle, run, states: np.ndarray) -> dict:
     if have.any():
         model = Model(vehicle, n=n, input_kind=run.input_kind)
         acc = model.rhs(float(run.t[0]), y, run.inputs)[:, 7:13]
+        # the measured acceleration is a Savitzky-Golay (low-pass) estimate; filter the model's
+        # acceleration the same way so that input steps do not leave a smoothing artefact
+        acc = smooth_derivative(run.t, acc, deriv=0, window_s=FORCE_WINDOW_S, what=f"{run.name}: model acceleration")
         M = model.M if model.M.ndim == 2 else model.M[0]
         res = (np.where(have[None, :], nud_m, acc) - acc) @ M.T
         mask = np.array([have[:3].all()] * 3 + [have[3:].all()] * 3)
         body = np.where(mask[None, :], res, np.nan)
+        # the filter's end segments (half a window) extrapolate a polynomial: not used
+        half = int(round(0.5 * FORCE_WINDOW_S / float(np.median(np.diff(run.t)))))
+        if 0 < half < n // 4:
+            body[:half] = np.nan
+            body[-half:] = np.nan
         R = quat_to_rotation(y[:, 3:7])
         ned[:, :3] = np.einsum("nij,nj->ni", R, body[:, :3])
         ned[:, 3:] = np.einsum("nij,nj->ni", R, body[:, 3:])
@@ -171,3 +189,59 @@ def force_residual(vehicle, run, states: np.ndarray) -> dict:
 def simulate(vehicle, runs, effects=None, overrides=None) -> list[dict]:
     """Simulated signals of ``runs`` (see :func:`uvsim.calibration.batching.simulate_dataset`)."""
     return simulate_dataset(vehicle, runs, overrides, effects)
+
+
+#: Window (s) of the straight-line fit that estimates a run's initial position and attitude.
+INITIAL_WINDOW_S = 1.0
+
+
+def initial_pose(run, window_s: float = INITIAL_WINDOW_S) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Initial NED position (3,) and attitude quaternion (4,) of a run, estimated by a
+    least-squares straight line through the samples of the first ``window_s`` seconds,
+    evaluated at the first time stamp (NaN samples skipped).
+
+    An open-loop simulation inherits the error of its initial state, and a heading
+    error grows into a position error along the path (0.005 rad over 6 m is 30 mm,
+    15 times a 2 mm motion-capture noise).  The line's value at ``t0`` has a variance
+    ``2 (2n - 1) / (n (n + 1))`` times that of one sample (0.32 for n = 11 samples,
+    0.08 for n = 51).  Returns None for what the run does not log; the position
+    keeps NaN for axes not logged."""
+    t = run.t
+    sel = t <= t[0] + window_s
+    if sel.sum() < 3:
+        return None, None
+    tt = t[sel] - t[0]
+
+    def line_at_t0(x):
+        ok = np.isfinite(x)
+        if ok.sum() < 3:
+            return np.nan
+        A = np.column_stack([np.ones(ok.sum()), tt[ok]])
+        return float(np.linalg.lstsq(A, x[ok], rcond=None)[0][0])
+
+    pos = None
+    if run.has_position:
+        p = run.position[sel]
+        pos = np.array([line_at_t0(p[:, j]) for j in range(3)])
+    q0 = None
+    if run.has_attitude:
+        q = run.quaternion[sel]
+        ok = np.isfinite(q).all(axis=1)
+        if ok.sum() >= 3:
+            ref = q[np.argmax(ok)]
+            q = np.where((q @ ref < 0)[:, None], -q, q)  # one hemisphere
+            q0 = np.array([line_at_t0(q[:, j]) for j in range(4)])
+            q0 = q0 / np.linalg.norm(q0)
+    return pos, q0
+
+
+def refine_initial_states(batch, window_s: float = INITIAL_WINDOW_S):
+    """Replace a :class:`uvsim.calibration.batching.RunBatch`'s first-sample initial
+    positions and attitudes by :func:`initial_pose` estimates (in place); returns it."""
+    for i, run in enumerate(batch.runs):
+        pos, q0 = initial_pose(run, window_s)
+        if pos is not None:
+            batch.pos0[i] = np.where(np.isfinite(pos), pos, batch.pos0[i])
+        if q0 is not None:
+            batch.q0[i] = q0
+    return batch

@@ -72,6 +72,26 @@ def rotation_rpy(rpy_deg) -> np.ndarray:
     return Rz @ Ry @ Rx
 
 
+def gimbal_matrix(tv_pitch, tv_yaw) -> np.ndarray:
+    """Rotation of the thrust-vectoring unit, ``G = R_y(-tv_pitch) R_z(-tv_yaw)`` ((3, 3) or
+    (n, 3, 3)), which turns the body x axis into the thrust direction of
+    :class:`uvsim.sam.subsystems.Propulsion`, ``[cos dp cos dy, -sin dy, sin dp cos dy]``."""
+    dp, dy = np.asarray(tv_pitch, float), np.asarray(tv_yaw, float)
+    c, s, cy, sy = np.cos(dp), np.sin(dp), np.cos(dy), np.sin(dy)
+    z = np.zeros_like(c)
+    rows = [[c * cy, c * sy, -s], [-sy, cy, z], [s * cy, s * sy, c]]
+    return np.stack([np.stack(r, -1) for r in rows], -2)
+
+
+def _matmul33(A, B):
+    """Product of two 3x3 matrices given as row-major 9-sequences (plain floats)."""
+    a0, a1, a2, a3, a4, a5, a6, a7, a8 = A
+    b0, b1, b2, b3, b4, b5, b6, b7, b8 = B
+    return (a0 * b0 + a1 * b3 + a2 * b6, a0 * b1 + a1 * b4 + a2 * b7, a0 * b2 + a1 * b5 + a2 * b8,
+            a3 * b0 + a4 * b3 + a5 * b6, a3 * b1 + a4 * b4 + a5 * b7, a3 * b2 + a4 * b5 + a5 * b8,
+            a6 * b0 + a7 * b3 + a8 * b6, a6 * b1 + a7 * b4 + a8 * b7, a6 * b2 + a7 * b5 + a8 * b8)
+
+
 # ----------------------------------------------------------------------------- tables (cached)
 @lru_cache(maxsize=32)
 def _body_table(hull_json: str, dataset: str, nu: float, re_key: tuple | None):
@@ -115,6 +135,7 @@ class Component:
     area: float
     length: float
     table: object
+    gimbal: bool = False
 
 
 def _vec(spec, key, where, default=None):
@@ -215,7 +236,10 @@ class ComponentBuildup(ForceTerm):
             area, chord = _pos(spec, "area", where), _pos(spec, "chord", where)
             ar = _pos(spec, "aspect_ratio", where)
             oswald = _pos({"oswald": spec.get("oswald", 0.9)}, "oswald", where)
-            return Component(name, "wing", pos, C, area, chord, _wing_table(ar, oswald))
+            gimbal = spec.get("gimbal", False)
+            if not isinstance(gimbal, bool):
+                raise VehicleError(f"{where}.gimbal: expected true or false, got {gimbal!r}")
+            return Component(name, "wing", pos, C, area, chord, _wing_table(ar, oswald), gimbal)
         raise VehicleError(f"{where}.kind: expected 'body' or 'wing', got {kind!r}")
 
     def parameters(self):
@@ -241,6 +265,24 @@ class ComponentBuildup(ForceTerm):
         return ComponentBuildup(**d)
 
     # ------------------------------------------------------------------ evaluation
+    _gimbal_key = None
+
+    def bind(self, vehicle, index):
+        """Copy that reads the thrust-vector angles of the vehicle's ``sam_propulsion`` term
+        (for components with ``gimbal: true``); called by :class:`uvsim.model.Model`."""
+        import copy
+
+        if not any(c.gimbal for c in self.components):
+            return self
+        terms = vehicle.terms
+        keys = [j for j, t in enumerate(terms) if getattr(t, "kind", None) == "sam_propulsion"]
+        if len(keys) != 1:
+            raise VehicleError(f"{vehicle.source}: damping (component_buildup): components with gimbal: true need "
+                               f"exactly one sam_propulsion effect, found {len(keys)}")
+        new = copy.copy(self)
+        new._gimbal_key = keys[0]
+        return new
+
     def prepare(self, params, n):
         names = list(ROT_NAMES) + (list(CROSS_NAMES) if self.cross_coupled is not None else [])
         vals = {k: np.broadcast_to(np.asarray(params[k], float), (n,)) for k in names}
@@ -248,14 +290,21 @@ class ComponentBuildup(ForceTerm):
         comps = []
         for c in self.components:
             comps.append((c.kind == "body", tuple(float(x) for x in c.r), tuple(float(x) for x in c.C.ravel()),
-                          0.5 * self.rho * c.area, c.length, c.length / self.nu, c.table))
+                          0.5 * self.rho * c.area, c.length, c.length / self.nu, c.table, c.gimbal))
         return {"vals": vals, "scalar": scalar, "comps": comps,
                 "svals": {k: float(v[0]) for k, v in vals.items()}}
 
+    def _gimbal_angles(self, ctx):
+        """(n, 2) thrust-vector angles [tv_pitch, tv_yaw] (rad), or None when not bound."""
+        if self._gimbal_key is None:
+            return None
+        return ctx.states[self._gimbal_key][:, 2:4]
+
     def forces(self, ctx, prep):
+        g = self._gimbal_angles(ctx)
         if prep["scalar"] and ctx.nu_r.shape[0] == 1:
-            return np.array([self._forces_single(ctx.nu_r[0].tolist(), prep)])
-        return self._forces_batch(ctx.nu_r, prep)
+            return np.array([self._forces_single(ctx.nu_r[0].tolist(), prep, None if g is None else g[0].tolist())])
+        return self._forces_batch(ctx.nu_r, prep, g)
 
     def component_forces(self, nu_r) -> dict:
         """Per-component generalized force (body frame, about the body origin) for velocities
@@ -267,11 +316,19 @@ class ComponentBuildup(ForceTerm):
             out[c.name] = self._batch_component(nu_r, pc)
         return out
 
-    def _forces_single(self, nu, prep):
+    def _forces_single(self, nu, prep, gimbal=None):
         u, v, w, p, q, r = nu
         X = Y = Z = K = M = N = 0.0
         sqrt, atan2 = math.sqrt, math.atan2
-        for is_body, (rx, ry, rz), (c00, c01, c02, c10, c11, c12, c20, c21, c22), qa, L, l_nu, table in prep["comps"]:
+        G = None
+        if gimbal is not None:
+            dp, dy = gimbal
+            c, s_, cy, sy = math.cos(dp), math.sin(dp), math.cos(dy), math.sin(dy)
+            G = (c * cy, c * sy, -s_, -sy, cy, 0.0, s_ * cy, s_ * sy, c)  # gimbal_matrix(dp, dy)
+        for is_body, (rx, ry, rz), Cf, qa, L, l_nu, table, gim in prep["comps"]:
+            if gim and G is not None:
+                Cf = _matmul33(G, Cf)
+            c00, c01, c02, c10, c11, c12, c20, c21, c22 = Cf
             vx = u + q * rz - r * ry
             vy = v + r * rx - p * rz
             vz = w + p * ry - q * rx
@@ -327,12 +384,14 @@ class ComponentBuildup(ForceTerm):
         return [X, Y, Z, K, M, N]
 
     @staticmethod
-    def _batch_component(nu_r, pc):
-        is_body, rc, Cf, qa, L, l_nu, table = pc
+    def _batch_component(nu_r, pc, G=None):
+        is_body, rc, Cf, qa, L, l_nu, table, gim = pc
         rc = np.asarray(rc)
         C = np.asarray(Cf).reshape(3, 3)
+        if gim and G is not None:
+            C = G @ C  # (n, 3, 3): component -> body through the gimbal
         vc = nu_r[:, :3] + np.cross(nu_r[:, 3:], rc)
-        loc = vc @ C  # C^T v for each row
+        loc = vc @ C if C.ndim == 2 else np.einsum("ni,nij->nj", vc, C)  # C^T v for each row
         lu, lv, lw = loc[:, 0], loc[:, 1], loc[:, 2]
         n = nu_r.shape[0]
         f = np.zeros((n, 3))
@@ -342,7 +401,7 @@ class ComponentBuildup(ForceTerm):
             U2 = lu * lu + cr2
             U = np.sqrt(U2)
             ct = np.sqrt(cr2)
-            CL, CD, CM = table.lookup(np.arctan2(ct, lu), U * l_nu)
+            CL, CD, CM = table.lookup(np.arctan2(ct, lu), np.maximum(U * l_nu, 1.0))  # Re >= 1: no log10(0)
             Us = np.where(U > 0, U, 1.0)
             ca, sa = np.where(U > 0, lu / Us, 1.0), ct / Us
             CN = CL * ca + CD * sa
@@ -356,20 +415,25 @@ class ComponentBuildup(ForceTerm):
         else:
             U2 = lu * lu + lw * lw
             U = np.sqrt(U2)
-            CL, CD, CM = table.lookup(np.arctan2(lw, lu), U * l_nu)
+            CL, CD, CM = table.lookup(np.arctan2(lw, lu), np.maximum(U * l_nu, 1.0))
             Us = np.where(U > 0, U, 1.0)
             a, b = lu / Us, lw / Us
             Q = qa * U2
             f[:, 0], f[:, 2] = Q * (CL * b - CD * a), Q * (-CL * a - CD * b)
             m[:, 1] = Q * L * CM
-        F = f @ C.T
-        Mb = m @ C.T + np.cross(rc, F)
+        if C.ndim == 2:
+            F = f @ C.T
+            Mb = m @ C.T + np.cross(rc, F)
+        else:
+            F = np.einsum("nij,nj->ni", C, f)
+            Mb = np.einsum("nij,nj->ni", C, m) + np.cross(rc, F)
         return np.concatenate([F, Mb], axis=1)
 
-    def _forces_batch(self, nu_r, prep):
+    def _forces_batch(self, nu_r, prep, gimbal=None):
+        G = None if gimbal is None else gimbal_matrix(gimbal[:, 0], gimbal[:, 1])
         tau = None
         for pc in prep["comps"]:
-            f = self._batch_component(nu_r, pc)
+            f = self._batch_component(nu_r, pc, G)
             tau = f if tau is None else tau + f
         vals = prep["vals"]
         p, q, r = nu_r[:, 3], nu_r[:, 4], nu_r[:, 5]

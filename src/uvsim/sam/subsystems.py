@@ -95,8 +95,20 @@ class _Servo:
         return d
 
     def derivative(self, cmd, x):
+        """``clip((clip(cmd) - x) / tau, -rate, rate)``, zero within a dead band of 1e-9 of
+        the range (so a settled actuator is exactly constant; see :class:`uvsim.sam.model.SamModel`)."""
         c = np.minimum(np.maximum(cmd, self.lo), self.hi)
-        return np.minimum(np.maximum((c - x) / self.tau, -self.rate), self.rate)
+        e = c - x
+        d = np.minimum(np.maximum(e / self.tau, -self.rate), self.rate)
+        return np.where(np.abs(e) > 1e-9 * (self.hi - self.lo), d, 0.0)
+
+    def derivative1(self, cmd: float, x: float) -> float:
+        """Scalar version of :meth:`derivative`."""
+        c = min(max(cmd, self.lo), self.hi)
+        e = c - x
+        if abs(e) <= 1e-9 * (self.hi - self.lo):
+            return 0.0
+        return min(max(e / self.tau, -self.rate), self.rate)
 
     def initial(self, cmd):
         return np.minimum(np.maximum(cmd, self.lo), self.hi)
@@ -212,6 +224,11 @@ class Propulsion(ForceTerm):
 
     def state_derivative(self, ctx, prep, x):
         u = ctx.u
+        if x.shape[0] == 1:
+            i = self.inputs
+            u0, x0 = u[0].tolist(), x[0].tolist()
+            r, t = self.rpm.derivative1, self.tv.derivative1
+            return np.array([[r(u0[i[0]], x0[0]), r(u0[i[1]], x0[1]), t(u0[i[2]], x0[2]), t(u0[i[3]], x0[3])]])
         d = np.empty_like(x)
         d[:, :2] = self.rpm.derivative(u[:, self.inputs[:2]], x[:, :2])
         d[:, 2:] = self.tv.derivative(u[:, self.inputs[2:]], x[:, 2:])
@@ -230,8 +247,36 @@ class Propulsion(ForceTerm):
         Q = np.where(fwd, r5 * (q0 * a * n_rps + q1 * va * a), r5 * q0 * a * n_rps / c["reverse_factor"])
         return T, Q
 
+    def _forces1(self, x, u_r, prep):
+        """Scalar path of :meth:`forces` for one trajectory (same equations)."""
+        c = self.coef
+        r4, k0, k1 = prep["kt"]
+        r5, q0, q1 = prep["kq"]
+        va = c["wake_fraction_factor"] * u_r
+        T = []
+        Q = []
+        for rpm in x[:2]:
+            n = rpm / 60.0
+            a = abs(n)
+            if n > 0:
+                T.append(r4 * (k0 * a * n + k1 * va * a))
+                Q.append(r5 * (q0 * a * n + q1 * va * a))
+            else:
+                T.append(r4 * k0 * a * n / c["reverse_factor"])
+                Q.append(r5 * q0 * a * n / c["reverse_factor"])
+        dp, dy = x[2], x[3]
+        cy = math.cos(dy)
+        dx, dyy, dz = math.cos(dp) * cy, -math.sin(dy), math.sin(dp) * cy
+        Tt = T[0] + T[1]
+        Fx, Fy, Fz = Tt * dx, Tt * dyy, Tt * dz
+        px, py, pz = self.position.tolist()
+        Mr = -(self.spin[0] * Q[0] + self.spin[1] * Q[1])
+        return [Fx, Fy, Fz, py * Fz - pz * Fy + Mr * dx, pz * Fx - px * Fz + Mr * dyy, px * Fy - py * Fx + Mr * dz]
+
     def forces(self, ctx, prep):
         x = ctx.states[self._index(ctx)]
+        if x.shape[0] == 1:
+            return np.array([self._forces1(x[0].tolist(), float(ctx.nu_r[0, 0]), prep)])
         T, Q = self.thrust_torque(x[:, :2], ctx.nu_r[:, 0], prep)
         dp, dy = x[:, 2], x[:, 3]
         cy = np.cos(dy)
@@ -275,18 +320,31 @@ class _MassTerm(ForceTerm):
             return self.servo.initial(u0[:, [self.input]])
         return np.full((n, 1), self.servo.ref)
 
+    def prepare(self, params, n):
+        return {"key": None, "val": None}
+
     def state_derivative(self, ctx, prep, x):
+        if x.shape[0] == 1:
+            return np.array([[self.servo.derivative1(float(ctx.u[0, self.input]), float(x[0, 0]))]])
         return self.servo.derivative(ctx.u[:, [self.input]], x)
 
     def forces(self, ctx, prep):
         return np.zeros((ctx.nu.shape[0], 6))
 
     def mass_properties(self, ctx, prep, x):
+        """``(dm (n,), d_first_moment (n, 3), dI (n, 3, 3))`` relative to the reference
+        position; cached on the state value (unchanged while the actuator is settled)."""
+        key = x[:, 0].tobytes()
+        if prep is not None and prep["key"] == key:
+            return prep["val"]
         n = x.shape[0]
         dm, r1, m1, r0, m0 = self._masses(x[:, 0], n)
         dfirst = m1[:, None] * r1 - m0[:, None] * r0
         dI = _point_inertia(m1, r1) - _point_inertia(m0, r0)
-        return dm, dfirst, dI
+        val = (dm, dfirst, dI)
+        if prep is not None:
+            prep["key"], prep["val"] = key, val
+        return val
 
 
 @register("sam_vbs")

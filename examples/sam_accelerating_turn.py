@@ -1,0 +1,19 @@
+"""SAM hydrobatic maneuver 'accelerating_turn' (seed 003 sec. V-C): CSV + plots.
+
+Run:  python examples/sam_accelerating_turn.py [OUT_DIR]     (default: out/sam)
+Same as:  uvsim maneuver accelerating_turn --out OUT_DIR/accelerating_turn.csv --plots OUT_DIR
+"""
+import json
+import sys
+from pathlib import Path
+
+from uvsim.logs import write_run
+from uvsim.maneuvers import run_maneuver
+from uvsim.plotting_sam import plot_maneuver
+
+out = Path(sys.argv[1] if len(sys.argv) > 1 else "out/sam")
+res = run_maneuver("accelerating_turn")
+write_run(out / "accelerating_turn.csv", res.frame)
+plot_maneuver(res.frame, out, "accelerating_turn")
+t_end = float(res.frame["t"].iloc[-1])
+print(json.dumps(dict(res.metrics, realtime_factor=t_end / res.wall_time), indent=2))
