@@ -121,7 +121,8 @@ def test_diagnose_finds_the_missing_effect(tmp_path, name, spec, truth):
 def test_clean_data_gives_none(tmp_path):
     report = diagnose(make_data(tmp_path / "clean", None, seed=3), "bluerov2_heavy").report
     assert report["effect"] == "none"
-    assert report["baseline_validation_rms_noise_sigmas"] < 1.5
+    # noise plus the propagated error of the estimated initial states
+    assert report["baseline_validation_rms_noise_sigmas"] < 3.0
     assert not any(c["accepted"] for c in report["candidates"])
     assert report["rmse_after"] == report["rmse_before"]
 

@@ -167,3 +167,43 @@ def test_sam_vehicle_file_round_trip(tmp_path):
     np.testing.assert_allclose(_forces(again.damping, nu), _forces(veh.damping, nu))
     for a, b in zip(again.effects, veh.effects):
         assert a.to_dict() == b.to_dict()
+
+
+def test_gimbal_nozzle_turns_with_the_thrust_vector():
+    """Nozzle sections with gimbal: true see the thrust-vector angle; at forward speed a positive
+    yaw vector gives a side force to port on the nozzle (like a rudder with its trailing edge to
+    starboard), adding to the thrust's yaw moment."""
+    import uvsim
+    from uvsim.sam.buildup import gimbal_matrix
+    from uvsim.sam.model import make_model
+    from uvsim.sam.vehicle import commands
+
+    veh = load_sam()
+    d = veh.damping
+    nu = np.array([[1.5, 0, 0, 0, 0, 0]])
+    f0 = d.component_forces(nu, tv=[0.0, 0.0])["nozzle_vertical"][0]
+    f1 = d.component_forces(nu, tv=[0.0, 0.1])["nozzle_vertical"][0]
+    assert abs(f0[1]) < 1e-9 and f1[1] < 0 and f1[5] > 0
+    G = gimbal_matrix(0.05, 0.1)
+    np.testing.assert_allclose(G @ [1, 0, 0], [np.cos(0.05) * np.cos(0.1), -np.sin(0.1), np.sin(0.05) * np.cos(0.1)])
+    np.testing.assert_allclose(G @ G.T, np.eye(3), atol=1e-12)
+    # inside a model the term reads the propulsion states; scalar and batch paths agree
+    u = commands(2, rpm_1=[800, 800], rpm_2=[800, 800], tv_pitch=[0.05, -0.1], tv_yaw=[0.1, 0.02])
+    m2 = make_model(veh, n=2)
+    y = m2.initial_state(nu=np.array([[1.2, 0.1, -0.1, 0.1, 0.2, 0.3]] * 2), u0=u)
+    rb = m2.rhs(0.0, y, u)
+    m1 = make_model(veh, n=1)
+    rs = np.vstack([m1.rhs(0.0, y[i:i + 1], u[i:i + 1]) for i in range(2)])
+    np.testing.assert_allclose(rs, rb, rtol=1e-9, atol=1e-12)
+    assert uvsim.load_vehicle("sam").damping.components[1].gimbal
+
+
+def test_gimbal_without_propulsion_is_an_error():
+    import copy
+
+    from uvsim.model import Model
+
+    veh = copy.copy(load_sam())
+    veh.effects = [e for e in veh.effects if e.kind != "sam_propulsion"]
+    with pytest.raises(VehicleError, match="sam_propulsion"):
+        Model(veh, input_kind="thrust")

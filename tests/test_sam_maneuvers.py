@@ -42,10 +42,13 @@ def test_turbo_turn_yaw_envelope_and_1hz(results):
 def test_helix_rolls_and_yaws(results):
     r = _get(results, "helix")
     m = r.metrics
+    # seed 003 V-C-3 / Fig. 26: roll and yaw encompass the full envelope, in a confined box
     assert m["heading_rotation_deg"] > 720.0
-    assert m["roll_range_deg"] > 120.0                # large roll excursions (seed 003: full envelope)
-    assert abs(r.frame["z"].iloc[-1]) > 3.0           # a helix: it progresses along the vertical
-    assert max(m["extent_x_m"], m["extent_y_m"]) < 6.0
+    assert m["roll_range_deg"] > 360.0                # rolls over completely (unwrapped roll)
+    roll = np.degrees(r.frame["roll"].to_numpy())
+    assert roll.min() < -170.0 and roll.max() > 170.0
+    assert abs(r.frame["z"].iloc[-1]) > 3.0           # it progresses along the vertical
+    assert max(m["extent_x_m"], m["extent_y_m"], m["extent_z_m"]) < 10.0
 
 
 def test_lcg_sweep_pitches_near_vertical_without_propellers(results):
@@ -111,5 +114,5 @@ def test_benchmark_step_converges_and_reports():
 
     out = run(quick=False)
     assert set(out) == set(DESCRIPTIONS)
-    assert out["sam_dt50ms_position_error_m"] < 0.2     # dt = 0.05 s stays within 20 cm of dt = 0.005 s
+    assert out["sam_dt50ms_position_error_m"] < 0.5     # dt = 0.05 s within 1 % of the ~50 m path (dt = 0.005 s ref)
     assert out["sam_realtime_factor"] > 0 and out["sam_realtime_factor_dt10ms"] > 0

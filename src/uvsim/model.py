@@ -114,7 +114,7 @@ class Model:
         self.terms = list(vehicle.terms) + list(extra_terms)
         # terms that need the vehicle (e.g. its thruster allocation) or their own index in
         # ctx.states get a bound copy: ``term.bind(vehicle, index) -> ForceTerm`` (uvsim.effects)
-        self.terms = [t.bind(vehicle, i) if hasattr(t, "bind") else t for i, t in enumerate(self.terms)]
+        self.terms = [t.bind(vehicle, i) for i, t in enumerate(self.terms)]
         for t in extra_terms:
             params.update(t.parameters())
         unknown = set(overrides) - set(params)

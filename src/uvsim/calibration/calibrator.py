@@ -43,6 +43,8 @@ from uvsim.vehicle import load_vehicle
 #: over the workers); a constant, so that serial and parallel runs compute the same
 #: batches and give identical results.
 JOINT_CHUNKS = 2
+#: 1-sigma above this fraction of the value: reported as "weakly_determined".
+WEAK_RELATIVE_SIGMA = 0.25
 
 
 def _as_dataset(data) -> Dataset:
@@ -136,7 +138,7 @@ class Calibrator:
                  merge_inertia: str = "auto", estimate_initial_velocity: bool = False,
                  initial_velocity: str = "zero", workers: int = 1, dask: str | None = None,
                  batch_rows: int = DEFAULT_BATCH_ROWS, checkpoint=None, resume=None, progress: bool = False,
-                 effects=None, max_nfev: int = 40, refine_sweeps: int = 1, joint: bool = True,
+                 effects=None, max_nfev: int = 20, refine_sweeps: int = 1, joint: bool = True,
                  joint_weights: Mapping | None = None):
         self.dofs = dofs
         self.population, self.generations, self.seed = population, generations, seed
@@ -294,9 +296,21 @@ class Calibrator:
             params.update(ref["values"])
             unc.update(ref["uncertainty"])
             eff_sigma.update(ref["effective_inertia_sigma"])
-            refine_info["joint"] = {k: ref[k] for k in ("cost", "nfev", "message", "residual_rms")}
+            refine_info["joint"] = {k: ref[k] for k in ("cost", "nfev", "message", "residual_rms",
+                                                        "residual_autocorrelation", "variance_inflation")}
         results = hook.run_tasks(evaluator, _ident_task, [(d, dict(params)) for d in dofs])
         ident = dict(zip(dofs, results))
+        for d in dofs:  # what the data determine only loosely, and fits stopped by a bound
+            prob = evaluator.problems[d]
+            weak, at_bound = [], []
+            for k, lo, hi in zip(prob.names, prob.lower, prob.upper):
+                sg = unc.get(k)
+                if sg is not None and sg > WEAK_RELATIVE_SIGMA * abs(params[k]):
+                    weak.append(k)
+                if min(abs(params[k] - lo), abs(params[k] - hi)) <= 1e-6 * (hi - lo):
+                    at_bound.append(k)
+            ident[d]["weakly_determined"] = weak
+            ident[d]["at_bound"] = at_bound
         return params, unc, ident, refine_info, eff_sigma
 
     # ------------------------------------------------------------------ evaluation

@@ -15,7 +15,7 @@ from pathlib import Path
 from uvsim.calibration.params import DOF_PARAMETERS, EFFECTIVE_INERTIA
 
 #: Reduced GA for the demo (paper: population 60, 30 generations).
-DEMO_SETTINGS = dict(population=20, generations=8, seed=0, workers=2)
+DEMO_SETTINGS = dict(population=20, generations=8, seed=0, workers=2, max_nfev=15)
 
 
 def table5_rows(cal, truth: dict | None = None) -> list[dict]:

@@ -197,7 +197,8 @@ def _worker_task(fn_args):
 
 
 class ProcessMap(SerialMap):
-    """DEAP map hook with ``workers`` local processes (``multiprocessing``, spawn).
+    """DEAP map hook with ``workers`` local processes (``multiprocessing``; fork on
+    Linux, spawn elsewhere - there, scripts need the ``if __name__ == "__main__"`` guard).
 
     Each worker receives the evaluator once (pool initializer) and then only
     the blocks' genes."""
@@ -209,7 +210,10 @@ class ProcessMap(SerialMap):
         if workers < 1:
             raise CalibrationError(f"workers must be >= 1, got {workers}")
         self.n_workers = workers
-        self._pool = ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn"),
+        # fork where available (Linux): no re-import of the user's __main__ module, so
+        # scripts without an ``if __name__ == "__main__"`` guard work; spawn elsewhere.
+        method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
+        self._pool = ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context(method),
                                          initializer=_init_worker, initargs=(evaluator,))
 
     def _run(self, ev, blocks):

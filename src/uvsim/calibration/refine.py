@@ -10,8 +10,9 @@ run).
 
 Uncertainty: the Gauss-Newton covariance ``cov = s^2 (J^T J)^+`` at the solution
 with ``s^2 = sum r^2 / (m - p)`` (m residuals, p parameters), the usual
-nonlinear-least-squares estimate; it assumes independent residuals (true for
-white measurement noise and a correct model; optimistic otherwise).
+nonlinear-least-squares estimate, inflated by ``(1 + rho) / (1 - rho)`` where rho
+is the lag-1 autocorrelation of the residuals (:func:`ar1_inflation`): the plain
+formula assumes independent residuals, which trajectory residuals are not.
 
 Identifiability: the singular values of the column-scaled Jacobian of *all* of
 the DOF's parameters.  A direction whose relative singular value is below
@@ -95,6 +96,22 @@ class _Residuals:
                                                   run_weight=float(prob.run_weights[j]), fill=1e3))
             out.append(np.concatenate(parts))
         return np.array(out)
+
+
+def ar1_inflation(r: np.ndarray) -> tuple[float, float]:
+    """(lag-1 autocorrelation rho of the residual vector, variance inflation (1 + rho) / (1 - rho)).
+
+    Gauss-Newton uncertainties assume independent residuals.  Tank-run residuals are
+    strongly autocorrelated (an initial-state error or a slightly wrong parameter
+    shifts a whole trajectory), which makes the plain formula optimistic by orders
+    of magnitude; inflating the covariance by the AR(1) factor (effective sample
+    size n (1 - rho) / (1 + rho)) is the usual first-order correction."""
+    r = np.asarray(r, float)
+    if r.size < 3 or not np.any(r):
+        return 0.0, 1.0
+    rho = float(np.dot(r[:-1], r[1:]) / np.dot(r, r))
+    rho = min(max(rho, 0.0), 0.999)
+    return rho, (1 + rho) / (1 - rho)
 
 
 def _jacobian(F: _Residuals, x: np.ndarray, step: float = FD_STEP) -> tuple[np.ndarray, np.ndarray]:
@@ -244,7 +261,8 @@ def refine_dof(vehicle, batch: RunBatch, problem, start: Mapping[str, float], *,
     m, p = res.fun.size, res.x.size
     s2 = float(res.fun @ res.fun) / max(m - p, 1)
     J = _jacobian(F, res.x)[1]
-    cov = s2 * np.linalg.pinv(J.T @ J)
+    rho, infl = ar1_inflation(res.fun)
+    cov = infl * s2 * np.linalg.pinv(J.T @ J)
     scales = np.array([c[2] for c in cols])
     sig = np.sqrt(np.maximum(np.diag(cov), 0.0)) * scales
     unc: dict = {}
@@ -267,6 +285,7 @@ def refine_dof(vehicle, batch: RunBatch, problem, start: Mapping[str, float], *,
     return {"values": {k: float(v) for k, v in values.items()}, "uncertainty": unc,
             "merged": list(merged) if merged else None, "effective_inertia_sigma": eff_sigma,
             "initial_velocity": nu_fit, "cost": float(res.cost), "nfev": int(res.nfev),
+            "residual_autocorrelation": rho, "variance_inflation": infl,
             "message": str(res.message), "residual_rms": float(np.sqrt(np.mean(res.fun ** 2)))}
 
 
@@ -347,7 +366,8 @@ def refine_joint(vehicle, batch: RunBatch, problems: dict, start: Mapping[str, f
     m, p_ = res.fun.size, res.x.size
     s2 = float(res.fun @ res.fun) / max(m - p_, 1)
     J = res.jac
-    cov = s2 * np.linalg.pinv(J.T @ J)
+    rho, infl = ar1_inflation(res.fun)
+    cov = infl * s2 * np.linalg.pinv(J.T @ J)
     sc = np.array([c[2] for c in cols])
     sig = np.sqrt(np.maximum(np.diag(cov), 0.0)) * sc
     unc, eff = {}, {}
@@ -363,5 +383,6 @@ def refine_joint(vehicle, batch: RunBatch, problems: dict, start: Mapping[str, f
             pair = EFFECTIVE_INERTIA[d]
             eff[d] = unc.get(pair[1]) if pair[0] not in p.names else None
     return {"values": values, "uncertainty": unc, "effective_inertia_sigma": eff, "cost": float(res.cost),
-            "nfev": int(res.nfev), "message": str(res.message),
+            "nfev": int(res.nfev), "message": str(res.message), "residual_autocorrelation": rho,
+            "variance_inflation": infl,
             "residual_rms": float(np.sqrt(np.mean(res.fun ** 2)))}

@@ -18,8 +18,11 @@ Procedure (issue 6):
        (``Delta BIC < -10``: "very strong" evidence on the Kass & Raftery 1995
        scale), with the effective sample size of the autocorrelated residual, and
    (c) it reduces the validation RMS by at least ``MIN_IMPROVEMENT`` = 20 %
-       (a practical-significance floor: with thousands of samples BIC alone
-       would accept tiny improvements);
+       and the part of the residual it explains, ``sqrt(RMS_before^2 -
+       RMS_after^2)``, is at least ``MIN_EXPLAINED`` = 2 noise sigmas (practical
+       significance: with thousands of nearly white residuals BIC alone accepts
+       tiny improvements, e.g. a 0.03 N "ballast" that only absorbs the error of
+       the initial state on clean data);
    and its fitted values pass the effect's physical validation.  The accepted
    candidate with the lowest BIC is the answer; otherwise ``none``.
 5. Confidence: ``high`` when the chosen effect brings the validation residual to
@@ -42,6 +45,7 @@ from uvsim.calibration.batching import prepare_runs
 from uvsim.diagnosis import fit as fitmod
 from uvsim.diagnosis.candidates import Candidate, build_candidates
 from uvsim.diagnosis.residuals import force_residual, noise_levels, output_residuals, refine_initial_states
+from uvsim.diagnosis.signatures import base_coefficient_evidence
 from uvsim.diagnosis.signatures import evidence as signature_evidence
 from uvsim.errors import CalibrationError, UvsimError, VehicleError
 from uvsim.forces import make_term
@@ -51,6 +55,7 @@ from uvsim.vehicle import load_vehicle
 NOISE_LEVEL = 1.5
 DELTA_BIC = -10.0
 MIN_IMPROVEMENT = 0.2
+MIN_EXPLAINED = 2.0
 CONFIDENT = 2.0
 EXPLAINED = 0.1
 _GROUP_TO_NOISE = {"position": "position", "attitude": "attitude", "velocity": "velocity", "rates": "rates"}
@@ -190,6 +195,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
 
     # 2. signatures ---------------------------------------------------------------------
     ev = signature_evidence(veh, train, fres_tr)
+    ev_base = base_coefficient_evidence(veh, train, fres_tr)
 
     # 3. candidates ---------------------------------------------------------------------
     dt = float(np.median(np.concatenate([np.diff(r.t) for r in train])))
@@ -239,6 +245,8 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         fr, va, tr = item["fit"], item["val"], item["train"]
         dbic = item["bic"] - baseline["bic"]
         improvement = 1.0 - float(np.sqrt(va["rss"] / rss0)) if rss0 > 0 else 0.0
+        rms_c = float(np.sqrt(va["rss"] / va["n"]))
+        explained = float(np.sqrt(max(rms_given ** 2 - rms_c ** 2, 0.0)))
         accepted = False
         if cand.name == "none":
             why = "baseline (the model as given" + (", base coefficients re-tuned)" if cand.n_params else ")")
@@ -252,10 +260,13 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         elif improvement < MIN_IMPROVEMENT:
             why = (f"too small: validation RMS reduced by {100 * improvement:.1f} % "
                    f"(needs >= {100 * MIN_IMPROVEMENT:.0f} %) although Delta BIC = {dbic:.1f}")
+        elif explained < MIN_EXPLAINED:
+            why = (f"too small: explains {explained:.2f} noise sigmas of the residual (needs >= {MIN_EXPLAINED:g}) "
+                   f"although Delta BIC = {dbic:.1f} and the RMS drops {100 * improvement:.1f} %")
         else:
             accepted = True
-            why = (f"significant: Delta BIC = {dbic:.1f} < {DELTA_BIC:g} and validation RMS reduced by "
-                   f"{100 * improvement:.1f} %")
+            why = (f"significant: Delta BIC = {dbic:.1f} < {DELTA_BIC:g}, validation RMS reduced by "
+                   f"{100 * improvement:.1f} %, explains {explained:.1f} noise sigmas")
         at_bound = [n for n, x, lo, hi in zip(cand.fit_names, fr.x, cand.lower, cand.upper)
                     if min(x - lo, hi - x) <= 1e-3 * (hi - lo)]
         if at_bound:
@@ -271,7 +282,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
             "train_rms_noise_sigmas": float(np.sqrt(tr["rss"] / tr["n"])),
             "validation_rms_noise_sigmas": float(np.sqrt(va["rss"] / va["n"])),
             "score": {"criterion": "BIC", "bic": item["bic"], "delta_bic": float(dbic),
-                      "validation_improvement": improvement},
+                      "validation_improvement": improvement, "explained_noise_sigmas": explained},
             "accepted": accepted,
             "why": why,
             "notes": cand.notes,
@@ -307,9 +318,19 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
             message = (f"none: the given model's validation residual ({rms_given:.2f} noise sigmas) is at the noise "
                        "level; no effect is needed.")
         else:
-            message = (f"none: the validation residual ({rms_given:.2f} noise sigmas) is above the noise level but no "
-                       "catalogue effect explains it significantly; the missing effect is not in the catalogue "
-                       "(or needs parameters the candidates hold fixed).")
+            scored = [r for r in table if "score" in r and r["name"] != "none"]
+            top = max(scored, key=lambda r: r["score"]["explained_noise_sigmas"], default=None)
+            best_txt = (f"; the best candidate, {top['name']}, explains {top['score']['explained_noise_sigmas']:.2f}"
+                        if top else "")
+            message = (f"none: no catalogue effect explains a significant part of the validation residual "
+                       f"({rms_given:.2f} noise sigmas{best_txt}). Well above 2 sigmas this points to an effect "
+                       "outside the catalogue (or one needing parameters the candidates hold fixed); near 2 it is "
+                       "the noise plus the error of the runs' initial states.")
+            own = ev_base if ev_base is not None and ev_base["present"] else None
+            if own is not None and rms_given > NOISE_LEVEL:
+                message += (f" The force residual follows each DOF's own velocity and acceleration (R2 = "
+                            f"{own['strength']:.2f}): the base coefficients (damping, added mass, inertia) look off; "
+                            "calibrate them (uvsim calibrate) or re-tune them here (--retune).")
 
     # force residuals after (validation runs), for plots and the evidence after
     fres_va_after = [force_residual(veh_after, r, p["states"]) for r, p in zip(val, after_va["predicted"])]
@@ -331,12 +352,14 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         "candidates": table,
         "per_run": per_run,
         "evidence": ev,
+        "base_coefficients_evidence": ev_base,
         "criterion": {
             "name": "BIC on validation residuals",
             "formula": "BIC = n_eff ln(RSS/n) + p ln(n_eff), n_eff = n (1 - rho) / (1 + rho)",
             "n": int(n_val), "rho": rho0, "n_eff": n_eff,
             "accept": (f"baseline above {NOISE_LEVEL} noise sigmas, Delta BIC < {DELTA_BIC:g}, validation RMS "
-                       f"reduced by >= {100 * MIN_IMPROVEMENT:.0f} %, physical parameter values"),
+                       f"reduced by >= {100 * MIN_IMPROVEMENT:.0f} %, explained part >= {MIN_EXPLAINED:g} noise sigmas, "
+                       "physical parameter values"),
             "confidence_high": (f"validation RMS after <= {CONFIDENT} noise sigmas or <= {EXPLAINED} x the "
                                 "given model's"),
             "residual_normalization": "each signal group divided by its noise level",

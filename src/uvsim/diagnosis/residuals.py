@@ -22,7 +22,8 @@ Savitzky-Golay filter (cubic, 1 s window, ``FORCE_WINDOW_S``) differentiates the
 Euler angles (converted to body rates, Fossen 2021 eq. 2.28); logged velocities
 and rates are used as they are; ``nu_dot`` is the Savitzky-Golay derivative of
 ``nu``; the model's acceleration ``f(eta, nu, u)`` is passed through the same
-(zero-phase) filter, so that both sides of the difference are equally smoothed
+(zero-phase) filter twice (the measured ``nu_dot`` went through two: position to
+``nu`` to ``nu_dot``), so that both sides of the difference are equally smoothed
 and input steps leave no filter artefact.  Components of ``nu`` that cannot be formed from the log (e.g. ``u, v`` of
 a depth-only run) are taken from the simulation and the residual components
 that depend on them are masked (NaN): forces need all of ``u, v, w``, moments all
@@ -167,7 +168,10 @@ def force_residual(vehicle, run, states: np.ndarray) -> dict:
         acc = model.rhs(float(run.t[0]), y, run.inputs)[:, 7:13]
         # the measured acceleration is a Savitzky-Golay (low-pass) estimate; filter the model's
         # acceleration the same way so that input steps do not leave a smoothing artefact
-        acc = smooth_derivative(run.t, acc, deriv=0, window_s=FORCE_WINDOW_S, what=f"{run.name}: model acceleration")
+        # (twice: the measured nu_dot went through two filters, position -> nu -> nu_dot)
+        for _ in range(2):
+            acc = smooth_derivative(run.t, acc, deriv=0, window_s=FORCE_WINDOW_S,
+                                    what=f"{run.name}: model acceleration")
         M = model.M if model.M.ndim == 2 else model.M[0]
         res = (np.where(have[None, :], nud_m, acc) - acc) @ M.T
         mask = np.array([have[:3].all()] * 3 + [have[3:].all()] * 3)
@@ -182,8 +186,12 @@ def force_residual(vehicle, run, states: np.ndarray) -> dict:
         ned[:, 3:] = np.einsum("nij,nj->ni", R, body[:, 3:])
     elif problem is None:
         problem = "the log gives neither full body velocities nor full rates"
-    return {"t": run.t, "body": body, "ned": ned, "nu": y[:, 7:13], "measured": have, "pos": y[:, 0:3],
-            "problem": problem}
+    nu_meas = np.where(have[None, :], nu_m, np.nan)
+    # the model's (smoothed) acceleration along the measured motion: a noise-free stand-in for
+    # nu_dot when regressing the residual on it (the measured nu_dot carries the residual's own noise)
+    nud_meas = np.where(have[None, :], acc, np.nan) if have.any() else np.full((n, 6), np.nan)
+    return {"t": run.t, "body": body, "ned": ned, "nu": y[:, 7:13], "nu_measured": nu_meas, "nu_dot": nud_meas,
+            "measured": have, "pos": y[:, 0:3], "problem": problem}
 
 
 def simulate(vehicle, runs, effects=None, overrides=None) -> list[dict]:

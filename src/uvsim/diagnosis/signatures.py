@@ -18,8 +18,12 @@ lagging the input          ``lowpass(tau_c, T0) - tau_c`` (the force a     thrus
                            first-order lag of ``T0 = 0.2 s`` removes)
 sign-dependent on input    ``B min(f_c, 0)`` beyond the symmetric ``B f_c``  thrust_asymmetry
 coupling                   DOF j's ``nu_j`` and ``|nu_j| nu_j`` for the     coupled_damping
-                           force of DOF i != j
+                           force of DOF i != j (measured velocities only)
 =========================  ==============================================  ===================
+
+Apart (:func:`base_coefficient_evidence`): DOF i's own ``nu_i``, ``|nu_i| nu_i``
+and acceleration, which wrong base coefficients would explain; it explains a
+``none`` answer.
 
 The evidence ranks and seeds the candidates; the decision is made by fitting
 each candidate through the simulator (:mod:`uvsim.diagnosis.core`).
@@ -66,12 +70,13 @@ def _stack(parts):
 
 def collect(vehicle, runs, force_res) -> dict:
     """Pooled arrays (samples of all runs) used by the signature tests."""
-    body, ned, nu, disp, lag, asym, sym, pos = [], [], [], [], [], [], [], []
+    body, ned, nu, disp, lag, asym, sym, pos, nud = [], [], [], [], [], [], [], [], []
     for run, fr in zip(runs, force_res):
         tau_c, f_c = commanded_thrusts(vehicle, run)
         body.append(fr["body"])
         ned.append(fr["ned"])
-        nu.append(fr["nu"])
+        nu.append(fr["nu_measured"])
+        nud.append(fr["nu_dot"])
         pos.append(fr["pos"])
         disp.append(fr["pos"] - fr["pos"][0])
         lag.append(_lowpass(run.t, tau_c, LAG_T0) - tau_c)
@@ -81,7 +86,7 @@ def collect(vehicle, runs, force_res) -> dict:
             asym.append(np.minimum(f_c, 0.0) @ vehicle.actuators.matrix.T)
         sym.append(tau_c)
     return {k: _stack(v) for k, v in dict(body=body, ned=ned, nu=nu, disp=disp, lag=lag, asym=asym, sym=sym,
-                                          pos=pos).items()}
+                                          pos=pos, nud=nud).items()}
 
 
 def evidence(vehicle, runs, force_res) -> list[dict]:
@@ -166,32 +171,74 @@ def evidence(vehicle, runs, force_res) -> list[dict]:
     return out
 
 
-def coupling_pairs(d: dict) -> list[dict]:
-    """For each force DOF i and velocity DOF j != i, the R^2 of ``tau_res,i`` on
-    ``nu_j`` (linear) or ``|nu_j| nu_j`` (quadratic), whichever explains more,
-    with the coefficient (a first estimate of the derivative, N or N m per unit);
-    sorted by R^2."""
-    body, nu = d["body"], d["nu"]
+def base_coefficient_evidence(vehicle, runs, force_res) -> dict | None:
+    """The residual's regression on each DOF's own velocity and acceleration
+    (:func:`own_dof`): what wrong base coefficients (diagonal damping, added mass,
+    inertia) leave.  Kept apart from :func:`evidence` because most missing effects
+    also correlate with the DOF's own motion (a thruster lag looks like extra
+    inertia); it is used to explain a ``none`` answer."""
+    own = own_dof(collect(vehicle, runs, force_res))
+    if not own:
+        return None
+    best = max(own, key=lambda o: o["r2"])
+    return {"signature": "own-DOF velocity and acceleration (base coefficients)", "strength": best["r2"],
+            "present": best["r2"] > PRESENT, "points_to": ["calibration (re-tune the base coefficients)"],
+            "detail": {"per_dof": own}}
+
+
+def own_dof(d: dict) -> list[dict]:
+    """Per DOF i, the R^2 of ``tau_res,i`` on its own ``nu_i``, ``|nu_i| nu_i`` and
+    ``nu_dot_i``: what wrong diagonal damping or added mass (the base coefficients,
+    not an extra effect) leaves.  Only measured velocities are used."""
+    body, nu, nud = d["body"], d["nu"], d["nud"]
     out = []
     for i in range(6):
-        ok = np.isfinite(body[:, i]) & np.isfinite(nu).all(axis=1)
+        ok = np.isfinite(body[:, i]) & np.isfinite(nu[:, i]) & np.isfinite(nud[:, i])
         if ok.sum() < 10:
             continue
-        y = body[ok, i]
+        x = nu[ok, i]
+        r2, beta = _r2(body[ok, i], np.column_stack([x, np.abs(x) * x, nud[ok, i]]))
+        out.append({"dof": DOF_NAMES[i], "r2": float(r2), "d_linear": float(beta[0]), "d_quadratic": float(beta[1]),
+                    "d_inertia": float(beta[2])})
+    return out
+
+
+def coupling_pairs(d: dict) -> list[dict]:
+    """For each force DOF i and velocity DOF j != i, the fraction of ``tau_res,i``'s
+    sum of squares that ``nu_j`` (linear) or ``|nu_j| nu_j`` (quadratic), whichever
+    explains more, adds to DOF i's own regressors (``nu_i``, ``|nu_i| nu_i``,
+    ``nu_dot_i`` where measured: a wrong diagonal coefficient is not a coupling),
+    with its coefficient (a first estimate of the derivative); sorted by that R^2.
+    Only measured velocities are used."""
+    body, nu, nud = d["body"], d["nu"], d["nud"]
+    out = []
+    for i in range(6):
         for j in range(6):
             if j == i:
                 continue
+            ok = np.isfinite(body[:, i]) & np.isfinite(nu[:, j])  # measured velocities only
+            if ok.sum() < 10:
+                continue
+            y = body[ok, i]
             x = nu[ok, j]
             if np.sqrt(np.mean(x * x)) < 1e-6:
                 continue
+            own_ok = np.isfinite(nu[ok, i]) & np.isfinite(nud[ok, i])
+            if own_ok.all():
+                xi = nu[ok, i]
+                own = np.column_stack([xi, np.abs(xi) * xi, nud[ok, i]])
+            else:
+                own = np.zeros((ok.sum(), 0))
+            r2_own = _r2(y, own)[0] if own.shape[1] else 0.0
             best = None
             for quad in (False, True):
-                r2, beta = _r2(y, (np.abs(x) * x if quad else x)[:, None])
+                reg = (np.abs(x) * x if quad else x)[:, None]
+                r2, beta = _r2(y, np.column_stack([reg, own]))
                 if best is None or r2 > best[0]:
                     best = (r2, beta[0], quad)
             r2, beta, quad = best
             name = f"{DOF_NAMES[i]}_{NU_NAMES[j]}{NU_NAMES[j] if quad else ''}"
-            out.append({"name": name, "force": i, "velocity": j, "quadratic": quad, "r2": float(r2),
-                        "coefficient": float(beta)})
+            out.append({"name": name, "force": i, "velocity": j, "quadratic": quad,
+                        "r2": float(max(r2 - r2_own, 0.0)), "coefficient": float(beta)})
     out.sort(key=lambda p: -p["r2"])
     return out

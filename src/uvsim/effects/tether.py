@@ -34,8 +34,9 @@ Generalized force on the vehicle (body frame)::
     f = R^T (F_pull + F_drag),     tau = [f;  r_a x f]
 
 Defaults: ``C_d = 1.2`` (circular cylinder in cross-flow at subcritical Re,
-Hoerner 1965 "Fluid-Dynamic Drag" ch. 3), ``D = 0.0076`` m (Blue Robotics Fathom
-slim tether, 7.6 mm, bluerobotics.com product page), ``rho = 1000`` kg/m^3.
+Hoerner 1965 "Fluid-Dynamic Drag" ch. 3), ``D = 0.0076`` m (the BlueROV2's Blue
+Robotics Fathom ROV tether R2: "diameter of 7.6 mm", docs.bluerobotics.com/fathom-r2),
+``rho = 1000`` kg/m^3 (fresh-water tank).
 """
 from __future__ import annotations
 

@@ -27,7 +27,9 @@ the log's sample rate.
 
 ``thrust_asymmetry`` (seed 002 sec. 5 remarks on propeller interaction; the
 T200's reverse branch gives roughly 80 % of the forward thrust at the same PWM
-offset, Blue Robotics T200 performance data).  Negative (reverse) thrusts are
+offset: 4.71 N vs 5.88 N at 1500 -+ 100 us in the shipped 16 V curve,
+``data/thrusters/t200_16v.csv``; a curve measured in a bollard test need not hold
+on the vehicle, where the reversed wake hits the frame).  Negative (reverse) thrusts are
 scaled by ``ratio``::
 
     f_eff = f_c            if f_c >= 0

@@ -80,6 +80,12 @@ class ForceTerm:
         """Named scalar parameters with their current values."""
         return {}
 
+    def bind(self, vehicle, index: int) -> "ForceTerm":
+        """Called when a :class:`uvsim.model.Model` is built: a term that needs the
+        vehicle (e.g. its thruster allocation) or its own position ``index`` in the term
+        list (the key of its states in ``ctx.states``) returns a bound copy."""
+        return self
+
     def prepare(self, params: Mapping[str, Any], n: int) -> Any:
         return None
 

@@ -168,9 +168,12 @@ class ComponentBuildup(ForceTerm):
         frame, m) and whose axis is the component x axis (pointing forward); its origin is
         the table's moment reference (volume centroid) ``nose - C [x_m, 0, 0]``.
         ``{name, kind: wing, position: [x, y, z], rpy_deg: [r, p, y], area, chord,
-        aspect_ratio, oswald: 0.9}`` - a NACA 0015 lifting surface (seed 003 Table IV:
-        lifting line < 10 deg, Montgomerie blend, flat plate) with its quarter chord at
-        ``position``, span along its y axis and lift in its x-z plane.
+        aspect_ratio, oswald: 0.9, gimbal: false}`` - a NACA 0015 lifting surface (seed 003
+        Table IV: lifting line < 10 deg, Montgomerie blend, flat plate) with its quarter chord
+        at ``position``, span along its y axis and lift in its x-z plane.  With ``gimbal:
+        true`` its frame is turned by the thrust-vector angles of the vehicle's
+        ``sam_propulsion`` term (``C = G(tv_pitch, tv_yaw) C_0``, :func:`gimbal_matrix`,
+        about the component origin): the nozzle of SAM is the thrust-vectoring unit.
     dataset : {"multifidelity", "jorgensen", "datcom"}
         Which body table (seed 003 Algorithm 1, or one method over the full envelope).
     rho : float
@@ -306,14 +309,20 @@ class ComponentBuildup(ForceTerm):
             return np.array([self._forces_single(ctx.nu_r[0].tolist(), prep, None if g is None else g[0].tolist())])
         return self._forces_batch(ctx.nu_r, prep, g)
 
-    def component_forces(self, nu_r) -> dict:
+    def component_forces(self, nu_r, tv=None) -> dict:
         """Per-component generalized force (body frame, about the body origin) for velocities
-        ``nu_r`` (n, 6); a diagnostic used by the docs and tests.  Rotational damping excluded."""
+        ``nu_r`` (n, 6) and thrust-vector angles ``tv`` (n, 2) [pitch, yaw] rad (default 0;
+        used by ``gimbal`` components); a diagnostic for docs and tests.  Rotational damping
+        excluded."""
         nu_r = np.atleast_2d(np.asarray(nu_r, float))
         prep = self.prepare({k: 0.0 for k in self.parameters()}, nu_r.shape[0])
+        G = None
+        if tv is not None:
+            tv = np.broadcast_to(np.asarray(tv, float), (nu_r.shape[0], 2))
+            G = gimbal_matrix(tv[:, 0], tv[:, 1])
         out = {}
         for c, pc in zip(self.components, prep["comps"]):
-            out[c.name] = self._batch_component(nu_r, pc)
+            out[c.name] = self._batch_component(nu_r, pc, G)
         return out
 
     def _forces_single(self, nu, prep, gimbal=None):
