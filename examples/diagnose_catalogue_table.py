@@ -18,6 +18,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from test_diagnosis import CASES, WaveForce, make_data  # noqa: E402
 
 from uvsim.diagnosis import diagnose  # noqa: E402
+from uvsim.synthetic import generate_dataset  # noqa: E402
 
 
 def fmt_params(report, truth=None):
@@ -46,6 +47,17 @@ def main() -> int:
                 rep = diagnose(make_data(Path(tmp) / f"{name}{k}", spec), "bluerov2_heavy").report
                 label = ", ".join(f"{kk} {v:g}" for kk, v in spec.items() if kk != "type")
                 print(row(f"{name}: {label}", rep, truth, time.time() - t0), flush=True)
+        for floor, damping in ((1.2, -400.0), (0.8, -150.0)):
+            spec = {"type": "bottom_effect", "floor_d": floor, "damping": damping, "decay_length": 0.25}
+            t0 = time.time()
+            ds = generate_dataset("bluerov2_heavy", Path(tmp) / f"floor{floor}", dofs=("surge", "heave", "pitch"),
+                                  runs_per_dof=4, validation_per_dof=2, duration=10.0, rate=10.0,
+                                  signals=("position", "mocap_attitude"), seed=1, effects=[spec],
+                                  levels={"heave": [60, 90, 120, 150, 75, 105]})
+            rep = diagnose(ds, "bluerov2_heavy").report
+            truth = {"bottom_effect_floor_d": (floor, 0), "bottom_effect_damping": (damping, 0)}
+            print(row(f"bottom_effect: floor_d {floor:g}, damping {damping:g} (surge/heave/pitch runs)", rep, truth,
+                      time.time() - t0), flush=True)
         t0 = time.time()
         rep = diagnose(make_data(Path(tmp) / "clean", None, seed=3), "bluerov2_heavy").report
         print(row("clean (no effect)", rep, None, time.time() - t0), flush=True)

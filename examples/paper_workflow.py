@@ -51,6 +51,9 @@ def main() -> None:
     for d, a in rep["identifiability"].items():
         if a["not_identifiable"]:
             print(f"  {d}: the data determine only {', '.join(a['identifiable_combinations'])}")
+        if a["at_bound"] or a["weakly_determined"]:
+            print(f"  {d}: stopped at a search bound: {a['at_bound'] or 'none'}; "
+                  f"1-sigma > 25 % of the value: {a['weakly_determined'] or 'none'}")
     print(f"\nvalidation RMSE  initial {jsonable(rep['initial_validation_rmse'])}")
     print(f"                 fitted  {jsonable(rep['validation_rmse'])}")
     out = Path(args.out)

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from uvsim.maneuvers import run_maneuver
-from uvsim.plotting_sam import plot_datasets
+from uvsim.plotting.sam import plot_datasets
 
 out = Path(sys.argv[1] if len(sys.argv) > 1 else "out/sam")
 runs = {ds: run_maneuver("accelerating_turn", dataset=ds) for ds in ("jorgensen", "datcom", "multifidelity")}

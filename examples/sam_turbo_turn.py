@@ -9,7 +9,7 @@ from pathlib import Path
 
 from uvsim.logs import write_run
 from uvsim.maneuvers import run_maneuver
-from uvsim.plotting_sam import plot_maneuver
+from uvsim.plotting.sam import plot_maneuver
 
 out = Path(sys.argv[1] if len(sys.argv) > 1 else "out/sam")
 res = run_maneuver("turbo_turn")

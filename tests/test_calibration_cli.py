@@ -37,7 +37,8 @@ def test_calibrate_command_outputs(dataset, tmp_path, capsys):
     assert {"rmse", "nrmse", "fit_percent"} <= set(run)
     y = out.read_text()
     assert "previous 0.344" in y and "X_udot: fitted" in y  # I_xx line and the added-mass row annotated
-    assert yaml.safe_load(y)["name"] == "bluerov2_heavy_initial"
+    assert yaml.safe_load(y)["name"] == "bluerov2_heavy_initial_calibrated"
+    assert "only I_xx + K_pdot =" in y
     assert (plots / "ga_convergence.png").is_file() and (plots / "error_boxplots.png").is_file()
     assert len(list((plots / "runs").glob("*.png"))) == 10
     assert (tmp_path / "fitted.yaml.ckpt").is_file()

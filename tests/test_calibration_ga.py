@@ -93,8 +93,10 @@ def test_bad_settings_and_inputs(tmp_path):
         _fit(resume=bad)
 
 
-@pytest.mark.skipif(importlib.util.find_spec("distributed") is not None, reason="dask.distributed is installed")
-def test_dask_missing_is_a_clear_error():
+def test_dask_missing_is_a_clear_error(monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "dask.distributed", None)  # as if not installed
     with pytest.raises(CalibrationError, match=r"uvsim\[dask\]"):
         _fit(dask="local")
 

@@ -159,3 +159,48 @@ def test_retune_base_coefficients(tmp_path):
     assert "X_uu" in rep["parameters"]
     assert abs(rep["parameters"]["X_uu"]["value"] - (-34.972)) < 0.1 * 34.972
     assert [c["name"] for c in rep["candidates"]] == ["none", "current", "ballast"]
+
+
+@pytest.mark.parametrize("floor, damping", [pytest.param(1.2, -400.0, id="floor1.2"),
+                                            pytest.param(0.8, -150.0, id="floor0.8", marks=pytest.mark.slow)])
+def test_diagnose_finds_the_tank_floor(tmp_path, floor, damping):
+    """bottom_effect needs runs that go near the floor: surge, heave (six levels, down and up) and pitch."""
+    spec = {"type": "bottom_effect", "floor_d": floor, "damping": damping, "decay_length": 0.25}
+    ds = generate_dataset("bluerov2_heavy", tmp_path / "floor", dofs=("surge", "heave", "pitch"), runs_per_dof=4,
+                          validation_per_dof=2, duration=10.0, rate=10.0, signals=("position", "mocap_attitude"),
+                          seed=1, effects=[spec], levels={"heave": [60, 90, 120, 150, 75, 105]})
+    rep = diagnose(ds, "bluerov2_heavy").report
+    assert rep["effect"] == "bottom_effect", rep["message"]
+    assert rep["confidence"] == "high"
+    assert abs(rep["parameters"]["bottom_effect_floor_d"]["value"] - floor) < 0.1
+    assert abs(rep["parameters"]["bottom_effect_damping"]["value"] - damping) < 0.2 * abs(damping)
+    assert rep["rmse_after"]["position_m"] <= 0.5 * rep["rmse_before"]["position_m"]
+
+
+def test_diagnose_on_rates_only_logs(tmp_path):
+    """Issue 7: IMU attitude + gyro rates + PWM, no position at all."""
+    ds = generate_dataset("bluerov2_heavy", tmp_path / "rates", runs_per_dof=2, validation_per_dof=1, duration=10.0,
+                          rate=10.0, signals=("imu_attitude", "rates"), seed=2,
+                          effects=[{"type": "thruster_lag", "time_constant": 0.3}])
+    rep = diagnose(ds, "bluerov2_heavy").report
+    assert rep["effect"] == "thruster_lag", rep["message"]
+    assert abs(rep["parameters"]["thruster_lag_time_constant"]["value"] - 0.3) < 0.06
+    assert "position_m" not in rep["rmse_before"]
+    assert rep["rmse_after"]["attitude_rad"] <= 0.5 * rep["rmse_before"]["attitude_rad"]
+    assert rep["rmse_after"]["rates_radps"] <= 0.5 * rep["rmse_before"]["rates_radps"]
+    lag = next(e for e in rep["evidence"] if e["signature"] == "lagging the input")
+    assert lag["present"]  # from the moments alone (forces need positions)
+
+
+def test_retune_alone_can_be_the_answer(tmp_path):
+    """Data from a vehicle whose surge drag differs by 30 %: no effect is needed once X_uu is re-tuned,
+    and the corrected vehicle carries the re-tuned value."""
+    ds = generate_dataset("bluerov2_heavy", tmp_path / "xuu", dofs=("surge", "yaw"), runs_per_dof=2,
+                          validation_per_dof=1, duration=10.0, rate=10.0, signals=("position", "mocap_attitude"),
+                          seed=6, overrides={"X_uu": -34.972 * 1.3})
+    diag = diagnose(ds, "bluerov2_heavy", retune=["X_uu"], only=["current", "thruster_lag"])
+    rep = diag.report
+    assert rep["effect"] == "none", rep["message"]
+    assert abs(rep["parameters"]["X_uu"]["value"] - (-34.972 * 1.3)) < 0.05 * 34.972 * 1.3
+    assert diag.vehicle_after.parameters()["X_uu"] == pytest.approx(rep["parameters"]["X_uu"]["value"])
+    assert rep["rmse_after"]["position_m"] < 0.5 * rep["rmse_before"]["position_m"]

@@ -103,3 +103,15 @@ def test_cli_diagnose_bad_input_is_one_line_error(tmp_path, capsys):
     rc = main(["diagnose", "--data", str(tmp_path / "nope"), "--vehicle", "bluerov2_heavy", "--quiet"])
     assert rc == 2
     assert "error" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("kw, match", [({"noise": {"pos": 0.002}}, "unknown signal group"),
+                                       ({"weights": {"attitude": -1.0}}, "positive"),
+                                       ({"only": ["tether", "wave"]}, "unknown candidate")])
+def test_diagnose_rejects_bad_options(tmp_path, kw, match):
+    from uvsim.diagnosis import diagnose
+    from uvsim.errors import CalibrationError
+
+    ds = _data(tmp_path / "o", duration=4.0)
+    with pytest.raises(CalibrationError, match=match):
+        diagnose(ds, "bluerov2_heavy", **kw)

@@ -32,7 +32,8 @@ def effect_force(effect, *, pos=(0, 0, 1.0), q=(1, 0, 0, 0), nu=(0, 0, 0, 0, 0, 
 def test_catalogue_names_registered():
     from uvsim.forces import registered
 
-    for name in ("current", "tether", "thruster_lag", "ballast", "thrust_asymmetry", "coupled_damping"):
+    for name in ("current", "tether", "thruster_lag", "ballast", "thrust_asymmetry", "coupled_damping",
+                 "bottom_effect"):
         assert name in registered()
         assert name in CATALOGUE
 
@@ -119,6 +120,18 @@ def test_coupled_damping_by_hand():
     np.testing.assert_allclose(tau, [0, 0, 0, -2.0 * 0.25, 0.5 * 0.2, 0], atol=1e-9)
 
 
+def test_bottom_effect_by_hand():
+    eff = {"type": "bottom_effect", "floor_d": 2.0, "damping": -100.0, "decay_length": 0.25}
+    # 0.5 m above the floor, sinking at 0.3 m/s: F = -100 exp(-0.5 / 0.25) 0.3^2 (upwards)
+    tau = effect_force(eff, pos=(0, 0, 1.5), nu=(0, 0, 0.3, 0, 0, 0))
+    np.testing.assert_allclose(tau, [0, 0, -100 * np.exp(-2.0) * 0.09, 0, 0, 0], atol=1e-9)
+    # below the floor level: full strength; rising: pushes down (opposes the motion)
+    tau = effect_force(eff, pos=(0, 0, 2.5), nu=(0, 0, -0.3, 0, 0, 0))
+    np.testing.assert_allclose(tau, [0, 0, 100 * 0.09, 0, 0, 0], atol=1e-9)
+    # horizontal motion: nothing
+    np.testing.assert_allclose(effect_force(eff, pos=(0, 0, 1.9), nu=(0.5, 0.2, 0, 0, 0, 0)), 0, atol=1e-12)
+
+
 @pytest.mark.parametrize("spec, field", [
     ({"type": "thruster_lag", "time_constant": 0.0}, "time_constant"),
     ({"type": "thruster_lag", "time_constant": 100.0}, "time_constant"),
@@ -135,6 +148,9 @@ def test_coupled_damping_by_hand():
     ({"type": "coupled_damping", "K_pp": -1.0}, "K_pp"),
     ({"type": "coupled_damping", "Q_u": 1.0}, "Q_u"),
     ({"type": "coupled_damping", "K_v": 1e9}, "K_v"),
+    ({"type": "bottom_effect", "floor_d": 2.0, "damping": 50.0}, "damping"),
+    ({"type": "bottom_effect", "floor_d": 2.0, "damping": -50.0, "decay_length": 0.0}, "decay_length"),
+    ({"type": "bottom_effect", "damping": -50.0}, "floor_d"),
 ])
 def test_absurd_values_rejected_naming_the_field(spec, field):
     with pytest.raises(VehicleError, match=field.replace(".", r"\.")):
@@ -148,6 +164,7 @@ EXAMPLES = [
     {"type": "thrust_asymmetry", "ratio": 0.75},
     {"type": "ballast", "weight": 1.5, "x": 0.1, "y": 0.0, "z": 0.05},
     {"type": "coupled_damping", "K_vv": -2.0, "M_u": 0.4},
+    {"type": "bottom_effect", "floor_d": 1.5, "damping": -200.0, "decay_length": 0.3},
 ]
 
 
@@ -207,6 +224,12 @@ def test_simulate_with_effects_in_vehicle_file(tmp_path):
     r = _sim(load({"type": "ballast", "weight": 5.0, "x": 0.05}), t, rest)
     assert r.position[-1, 2] > base_f.position[0, 2] + 0.1
     assert r.euler[-1, 1] < -0.01  # weight forward of the CG: nose down (negative pitch)
+    # floor 0.5 m below the start: a heave-down run stops short of where it went without
+    heave = np.full((t.size, 8), 1500.0)
+    heave[(t >= 1.0) & (t < 6.0), 4:] = 1650.0
+    base_h = _sim(VEH, t, heave)
+    r = _sim(load({"type": "bottom_effect", "floor_d": 1.5, "damping": -500.0}), t, heave)
+    assert base_h.position[-1, 2] > 2.0 and r.position[-1, 2] < base_h.position[-1, 2] - 0.2
     # coupled damping: surge motion now pitches the vehicle
     r = _sim(load({"type": "coupled_damping", "M_uu": 3.0}), t, fwd)
     assert r.euler[:, 1].max() > base_f.euler[:, 1].max() + 0.01

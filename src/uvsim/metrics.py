@@ -393,7 +393,9 @@ def normalized_residuals(measured: Mapping[str, np.ndarray], predicted: Mapping[
         valid = np.isfinite(m).all(axis=-1, keepdims=True) if g == "attitude" else np.isfinite(m)
         w = component_weights(g, weights)
         valid = np.broadcast_to(valid, e.shape) & (w > 0)
-        r = (e / scales[g] * np.sqrt(w * run_weight))[valid]
+        # channel-major order (each channel's time series contiguous), so that
+        # neighbouring entries are neighbouring samples (used for autocorrelation)
+        r = (e / scales[g] * np.sqrt(w * run_weight)).T[valid.T]
         bad = ~np.isfinite(r)
         if bad.any():
             if fill is None:

@@ -17,7 +17,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from uvsim.kinematics import attitude_error_angle, quat_to_euler  # noqa: E402
+from uvsim.kinematics import quat_to_euler  # noqa: E402
 
 LINEAR = ("surge", "sway", "heave")
 ROTATIONAL = ("roll", "pitch", "yaw")
@@ -124,8 +124,11 @@ def plot_convergence(logbooks, path) -> Path:
     return path
 
 
-def plot_calibration(cal, dataset, out_dir) -> list[Path]:
-    """All calibration plots of a fitted :class:`uvsim.calibration.Calibrator` into ``out_dir``."""
+def plot_calibration(cal, dataset, out_dir, *, run_plots: str = "all") -> list[Path]:
+    """All calibration plots of a fitted :class:`uvsim.calibration.Calibrator` into ``out_dir``.
+
+    ``run_plots``: "all" runs, only the "validation" runs, or "none" get a
+    measured-vs-simulated figure (one matplotlib figure per run is the slow part)."""
     from uvsim.calibration.batching import prepare_runs, simulate_dataset
 
     out_dir = Path(out_dir)
@@ -140,12 +143,14 @@ def plot_calibration(cal, dataset, out_dir) -> list[Path]:
         meas += b.measured
         fit += simulate_dataset(cal.vehicle_, b)
         ini += simulate_dataset(cal.initial_vehicle_, b)
-    paths = plot_runs(ordered, meas, fit, ini, out_dir / "runs")
     val = [i for i, r in enumerate(ordered) if r.split == "validation"] or list(range(len(ordered)))
+    sel = {"all": list(range(len(ordered))), "validation": val, "none": []}[run_plots]
+    paths = plot_runs([ordered[i] for i in sel], [meas[i] for i in sel], [fit[i] for i in sel],
+                      [ini[i] for i in sel], out_dir / "runs")
     paths.append(plot_error_boxplots([ordered[i] for i in val], [meas[i] for i in val], [fit[i] for i in val],
                                      out_dir / "error_boxplots.png"))
     paths.append(plot_convergence(cal.logbook_, out_dir / "ga_convergence.png"))
     return paths
 
 
-__all__ = ["plot_calibration", "plot_runs", "plot_error_boxplots", "plot_convergence", "attitude_error_angle"]
+__all__ = ["plot_calibration", "plot_runs", "plot_error_boxplots", "plot_convergence"]

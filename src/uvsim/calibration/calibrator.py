@@ -254,7 +254,7 @@ class Calibrator:
         self.identifiability_ = ident
         self.logbook_ = ga["logbooks"]
         self.evaluations_ = ga["evaluations"]
-        self.vehicle_ = veh.with_parameters(params)
+        self.vehicle_ = veh.with_parameters(params, name=f"{veh.name}_calibrated")
         self.dofs_ = dofs
         self._train_runs = runs
         self.report_ = self._report(ds, dofs, problems, ga, ga_values, refine_info, eff_sigma, t0, t_ga, t_ref)

@@ -87,6 +87,6 @@ def run(out_dir, dataset, settings: dict | None = None) -> None:
     (out / "calibration_report.json").write_text(json.dumps(jsonable(rep), indent=2))
     from uvsim.plotting_calibration import plot_calibration
 
-    plot_calibration(cal, dataset, out / "calibration_plots")
+    plot_calibration(cal, dataset, out / "calibration_plots", run_plots="validation")
     print(f"calibration outputs: {out / 'fitted.yaml'}, {out / 'calibration_report.json'}, "
           f"{out / 'calibration_plots'}/")

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import functools
 import math
+import random
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -163,8 +164,15 @@ class SerialMap:
             return list(map(func, individuals))
         items = [(ind.dof, tuple(ind)) for ind in individuals]
         out = []
-        for res in self._run(ev, ev.make_blocks(items)):
-            out.extend(res)
+        # the executor (e.g. dask's client) may draw from the global random streams
+        # that DEAP's operators use: keep them untouched so results match the serial run
+        state, np_state = random.getstate(), np.random.get_state()
+        try:
+            for res in self._run(ev, ev.make_blocks(items)):
+                out.extend(res)
+        finally:
+            random.setstate(state)
+            np.random.set_state(np_state)
         return out
 
     def _run(self, ev, blocks):

@@ -94,15 +94,24 @@ def save_fitted_vehicle(cal, path) -> Path:
     from uvsim.vehicle import save_vehicle
 
     rep = cal.report_
+    from uvsim.calibration.params import EFFECTIVE_INERTIA
+
+    pair_of = {k: (d, pr) for d, pr in EFFECTIVE_INERTIA.items() for k in pr}
     notes = {}
     for k, v in cal.params_.items():
         sig = cal.uncertainty_.get(k)
-        s = (f"+- {_fmt(sig)}" if sig is not None else "not separately identifiable; see effective inertia")
+        if sig is not None:
+            s = f"+- {_fmt(sig)}"
+        else:
+            d, (a, b) = pair_of[k]
+            s = (f"only {a} + {b} = {rep['effective_inertia'][d]:.6g} +- "
+                 f"{_fmt(rep['effective_inertia_uncertainty'].get(d))} is identifiable")
         notes[k] = f"fitted {v:.6g} {s}; previous {_fmt(rep['initial_parameters'][k])}"
     header = (f"Calibrated by `uvsim calibrate` from {rep['vehicle']} on {rep['dataset']}\n"
               f"DOFs {', '.join(rep['dofs'])}; seed 000 GA (population {rep['settings']['population']}, "
               f"{rep['settings']['generations']} generations, seed {rep['settings']['seed']}) + least squares\n"
-              f"validation RMSE {rep['validation_rmse']}; uncertainties are 1-sigma (Gauss-Newton)")
+              f"validation RMSE {jsonable({k: round(v, 6) for k, v in rep['validation_rmse'].items()})}; "
+              "uncertainties are 1-sigma (Gauss-Newton, AR(1)-inflated)")
     path = save_vehicle(cal.vehicle_, path, header=header, annotations=notes)
     # added mass is written as a 6x6 matrix: annotate its diagonal rows
     lines = Path(path).read_text().splitlines()

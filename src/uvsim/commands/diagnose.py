@@ -2,6 +2,7 @@
 
     uvsim diagnose --data DIR --vehicle NAME|FILE --json report.json [--plots DIR] [--out fixed.yaml]
                    [--retune X_u,X_uu] [--only current,tether] [--noise position=0.002,attitude=0.005]
+                   [--weights position=1,attitude=2]
 """
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ def register(subparsers) -> None:
         "diagnose", help="trace the residual of a model to a missing effect, fit it, report before/after",
         description="Simulate every run of a dataset with the given vehicle, compute the residuals (output "
                     "and inverse-dynamics force), fit each catalogue effect (current, tether, thruster_lag, "
-                    "thrust_asymmetry, ballast, coupled_damping) on the training runs, score them by BIC on "
+                    "thrust_asymmetry, ballast, coupled_damping, bottom_effect) on the training runs, score them by BIC on "
                     "the validation runs and keep the best one only if it is significant.  See docs/diagnose.md.")
     p.add_argument("--data", required=True, help="dataset directory (manifest.yaml + runs, docs/log_format.md)")
     p.add_argument("--vehicle", help="built-in vehicle name or vehicle YAML (default: the manifest's vehicle)")
@@ -27,6 +28,7 @@ def register(subparsers) -> None:
     p.add_argument("--only", help="comma-separated catalogue effects to try (default: all)")
     p.add_argument("--noise", help="noise levels per signal group, e.g. position=0.002,attitude=0.005 "
                                    "(default: estimated from the data)")
+    p.add_argument("--weights", help="per signal group weights, e.g. position=1,attitude=2 (default 1 each)")
     p.add_argument("--max-nfev", type=int, default=30, help="evaluation budget of each fit (default 30)")
     p.add_argument("--quiet", action="store_true", help="no progress messages")
     p.set_defaults(func=run)
@@ -36,18 +38,18 @@ def _list(s):
     return [x.strip() for x in s.split(",") if x.strip()] if s else None
 
 
-def _noise(s):
+def _noise(s, what="--noise"):
     if not s:
         return None
     out = {}
     for item in s.split(","):
         if "=" not in item:
-            raise CalibrationError(f"--noise: expected group=value pairs, got {item!r}")
+            raise CalibrationError(f"{what}: expected group=value pairs, got {item!r}")
         k, v = item.split("=", 1)
         try:
             out[k.strip()] = float(v)
         except ValueError:
-            raise CalibrationError(f"--noise: {k.strip()}: expected a number, got {v!r}") from None
+            raise CalibrationError(f"{what}: {k.strip()}: expected a number, got {v!r}") from None
     return out
 
 
@@ -85,7 +87,8 @@ def run(args) -> int:
 
     say = None if args.quiet else (lambda m: print(f"uvsim diagnose: {m}", flush=True))
     diag = diagnose(args.data, args.vehicle, retune=_list(args.retune), only=_list(args.only),
-                    noise=_noise(args.noise), max_nfev=args.max_nfev, progress=say)
+                    noise=_noise(args.noise), weights=_noise(args.weights, "--weights"), max_nfev=args.max_nfev,
+                    progress=say)
     print(format_table(diag.report))
     if args.json_out:
         Path(args.json_out).parent.mkdir(parents=True, exist_ok=True)

@@ -118,7 +118,7 @@ def _run_table(args) -> int:
     print("cells by method: " + ", ".join(f"{m} {c}" for m, c in zip(labels, counts))
           + f"; smoothed {int(table.smoothed.sum())}")
     if args.plot:
-        from uvsim.plotting_hydro import plot_table
+        from uvsim.plotting.hydro import plot_table
         for p in plot_table(table, out):
             print(f"wrote {p}")
     return 0

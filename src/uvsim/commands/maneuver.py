@@ -43,7 +43,7 @@ def run(args) -> int:
                 simulated_s=float(res.frame["t"].iloc[-1]), wall_s=res.wall_time,
                 realtime_factor=float(res.frame["t"].iloc[-1]) / res.wall_time)
     if args.plots:
-        from uvsim.plotting_sam import plot_maneuver
+        from uvsim.plotting.sam import plot_maneuver
 
         info["plots"] = [str(p) for p in plot_maneuver(res.frame, args.plots, args.name)]
     if args.json:

@@ -18,7 +18,9 @@ reparameterization that is linear in the force, which conditions the fit:
 ``current`` fits the horizontal components ``current_n``, ``current_e`` (a
 steady vertical force is ``ballast``'s); ``thruster_lag`` its time constant;
 ``thrust_asymmetry`` its ratio; ``coupled_damping`` the two cross-coupling
-derivatives with the strongest coupling evidence.  Base coefficients named in
+derivatives with the strongest coupling evidence; ``bottom_effect`` its extra
+drag at the floor and the floor's depth (decay length held at 0.25 m), only when
+the runs log depth.  Base coefficients named in
 ``retune`` are added to every candidate (and to the baseline ``none``).
 """
 from __future__ import annotations
@@ -103,7 +105,7 @@ def _append_retune(c: Candidate, retune: Mapping[str, tuple[float, float, float]
 
 def build_candidates(evidence: Sequence[dict], *, dt: float, p_ref: np.ndarray,
                      retune: Mapping[str, tuple[float, float, float]] | None = None,
-                     only: Sequence[str] | None = None) -> list[Candidate]:
+                     only: Sequence[str] | None = None, z_max: float | None = None) -> list[Candidate]:
     """The baseline ``none`` and one candidate per catalogue effect (module docstring).
 
     Parameters
@@ -113,6 +115,7 @@ def build_candidates(evidence: Sequence[dict], *, dt: float, p_ref: np.ndarray,
     p_ref : (3,) mean start position of the training runs, NED m.
     retune : base coefficients to re-tune with every candidate: name -> (start, low, high).
     only : restrict to these catalogue names.
+    z_max : deepest logged depth of the training runs, m (None: no ``bottom_effect`` candidate).
     """
     retune = dict(retune or {})
     out = [_append_retune(Candidate("none", [], np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0),
@@ -212,6 +215,18 @@ def build_candidates(evidence: Sequence[dict], *, dt: float, p_ref: np.ndarray,
                                {"type": "coupled_damping", **{n: float(v) for n, v in zip(names, c0)}},
                                notes=f"The cross-couplings with the strongest evidence ({desc}).",
                                reported=names))
+
+    # bottom effect ----------------------------------------------------------------
+    if z_max is not None and np.isfinite(z_max):
+        lo_f, hi_f = z_max - 2.0, z_max + 3.0
+        cands.append(Candidate("bottom_effect", ["bottom_effect_damping", "bottom_effect_floor_d"],
+                               np.array([-50.0, z_max + 0.1]), np.array([50.0, 0.2]), np.array([-5000.0, lo_f]),
+                               np.array([-1e-3, hi_f]),
+                               {"type": "bottom_effect", "floor_d": float(z_max + 0.1), "damping": -50.0,
+                                "decay_length": 0.25},
+                               notes=f"Floor depth searched within {lo_f:.2f}..{hi_f:.2f} m (deepest logged depth "
+                                     f"{z_max:.2f} m -2/+3 m); decay length held at 0.25 m (the BlueROV2's height).",
+                               reported=["bottom_effect_damping", "bottom_effect_floor_d"]))
 
     if only is not None:
         unknown = set(only) - {c.name for c in cands}

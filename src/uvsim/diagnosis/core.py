@@ -12,8 +12,9 @@ Procedure (issue 6):
    optionally re-tuning named base coefficients) and score it on the validation
    runs (:mod:`uvsim.diagnosis.fit`).
 4. Decision rule: a candidate is *accepted* when
-   (a) the baseline validation residual is above the noise level
-       (normalized RMS > ``NOISE_LEVEL`` = 1.5 noise sigmas),
+   (a) the baseline validation residual (the given model; with ``retune``, the
+       given model with those base coefficients re-tuned) is above the noise
+       level (normalized RMS > ``NOISE_LEVEL`` = 1.5 noise sigmas),
    (b) its BIC on the validation runs beats the baseline's by more than 10
        (``Delta BIC < -10``: "very strong" evidence on the Kass & Raftery 1995
        scale), with the effective sample size of the autocorrelated residual, and
@@ -24,7 +25,8 @@ Procedure (issue 6):
        tiny improvements, e.g. a 0.03 N "ballast" that only absorbs the error of
        the initial state on clean data);
    and its fitted values pass the effect's physical validation.  The accepted
-   candidate with the lowest BIC is the answer; otherwise ``none``.
+   candidate with the lowest BIC is the answer; otherwise ``none`` (with
+   ``retune``, the corrected vehicle then carries the re-tuned coefficients).
 5. Confidence: ``high`` when the chosen effect brings the validation residual to
    within ``CONFIDENT`` = 2 noise sigmas (normalized RMS) or cuts its RMS at
    least tenfold (``EXPLAINED`` = 0.1: 99 % of the squared residual explained;
@@ -142,7 +144,8 @@ def _run_summary(m: dict) -> dict:
 
 
 def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: Sequence[str] | None = None,
-             noise: Mapping[str, float] | None = None, max_nfev: int = 30, progress=None) -> Diagnosis:
+             noise: Mapping[str, float] | None = None, weights: Mapping[str, float] | None = None,
+             max_nfev: int = 30, progress=None) -> Diagnosis:
     """Diagnose which catalogue effect the model lacks (module docstring).
 
     Parameters
@@ -154,6 +157,8 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     only : restrict the candidates to these catalogue names.
     noise : 1-sigma noise per signal group (position m, attitude rad, velocity
         m/s, rates rad/s); estimated from the data where not given.
+    weights : per signal group weight (position, attitude, velocity, rates; default 1)
+        multiplying its normalized residual's square in the fit and the score.
     max_nfev : function-evaluation budget of each least-squares fit.
     progress : optional callable ``progress(message)``.
 
@@ -170,6 +175,13 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     veh = load_vehicle(vehicle)
     train, val, split_note = _split(dataset)
 
+    groups = ("position", "attitude", "velocity", "rates")
+    for what, d in (("noise", noise), ("weights", weights)):
+        for k, v in dict(d or {}).items():
+            if k not in groups:
+                raise CalibrationError(f"{what}: unknown signal group {k!r}; expected some of {', '.join(groups)}")
+            if not (np.isfinite(v) and v > 0):
+                raise CalibrationError(f"{what}.{k}: expected a positive number, got {v!r}")
     # noise level per run and signal group (IMU and motion-capture runs differ), user values win
     user_noise = dict(noise or {})
     scales_tr = [{**noise_levels([r]), **user_noise} for r in train]
@@ -188,8 +200,8 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     # 1. baseline residuals -------------------------------------------------------
     say("simulating the given model")
     base_cand = Candidate("none", [], np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0))
-    base_tr = fitmod.evaluate(veh, batch_tr, base_cand, np.zeros(0), scales_tr)
-    base_va = fitmod.evaluate(veh, batch_va, base_cand, np.zeros(0), scales_va)
+    base_tr = fitmod.evaluate(veh, batch_tr, base_cand, np.zeros(0), scales_tr, weights)
+    base_va = fitmod.evaluate(veh, batch_va, base_cand, np.zeros(0), scales_va, weights)
     fres_tr = [force_residual(veh, r, p["states"]) for r, p in zip(train, base_tr["predicted"])]
     fres_va = [force_residual(veh, r, p["states"]) for r, p in zip(val, base_va["predicted"])]
 
@@ -200,20 +212,21 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     # 3. candidates ---------------------------------------------------------------------
     dt = float(np.median(np.concatenate([np.diff(r.t) for r in train])))
     p_ref = batch_tr.pos0.mean(axis=0)
-    cands = build_candidates(ev, dt=dt, p_ref=p_ref, retune=_retune_spec(veh, retune), only=only)
+    depths = [r.position[:, 2] for r in train if r.has_position and np.isfinite(r.position[:, 2]).any()]
+    z_max = float(max(np.nanmax(z) for z in depths)) if depths else None
+    cands = build_candidates(ev, dt=dt, p_ref=p_ref, retune=_retune_spec(veh, retune), only=only, z_max=z_max)
 
     rho0 = fitmod.lag1_autocorrelation(batch_va, base_va["predicted"], scales_va)
     n_val = base_va["n"]
     n_eff = fitmod.effective_n(n_val, rho0)
     rms_given = float(np.sqrt(base_va["rss"] / n_val))
-    at_noise = rms_given <= NOISE_LEVEL
 
     results = []
     baseline = None
     for cand in cands:
         say(f"fitting {cand.name} ({cand.n_params} parameter(s))")
         try:
-            fr = fitmod.fit(veh, batch_tr, cand, scales_tr, max_nfev=max_nfev)
+            fr = fitmod.fit(veh, batch_tr, cand, scales_tr, max_nfev=max_nfev, weights=weights)
         except (UvsimError, np.linalg.LinAlgError) as exc:
             results.append({"cand": cand, "error": str(exc)})
             continue
@@ -223,8 +236,8 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
                 _effect_with(cand, fr.params)
             except VehicleError as exc:
                 problem = f"fitted values are not physical: {exc}"
-        tr = fitmod.evaluate(veh, batch_tr, cand, fr.x, scales_tr) if cand.n_params else base_tr
-        va = fitmod.evaluate(veh, batch_va, cand, fr.x, scales_va) if cand.n_params else base_va
+        tr = fitmod.evaluate(veh, batch_tr, cand, fr.x, scales_tr, weights) if cand.n_params else base_tr
+        va = fitmod.evaluate(veh, batch_va, cand, fr.x, scales_va, weights) if cand.n_params else base_va
         score = fitmod.bic(va["rss"], va["n"], cand.n_params, n_eff)
         item = {"cand": cand, "fit": fr, "train": tr, "val": va, "bic": score, "problem": problem}
         results.append(item)
@@ -234,7 +247,10 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         raise CalibrationError("the baseline model could not be evaluated")
 
     # 4. decision -------------------------------------------------------------------------
+    # reference: the baseline (the given model, or with --retune the re-tuned given model)
     rss0 = baseline["val"]["rss"]
+    rms_ref = float(np.sqrt(rss0 / baseline["val"]["n"]))
+    at_noise = rms_ref <= NOISE_LEVEL
     table = []
     best = None
     for item in results:
@@ -246,15 +262,15 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         dbic = item["bic"] - baseline["bic"]
         improvement = 1.0 - float(np.sqrt(va["rss"] / rss0)) if rss0 > 0 else 0.0
         rms_c = float(np.sqrt(va["rss"] / va["n"]))
-        explained = float(np.sqrt(max(rms_given ** 2 - rms_c ** 2, 0.0)))
+        explained = float(np.sqrt(max(rms_ref ** 2 - rms_c ** 2, 0.0)))
         accepted = False
         if cand.name == "none":
             why = "baseline (the model as given" + (", base coefficients re-tuned)" if cand.n_params else ")")
         elif item["problem"]:
             why = item["problem"]
         elif at_noise:
-            why = (f"not needed: the given model's validation residual is at the noise level "
-                   f"({rms_given:.2f} noise sigmas <= {NOISE_LEVEL})")
+            why = (f"not needed: the baseline's validation residual is at the noise level "
+                   f"({rms_ref:.2f} noise sigmas <= {NOISE_LEVEL})")
         elif dbic >= DELTA_BIC:
             why = f"not significant: Delta BIC = {dbic:.1f} (needs < {DELTA_BIC:g})"
         elif improvement < MIN_IMPROVEMENT:
@@ -312,22 +328,25 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
                       f"The residual after the fit is still {rms_after:.1f} noise sigmas: {cand.name} explains part "
                       "of it; another effect (outside the catalogue, or a second one) remains."))
     else:
-        after_tr, after_va = base_tr, base_va
+        after_tr, after_va = baseline["train"], baseline["val"]
+        if baseline["cand"].n_params:  # --retune: keep the re-tuned base coefficients
+            veh_after = veh.with_parameters(baseline["fit"].params)
         confidence = "none"
         if at_noise:
-            message = (f"none: the given model's validation residual ({rms_given:.2f} noise sigmas) is at the noise "
-                       "level; no effect is needed.")
+            message = (f"none: the validation residual ({rms_ref:.2f} noise sigmas"
+                       + (", base coefficients re-tuned" if baseline["cand"].n_params else "")
+                       + ") is at the noise level; no effect is needed.")
         else:
             scored = [r for r in table if "score" in r and r["name"] != "none"]
             top = max(scored, key=lambda r: r["score"]["explained_noise_sigmas"], default=None)
             best_txt = (f"; the best candidate, {top['name']}, explains {top['score']['explained_noise_sigmas']:.2f}"
                         if top else "")
             message = (f"none: no catalogue effect explains a significant part of the validation residual "
-                       f"({rms_given:.2f} noise sigmas{best_txt}). Well above 2 sigmas this points to an effect "
+                       f"({rms_ref:.2f} noise sigmas{best_txt}). Well above 2 sigmas this points to an effect "
                        "outside the catalogue (or one needing parameters the candidates hold fixed); near 2 it is "
                        "the noise plus the error of the runs' initial states.")
             own = ev_base if ev_base is not None and ev_base["present"] else None
-            if own is not None and rms_given > NOISE_LEVEL:
+            if own is not None and not baseline["cand"].n_params:
                 message += (f" The force residual follows each DOF's own velocity and acceleration (R2 = "
                             f"{own['strength']:.2f}): the base coefficients (damping, added mass, inertia) look off; "
                             "calibrate them (uvsim calibrate) or re-tune them here (--retune).")
@@ -341,10 +360,11 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
             per_run[r.name] = {"split": split, "dof": r.dof, "before": _run_summary(before["per_run"][r.name]),
                                "after": _run_summary(after["per_run"][r.name])}
 
+    chosen = best if best is not None else baseline
     report = {
         "effect": best["cand"].name if best is not None else "none",
-        "parameters": ({k: {"value": v, "std": best["fit"].std.get(k), "unit": _unit(best["cand"].effect, k)}
-                        for k, v in best["fit"].params.items()} if best is not None else {}),
+        "parameters": {k: {"value": v, "std": chosen["fit"].std.get(k), "unit": _unit(chosen["cand"].effect, k)}
+                       for k, v in chosen["fit"].params.items()},
         "confidence": confidence,
         "message": message,
         "rmse_before": _group_rmse(base_va["rmse"]),
@@ -362,12 +382,14 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
                        "physical parameter values"),
             "confidence_high": (f"validation RMS after <= {CONFIDENT} noise sigmas or <= {EXPLAINED} x the "
                                 "given model's"),
-            "residual_normalization": "each signal group divided by its noise level",
+            "residual_normalization": "each signal group divided by its noise level (per run)",
+            "weights": dict(weights or {}),
         },
         "noise": {"pooled": noise_used, "per_run": {r.name: sc for r, sc in zip(train + val, scales_tr + scales_va)},
                   "estimated_from": "second differences of the raw signals (uvsim.diagnosis.residuals.noise_levels)"
                                     + ("; user-given: " + ", ".join(user_noise) if user_noise else "")},
         "baseline_validation_rms_noise_sigmas": rms_given,
+        "reference_validation_rms_noise_sigmas": rms_ref,
         "vehicle": veh.name,
         "data": str(dataset.path),
         "runs": {"train": [r.name for r in train], "validation": [r.name for r in val], "split": split_note},

@@ -64,9 +64,9 @@ class Objective:
     """Normalized residual vectors of a batch of runs for parameter sets ``X`` (P, p);
     ``scales`` is a list with one dict of noise levels per run."""
 
-    def __init__(self, vehicle, batch: RunBatch, cand: Candidate, scales):
+    def __init__(self, vehicle, batch: RunBatch, cand: Candidate, scales, weights=None):
         self.vehicle = vehicle.with_effects([cand.effect]) if cand.effect else vehicle
-        self.batch, self.cand, self.scales = batch, cand, scales
+        self.batch, self.cand, self.scales, self.weights = batch, cand, scales, weights
         self.n_sims = 0
 
     def predict(self, X: np.ndarray) -> np.ndarray:
@@ -89,7 +89,7 @@ class Objective:
         out = []
         for i in range(X.shape[0]):
             parts = [normalized_residuals(self.batch.measured[r], self.signals(Y[i * R + r], r), self.scales[r],
-                                          fill=FILL) for r in range(R)]
+                                          self.weights, fill=FILL) for r in range(R)]
             v = np.concatenate(parts)
             out.append(np.where(np.isfinite(v), v, FILL))
         return np.array(out)
@@ -112,9 +112,9 @@ class FitResult:
     message: str
 
 
-def fit(vehicle, batch: RunBatch, cand: Candidate, scales, *, max_nfev: int = 30) -> FitResult:
-    """Least-squares fit of ``cand`` on ``batch`` (module docstring)."""
-    obj = Objective(vehicle, batch, cand, scales)
+def fit(vehicle, batch: RunBatch, cand: Candidate, scales, *, max_nfev: int = 30, weights=None) -> FitResult:
+    """Least-squares fit of ``cand`` on ``batch`` (module docstring); ``weights`` per signal group."""
+    obj = Objective(vehicle, batch, cand, scales, weights)
     if cand.n_params == 0:
         r = obj.vectors(np.zeros((1, 0)))[0]
         return FitResult(np.zeros(0), {}, {}, float(r @ r), r.size, 1, 0.0, True, "nothing to fit")
@@ -172,12 +172,12 @@ def _map_with_uncertainty(cand: Candidate, x: np.ndarray, cov_x: np.ndarray):
     return base, std
 
 
-def evaluate(vehicle, batch: RunBatch, cand: Candidate, x: np.ndarray, scales) -> dict:
+def evaluate(vehicle, batch: RunBatch, cand: Candidate, x: np.ndarray, scales, weights=None) -> dict:
     """Residual vector, pooled RMSE and per-run metrics of ``cand`` at ``x`` on ``batch``."""
-    obj = Objective(vehicle, batch, cand, scales)
+    obj = Objective(vehicle, batch, cand, scales, weights)
     X = np.atleast_2d(x) if cand.n_params else np.zeros((1, 0))
     pred = obj.predicted(X[0])
-    parts = [normalized_residuals(m, p, sc, fill=FILL) for m, p, sc in zip(batch.measured, pred, scales)]
+    parts = [normalized_residuals(m, p, sc, weights, fill=FILL) for m, p, sc in zip(batch.measured, pred, scales)]
     v = np.concatenate(parts)
     v = np.where(np.isfinite(v), v, FILL)
     return {

@@ -138,11 +138,14 @@ def evidence(vehicle, runs, force_res) -> list[dict]:
                     "detail": {"gradient_N_per_m": G.tolist(), "offset_N": a.tolist(), "stiffness_N_per_m": k_est,
                                "mean_start_position_m": d["pos"][forces_ok][0].tolist() if forces_ok.any() else None}})
 
-    ok = np.isfinite(body).all(axis=1)
+    ok = np.isfinite(body).any(axis=1)  # rows with forces and/or moments (NaN entries are skipped by _r2)
     if ok.sum() > 10:
         # scale each DOF so forces and moments weigh alike
         B = body[ok]
-        s = np.sqrt(np.mean(B * B, axis=0))
+        fin = np.isfinite(B)
+        cnt = fin.sum(axis=0)
+        ss = np.where(fin, B * B, 0.0).sum(axis=0)
+        s = np.sqrt(np.divide(ss, cnt, out=np.zeros(6), where=cnt > 0))
         s = np.where(s > 0, s, 1.0)
         y = (B / s).ravel()
         # --- lagging the input ----------------------------------------------------

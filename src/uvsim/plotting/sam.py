@@ -9,10 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.pyplot as plt  # the package __init__ selects the Agg backend
 import numpy as np  # noqa: E402
 
 from uvsim.sam.vehicle import SAM_INPUTS  # noqa: E402
