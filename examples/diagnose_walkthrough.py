@@ -20,7 +20,7 @@ from pathlib import Path
 
 from uvsim.commands.diagnose import format_table
 from uvsim.diagnosis import diagnose, save_fixed_vehicle
-from uvsim.plotting_diagnosis import plot_diagnosis
+from uvsim.plotting.diagnosis import plot_diagnosis
 from uvsim.synthetic import generate_dataset
 
 TRUTH = {"type": "tether", "anchor_n": -4.0, "anchor_e": 1.0, "anchor_d": -1.0, "stiffness": 0.3}

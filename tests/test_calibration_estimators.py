@@ -54,17 +54,17 @@ def test_heave_least_squares_and_rls_recover_model():
         runs.append(_run(f"heave{i}", t, tau, ["z", "w"], {"z": 0.002, "w": 0.002}, i))
     ls = E.heave_least_squares(VEH, runs, bias=False)
     p = ls["parameters"]
-    assert p["Z_wdot"] == pytest.approx(P["Z_wdot"], rel=0.03)
-    assert p["Z_ww"] == pytest.approx(P["Z_ww"], rel=0.05)
-    assert abs(p["Z_w"] - P["Z_w"]) < 0.1 * abs(P["Z_ww"]) * 0.1 + 3 * ls["uncertainty"]["Z_w"] + 1.0
+    assert p["Z_wdot"] == pytest.approx(P["Z_wdot"], rel=0.02)  # measured +1.0 %
+    assert p["Z_ww"] == pytest.approx(P["Z_ww"], rel=0.01)  # measured +0.1 %
+    assert abs(p["Z_w"] - P["Z_w"]) < 3 * ls["uncertainty"]["Z_w"]  # small at these speeds: -5 %, 1.1 sigma
     rls = E.heave_recursive(VEH, runs, forgetting=1.0, bias=False)
     assert rls["parameters"]["Z_wdot"] == pytest.approx(p["Z_wdot"], rel=0.02)
     assert rls["theta_history"].shape == (4 * t.size, 3)
     # depth only: w from the differentiated depth gives the same answer
     depth_only = [Run(name=r.name, path=None, data=r.data.drop(columns=["w"])) for r in runs]
     p2 = E.heave_least_squares(VEH, depth_only, bias=False)["parameters"]
-    assert p2["Z_wdot"] == pytest.approx(P["Z_wdot"], rel=0.05)
-    assert p2["Z_ww"] == pytest.approx(P["Z_ww"], rel=0.08)
+    assert p2["Z_wdot"] == pytest.approx(P["Z_wdot"], rel=0.05)  # measured +3.1 %
+    assert p2["Z_ww"] == pytest.approx(P["Z_ww"], rel=0.02)  # measured +0.2 %
 
 
 def test_rls_forgetting_tracks_and_validates():
@@ -88,16 +88,16 @@ def test_yaw_steady_state_and_sinusoid_recover_seed002_model():
         runs.append(_run(f"ss{i}", t, tau, ["yaw", "r"], {"r": 0.002}, 10 + i, ov))
     pts = E.steady_state_points(VEH, runs)
     fit = E.yaw_steady_state_fit(pts[:, 0], pts[:, 1])
-    assert fit["parameters"]["N_rr"] == pytest.approx(-5.4815, rel=0.05)
-    assert fit["parameters"]["N_r"] == pytest.approx(-4.6114, rel=0.05)
-    assert fit["seed002_form"]["N_|r|r"] == pytest.approx(5.4815, rel=0.05)
+    assert fit["parameters"]["N_rr"] == pytest.approx(-5.4815, rel=0.01)  # measured -0.1 %
+    assert fit["parameters"]["N_r"] == pytest.approx(-4.6114, rel=0.01)  # measured +0.2 %
+    assert fit["seed002_form"]["N_|r|r"] == pytest.approx(5.4815, rel=0.01)
     ts = np.arange(0, 30, 1 / RATE)
     tau = np.zeros((ts.size, 6))
     tau[:, 5] = 35.17 * np.sin(2 * np.pi * 0.2 * ts)
     sine = _run("sine", ts, tau, ["yaw", "r"], {"r": 0.002}, 99, ov)
     J = E.yaw_inertia_sinusoid(VEH, sine, fit["parameters"]["N_r"], fit["parameters"]["N_rr"])
-    assert J["total_inertia"]["least_squares"] == pytest.approx(4.3, rel=0.05)
-    assert J["total_inertia"]["peak"] == pytest.approx(4.3, rel=0.15)
+    assert J["total_inertia"]["least_squares"] == pytest.approx(4.3, rel=0.05)  # measured +3.3 %
+    assert J["total_inertia"]["peak"] == pytest.approx(4.3, rel=0.05)  # measured +1.8 %
     assert J["N_rdot"]["least_squares"] == pytest.approx(4.3 - P["I_zz"], rel=0.1)
 
 

@@ -20,7 +20,7 @@ def _eff(p, dof):
 @pytest.fixture(scope="module")
 def six_dof():
     runs, truth = tank_runs()
-    cal = Calibrator(population=16, generations=5, seed=1).fit(runs, "bluerov2_heavy_initial")
+    cal = Calibrator(population=16, generations=5, seed=1, max_nfev=12).fit(runs, "bluerov2_heavy_initial")
     return runs, cal
 
 
@@ -112,3 +112,22 @@ def test_paper_setup_full_size():
         assert _eff(p, dof) == pytest.approx(_eff(TRUTH, dof), rel=0.02), dof
     floor = truth_rmse(runs)
     assert cal.report_["validation_rmse"]["position_m"] < 1.5 * floor["position_m"]
+
+
+def test_runs_starting_in_motion_initial_velocity():
+    # depth-only heave runs cut at t = 3 s, while moving: zero initial velocity is wrong
+    from uvsim.logs import Run
+
+    runs, _ = tank_runs(dofs=("heave",), signals=("depth",))
+    cut = [Run(name=r.name, path=None, data=r.data[r.data.t >= 3.0].reset_index(drop=True), dof=r.dof,
+               weight=r.weight, split=r.split) for r in runs]
+    kw = dict(population=12, generations=4, seed=2)
+    naive = Calibrator(**kw).fit(cut, "bluerov2_heavy_initial").vehicle_.parameters()
+    est = Calibrator(estimate_initial_velocity=True, **kw).fit(cut, "bluerov2_heavy_initial")
+    diff = Calibrator(initial_velocity="differentiate", **kw).fit(cut, "bluerov2_heavy_initial")
+    truth = _eff(TRUTH, "heave")
+    assert abs(_eff(naive, "heave") / truth - 1) > 0.1  # biased
+    assert _eff(est.vehicle_.parameters(), "heave") == pytest.approx(truth, rel=0.01)
+    assert est.vehicle_.parameters()["Z_ww"] == pytest.approx(TRUTH["Z_ww"], rel=0.01)
+    assert len(est.report_["refinement"]["heave"]["initial_velocity"]) == 4
+    assert _eff(diff.vehicle_.parameters(), "heave") == pytest.approx(truth, rel=0.06)

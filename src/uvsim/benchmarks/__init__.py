@@ -14,6 +14,7 @@ MODULES = {
     "hydro": "uvsim.benchmarks.hydro",
     "sam": "uvsim.benchmarks.sam",
     "calibration": "uvsim.benchmarks.calibration",
+    "diagnosis": "uvsim.benchmarks.diagnosis",
 }
 
 

@@ -108,9 +108,16 @@ def body_acceleration(run, nu: np.ndarray | None = None, *, window_s: float = DE
     return out
 
 
-def initial_velocity_estimate(run, **kw) -> np.ndarray:
+#: Window (s) and order of the fit behind the initial-velocity estimate: at the
+#: first sample the Savitzky-Golay fit is one-sided, so it uses a longer window and
+#: a quadratic to keep the noise of the estimated velocity down.
+INITIAL_WINDOW_S, INITIAL_POLYORDER = 1.0, 2
+
+
+def initial_velocity_estimate(run, *, window_s: float = INITIAL_WINDOW_S,
+                              polyorder: int = INITIAL_POLYORDER) -> np.ndarray:
     """nu at the first sample (6,) from :func:`body_velocity` (NaN where unknown)."""
     try:
-        return body_velocity(run, **kw)[0]
+        return body_velocity(run, window_s=window_s, polyorder=polyorder)[0]
     except CalibrationError:
         return np.full(6, np.nan)

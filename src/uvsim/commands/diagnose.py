@@ -98,7 +98,7 @@ def run(args) -> int:
         save_fixed_vehicle(diag, args.out)
         print(f"corrected vehicle: {args.out}")
     if args.plots:
-        from uvsim.plotting_diagnosis import plot_diagnosis
+        from uvsim.plotting.diagnosis import plot_diagnosis
 
         files = plot_diagnosis(diag, args.plots)
         print(f"plots: {', '.join(str(f) for f in files)}")

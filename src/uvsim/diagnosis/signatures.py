@@ -12,8 +12,8 @@ signature                  regressors                                      point
 =========================  ==============================================  ===================
 constant in NED            a constant per NED force component              current (horizontal),
                            (compared with a constant in the body frame)    ballast (vertical)
-growing with distance      constant + displacement from the run's start    tether
-                           (NED force on NED displacement)
+growing with distance      displacement from the run's start, beyond a     tether
+                           constant (NED force; partial R^2)
 lagging the input          ``lowpass(tau_c, T0) - tau_c`` (the force a     thruster_lag
                            first-order lag of ``T0 = 0.2 s`` removes)
 sign-dependent on input    ``B min(f_c, 0)`` beyond the symmetric ``B f_c``  thrust_asymmetry
@@ -116,7 +116,8 @@ def evidence(vehicle, runs, force_res) -> list[dict]:
             pts.append("current")
         if abs(mean_ned[2]) > 0.5 * horiz:
             pts.append("ballast")
-        out.append({"signature": "constant in NED", "strength": r2_ned, "present": r2_ned > PRESENT and r2_ned >= r2_body,
+        out.append({"signature": "constant in NED", "strength": r2_ned,
+                    "present": bool(r2_ned > PRESENT and r2_ned >= r2_body),
                     "points_to": pts,
                     "detail": {"mean_force_ned_N": mean_ned.tolist(), "r2_body_constant": r2_body}})
 
@@ -131,10 +132,11 @@ def evidence(vehicle, runs, force_res) -> list[dict]:
             a[i], G[i] = beta[0], beta[1:]
             rss_d += float(np.sum((y - X @ beta) ** 2))
             rss_c += float(np.sum((y - y.mean()) ** 2))
-        r2_dist = max(0.0, (rss_c - rss_d) / tot) if tot > 0 else 0.0
+        # partial R^2: the share of what the constant leaves that the displacement explains
+        r2_dist = max(0.0, (rss_c - rss_d) / rss_c) if rss_c > 0 else 0.0
         k_est = float(-np.trace(G) / 3.0)
         out.append({"signature": "growing with distance from the start", "strength": r2_dist,
-                    "present": r2_dist > PRESENT and k_est > 0, "points_to": ["tether"],
+                    "present": bool(r2_dist > PRESENT and k_est > 0), "points_to": ["tether"],
                     "detail": {"gradient_N_per_m": G.tolist(), "offset_N": a.tolist(), "stiffness_N_per_m": k_est,
                                "mean_start_position_m": d["pos"][forces_ok][0].tolist() if forces_ok.any() else None}})
 
@@ -151,7 +153,7 @@ def evidence(vehicle, runs, force_res) -> list[dict]:
         # --- lagging the input ----------------------------------------------------
         r2_lag, beta = _r2(y, (d["lag"][ok] / s).ravel()[:, None])
         out.append({"signature": "lagging the input", "strength": r2_lag,
-                    "present": r2_lag > PRESENT and beta[0] > 0, "points_to": ["thruster_lag"],
+                    "present": bool(r2_lag > PRESENT and beta[0] > 0), "points_to": ["thruster_lag"],
                     "detail": {"coefficient": float(beta[0]),
                                "time_constant_s_estimate": float(LAG_T0 * beta[0]) if beta[0] > 0 else None}})
         # --- sign-dependent on the input -------------------------------------------
@@ -160,7 +162,7 @@ def evidence(vehicle, runs, force_res) -> list[dict]:
         r2_sym, _ = _r2(y, Xs[:, :1])
         gain = r2_both - r2_sym
         out.append({"signature": "sign-dependent on the input", "strength": float(max(gain, 0.0)),
-                    "present": gain > PRESENT, "points_to": ["thrust_asymmetry"],
+                    "present": bool(gain > PRESENT), "points_to": ["thrust_asymmetry"],
                     "detail": {"reverse_ratio_estimate": float(1.0 + beta2[1] / max(1e-9, 1.0 + beta2[0])),
                                "symmetric_gain_error": float(beta2[0]), "r2_symmetric_only": r2_sym}})
     # --- coupling one DOF's velocity to another DOF's force --------------------
@@ -168,7 +170,7 @@ def evidence(vehicle, runs, force_res) -> list[dict]:
     if pairs:
         best = pairs[0]
         out.append({"signature": "coupling one DOF's velocity to another DOF's force", "strength": best["r2"],
-                    "present": best["r2"] > PRESENT, "points_to": ["coupled_damping"],
+                    "present": bool(best["r2"] > PRESENT), "points_to": ["coupled_damping"],
                     "detail": {"pairs": pairs[:4]}})
     out.sort(key=lambda e: -e["strength"])
     return out
@@ -185,7 +187,7 @@ def base_coefficient_evidence(vehicle, runs, force_res) -> dict | None:
         return None
     best = max(own, key=lambda o: o["r2"])
     return {"signature": "own-DOF velocity and acceleration (base coefficients)", "strength": best["r2"],
-            "present": best["r2"] > PRESENT, "points_to": ["calibration (re-tune the base coefficients)"],
+            "present": bool(best["r2"] > PRESENT), "points_to": ["calibration (re-tune the base coefficients)"],
             "detail": {"per_dof": own}}
 
 
@@ -209,8 +211,9 @@ def own_dof(d: dict) -> list[dict]:
 def coupling_pairs(d: dict) -> list[dict]:
     """For each force DOF i and velocity DOF j != i, the fraction of ``tau_res,i``'s
     sum of squares that ``nu_j`` (linear) or ``|nu_j| nu_j`` (quadratic), whichever
-    explains more, adds to DOF i's own regressors (``nu_i``, ``|nu_i| nu_i``,
-    ``nu_dot_i`` where measured: a wrong diagonal coefficient is not a coupling),
+    explains more, adds to a constant and DOF i's own regressors (``nu_i``,
+    ``|nu_i| nu_i``, ``nu_dot_i`` where measured: a constant force or a wrong
+    diagonal coefficient is not a coupling),
     with its coefficient (a first estimate of the derivative); sorted by that R^2.
     Only measured velocities are used."""
     body, nu, nud = d["body"], d["nu"], d["nud"]
@@ -227,12 +230,13 @@ def coupling_pairs(d: dict) -> list[dict]:
             if np.sqrt(np.mean(x * x)) < 1e-6:
                 continue
             own_ok = np.isfinite(nu[ok, i]) & np.isfinite(nud[ok, i])
+            one = np.ones((ok.sum(), 1))  # a constant (ballast, current) is not a coupling either
             if own_ok.all():
                 xi = nu[ok, i]
-                own = np.column_stack([xi, np.abs(xi) * xi, nud[ok, i]])
+                own = np.column_stack([one, xi, np.abs(xi) * xi, nud[ok, i]])
             else:
-                own = np.zeros((ok.sum(), 0))
-            r2_own = _r2(y, own)[0] if own.shape[1] else 0.0
+                own = one
+            r2_own = _r2(y, own)[0]
             best = None
             for quad in (False, True):
                 reg = (np.abs(x) * x if quad else x)[:, None]

@@ -1,15 +1,12 @@
 """Plots of a diagnosis (:func:`uvsim.diagnosis.diagnose`): residuals before/after over time.
 
-Only this module (with the other ``plotting*`` modules) imports matplotlib.
+Part of :mod:`uvsim.plotting`, the only package that imports matplotlib.
 """
 from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.pyplot as plt  # the package __init__ selects the Agg backend
 import numpy as np  # noqa: E402
 
 DOF = ("X [N]", "Y [N]", "Z [N]", "K [N m]", "M [N m]", "N [N m]")
