@@ -61,7 +61,7 @@ def main() -> None:
     save_fitted_vehicle(cal, out / "fitted.yaml")
     (out / "report.json").write_text(json.dumps(jsonable(rep), indent=2))
     if args.plots:
-        from uvsim.plotting_calibration import plot_calibration
+        from uvsim.plotting.calibration import plot_calibration
 
         plot_calibration(cal, ds, out / "plots")
     print(f"-> {out}/fitted.yaml, {out}/report.json")

@@ -85,7 +85,7 @@ def run(out_dir, dataset, settings: dict | None = None) -> None:
     print(f"                             fitted  {jsonable(rep['validation_rmse'])}")
     save_fitted_vehicle(cal, out / "fitted.yaml")
     (out / "calibration_report.json").write_text(json.dumps(jsonable(rep), indent=2))
-    from uvsim.plotting_calibration import plot_calibration
+    from uvsim.plotting.calibration import plot_calibration
 
     plot_calibration(cal, dataset, out / "calibration_plots", run_plots="validation")
     print(f"calibration outputs: {out / 'fitted.yaml'}, {out / 'calibration_report.json'}, "

@@ -151,7 +151,7 @@ def _run(args) -> int:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(jsonable(rep), indent=2))
     if args.plots:
-        from uvsim.plotting_calibration import plot_calibration
+        from uvsim.plotting.calibration import plot_calibration
 
         plot_calibration(cal, ds, args.plots)
     print(f"calibrated {', '.join(rep['dofs'])} of {rep['vehicle']}: {rep['evaluations']} GA evaluations, "

@@ -11,10 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.pyplot as plt  # the package __init__ selects the Agg backend
 import numpy as np  # noqa: E402
 
 from uvsim.kinematics import quat_to_euler  # noqa: E402
