@@ -2,26 +2,31 @@
 PYTHON ?= python3
 VENV   := .venv
 PY     := $(VENV)/bin/python
-STAMP  := $(VENV)/.installed
+BASE   := $(VENV)/.installed-base
+TEST   := $(VENV)/.installed-test
 
 .PHONY: demo test test-all bench clean
 
-$(STAMP): pyproject.toml
+$(BASE): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e ".[test]"
-	touch $(STAMP)
+	$(PY) -m pip install --quiet -e .
+	touch $(BASE)
 
-demo: $(STAMP)
+$(TEST): $(BASE)
+	$(PY) -m pip install --quiet -e ".[test]"
+	touch $(TEST)
+
+demo: $(BASE)
 	$(VENV)/bin/uvsim demo --out demo_output
 
-test: $(STAMP)
+test: $(TEST)
 	$(PY) -m pytest -q
 
-test-all: $(STAMP)
+test-all: $(TEST)
 	$(PY) -m pytest -q -m "slow or not slow"
 
-bench: $(STAMP)
+bench: $(BASE)
 	$(VENV)/bin/uvsim bench
 
 clean:
