@@ -3,14 +3,13 @@ the derivation of the expected value; tolerances are stated and far tighter than
 modelling error would pass."""
 from __future__ import annotations
 
-import copy
 
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
 import uvsim
-from uvsim.kinematics import euler_to_quat, quat_to_euler, quat_to_rotation
+from uvsim.kinematics import euler_to_quat, quat_to_rotation
 from uvsim.model import Model
 from uvsim.vehicle import load_vehicle, vehicle_from_dict
 

@@ -1,7 +1,6 @@
 """`uvsim hydro` command line and the benchmark entry point."""
 import json
 
-import pytest
 
 from uvsim.cli import main
 

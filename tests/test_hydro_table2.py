@@ -16,7 +16,6 @@ Result: Table II is NOT reproduced within 10 %.  The values we get are asserted 
 tolerance (regression guard) and the 10 % reproduction checks are strict xfails, so that a change
 which reproduces the paper shows up.  docs/hydro.md discusses the differences.
 """
-import numpy as np
 import pytest
 
 from uvsim.hydro.body import BodyModel

@@ -32,7 +32,7 @@ from uvsim.errors import SimulationError, VehicleError
 from uvsim.forces.base import Context
 from uvsim.bilinear import CORIOLIS, CROSS, ROT_QRATE, bilinear
 from uvsim.rigid_body import rigid_body_mass_matrix
-from uvsim.vehicle import ADDED_MASS_NAMES, INERTIA_NAMES, Vehicle, inertia_tensor, load_vehicle
+from uvsim.vehicle import ADDED_MASS_NAMES, INERTIA_NAMES, inertia_tensor, load_vehicle
 
 POS, QUAT, NU = slice(0, 3), slice(3, 7), slice(7, 13)
 STATE_NAMES = ["x", "y", "z", "qw", "qx", "qy", "qz", "u", "v", "w", "p", "q", "r"]

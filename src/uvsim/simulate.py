@@ -13,17 +13,19 @@ extra steps zero-length (``dt = 0``) so their states stay put.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Mapping, Sequence
+from typing import Any, Mapping
 
 import numpy as np
 
 from uvsim.errors import SimulationError
-from uvsim.kinematics import quat_to_euler
+from uvsim.kinematics import euler_to_quat, quat_to_euler
 from uvsim.model import NU, POS, QUAT, Model
 
 #: Speeds beyond which a trajectory is declared blown up (m/s or rad/s): far above
 #: anything an underwater vehicle does (hydrobatic AUVs reach ~5 m/s, seed 003 V-C).
 BLOWUP_SPEED = 1.0e3
+
+INITIAL_VELOCITY_MODES = ("zero", "differentiate")
 
 
 @dataclass
@@ -305,31 +307,71 @@ def simulate_batch(vehicle, t, inputs, *, input_kind: str = "force", y0=None, po
                             input_names(model.input_kind, U.shape[2]), model.vehicle.name)
 
 
-def initial_state_from_run(run, *, estimate_missing: bool = False):
-    """(pos0, q0, nu0) from the first row of a logged run: measured values where
-    present, zero velocity / origin / level attitude where absent."""
-    pos0 = np.zeros(3)
-    if run.has_position:
-        p = run.position[0]
-        pos0 = np.where(np.isfinite(p), p, 0.0)
-    q0 = np.array([1.0, 0, 0, 0])
+#: Window (s) over which the initial position and attitude are estimated by a
+#: quadratic least-squares fit evaluated at the first sample: a single noisy
+#: sample (2-5 mm, 5-10 mrad) as initial state biases a whole 14-s simulation.
+INITIAL_WINDOW_S = 0.5
+
+
+def _initial_value(t: np.ndarray, a: np.ndarray, window_s: float) -> np.ndarray:
+    """Per column of ``a`` (n, k): quadratic fit over the valid samples in the first
+    ``window_s`` seconds evaluated at ``t[0]`` (>= 5 samples), else the first valid
+    value; NaN for columns with no valid sample."""
+    out = np.full(a.shape[1], np.nan)
+    for j in range(a.shape[1]):
+        ok = np.flatnonzero(np.isfinite(a[:, j]))
+        if not ok.size:
+            continue
+        sel = ok[t[ok] <= t[ok[0]] + window_s]
+        if window_s > 0 and sel.size >= 5:
+            c = np.polyfit(t[sel] - t[0], a[sel, j], 2)
+            out[j] = np.polyval(c, 0.0)
+        else:
+            out[j] = a[ok[0], j]
+    return out
+
+
+def initial_state_from_run(run, *, initial_velocity: str = "zero", window_s: float = 0.0
+                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Initial state of a logged run from what it measured (partial initial state).
+
+    Returns ``(pos0 (3,), q0 (4,), nu0 (6,), nu0_known (6,) bool)``.  Position and
+    attitude (as unwrapped Euler angles) are the first valid sample (``window_s = 0``,
+    the default, as ``uvsim simulate`` does) or a quadratic fit over the first
+    ``window_s`` seconds evaluated at the first sample (calibration and diagnosis use
+    :data:`INITIAL_WINDOW_S`); axes not logged start at 0 / level.  Velocities are the
+    first logged sample where present; where absent, ``initial_velocity="zero"`` (runs
+    start at rest, seed 000) or ``"differentiate"`` (a Savitzky-Golay derivative of the
+    logged motion at the start, :mod:`uvsim.calibration.derivatives`)."""
+    if initial_velocity not in INITIAL_VELOCITY_MODES:
+        raise SimulationError(f"initial_velocity {initial_velocity!r}: expected one of {INITIAL_VELOCITY_MODES}")
+    t = run.t
+    pos = _initial_value(t, run.position, window_s)
+    pos0 = np.where(np.isfinite(pos), pos, 0.0)
+    q0 = np.array([1.0, 0.0, 0.0, 0.0])
     if run.has_attitude:
-        qa = run.quaternion
-        ok = np.isfinite(qa).all(axis=1)
+        e = run.euler
+        ok = np.isfinite(e).all(axis=1)
         if ok.any():
-            q0 = qa[int(np.argmax(ok))]
-    nu0 = np.zeros(6)
+            eu = np.full_like(e, np.nan)
+            eu[ok] = np.unwrap(e[ok], axis=0)
+            q0 = euler_to_quat(_initial_value(t, eu, window_s))
     vel = run.velocity
-    if vel is not None:
-        v = vel[0]
-        nu0 = np.where(np.isfinite(v), v, 0.0)
-    return pos0, q0, nu0
+    v0 = vel[0]
+    known = np.isfinite(v0)
+    nu0 = np.where(known, v0, 0.0)
+    if initial_velocity == "differentiate" and not known.all():
+        from uvsim.calibration.derivatives import initial_velocity_estimate
+
+        est = initial_velocity_estimate(run)
+        nu0 = np.where(known, nu0, np.where(np.isfinite(est), est, 0.0))
+    return pos0, q0, nu0, known
 
 
 def simulate_run(vehicle, run, *, current=None, overrides=None, method: str = "rk4", substeps: int = 1,
-                 on_blowup: str = "raise") -> SimulationResult:
+                 on_blowup: str = "raise", initial_window_s: float = 0.0) -> SimulationResult:
     """Simulate a logged :class:`uvsim.logs.Run`: start from its first measured state
     (velocities zero where not logged) and apply its inputs."""
-    pos0, q0, nu0 = initial_state_from_run(run)
+    pos0, q0, nu0, _ = initial_state_from_run(run, window_s=initial_window_s)
     return simulate(vehicle, run.t, run.inputs, input_kind=run.input_kind, pos0=pos0, q0=q0, nu0=nu0,
                     overrides=overrides, current=current, method=method, substeps=substeps, on_blowup=on_blowup)

@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 from uvsim.errors import UvsimError
-from uvsim.kinematics import euler_to_quat, quat_multiply, quat_normalize, quat_to_euler
+from uvsim.kinematics import quat_multiply, quat_normalize, quat_to_euler
 from uvsim.logs import Run, write_dataset
 from uvsim.simulate import simulate_batch
 from uvsim.vehicle import DOFS, load_vehicle

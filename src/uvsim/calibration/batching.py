@@ -25,8 +25,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from uvsim.errors import CalibrationError
-from uvsim.kinematics import euler_to_quat
+from uvsim.errors import CalibrationError, SimulationError
 from uvsim.metrics import (
     normalized_residuals,
     run_metrics,
@@ -34,11 +33,8 @@ from uvsim.metrics import (
     signals_from_states,
     weighted_abs_error,
 )
-from uvsim.simulate import simulate_batch
+from uvsim.simulate import INITIAL_WINDOW_S, initial_state_from_run, simulate_batch
 from uvsim.vehicle import load_vehicle
-
-INITIAL_VELOCITY_MODES = ("zero", "differentiate")
-
 
 @dataclass
 class RunBatch:
@@ -83,60 +79,13 @@ class RunBatch:
                         [self.measured[i] for i in idx])
 
 
-#: Window (s) over which the initial position and attitude are estimated by a
-#: quadratic least-squares fit evaluated at the first sample: a single noisy
-#: sample (2-5 mm, 5-10 mrad) as initial state biases a whole 14-s simulation.
-INITIAL_WINDOW_S = 0.5
-
-
-def _initial_value(t: np.ndarray, a: np.ndarray, window_s: float) -> np.ndarray:
-    """Per column of ``a`` (n, k): quadratic fit over the valid samples in the first
-    ``window_s`` seconds evaluated at ``t[0]`` (>= 5 samples), else the first valid
-    value; NaN for columns with no valid sample."""
-    out = np.full(a.shape[1], np.nan)
-    for j in range(a.shape[1]):
-        ok = np.flatnonzero(np.isfinite(a[:, j]))
-        if not ok.size:
-            continue
-        sel = ok[t[ok] <= t[ok[0]] + window_s]
-        if window_s > 0 and sel.size >= 5:
-            c = np.polyfit(t[sel] - t[0], a[sel, j], 2)
-            out[j] = np.polyval(c, 0.0)
-        else:
-            out[j] = a[ok[0], j]
-    return out
-
-
-def initial_state(run, *, initial_velocity: str = "zero", window_s: float = INITIAL_WINDOW_S
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(pos0 (3,), q0 (4,), nu0 (6,), nu0_known (6,) bool) of one run (module doc).
-
-    Position and attitude (as unwrapped Euler angles) are smoothed over the first
-    ``window_s`` seconds (:data:`INITIAL_WINDOW_S`; 0 = first sample as logged);
-    logged velocities are taken as the first sample."""
-    if initial_velocity not in INITIAL_VELOCITY_MODES:
-        raise CalibrationError(f"initial_velocity {initial_velocity!r}: expected one of {INITIAL_VELOCITY_MODES}")
-    t = run.t
-    pos = _initial_value(t, run.position, window_s)
-    pos0 = np.where(np.isfinite(pos), pos, 0.0)
-    q0 = np.array([1.0, 0.0, 0.0, 0.0])
-    if run.has_attitude:
-        e = run.euler
-        ok = np.isfinite(e).all(axis=1)
-        if ok.any():
-            eu = np.full_like(e, np.nan)
-            eu[ok] = np.unwrap(e[ok], axis=0)
-            q0 = euler_to_quat(_initial_value(t, eu, window_s))
-    vel = run.velocity
-    v0 = vel[0]
-    known = np.isfinite(v0)
-    nu0 = np.where(known, v0, 0.0)
-    if initial_velocity == "differentiate" and not known.all():
-        from uvsim.calibration.derivatives import initial_velocity_estimate
-
-        est = initial_velocity_estimate(run)
-        nu0 = np.where(known, nu0, np.where(np.isfinite(est), est, 0.0))
-    return pos0, q0, nu0, known
+def initial_state(run, *, initial_velocity: str = "zero", window_s: float = INITIAL_WINDOW_S):
+    """(pos0 (3,), q0 (4,), nu0 (6,), nu0_known (6,) bool) of one run, with the start
+    smoothed over :data:`INITIAL_WINDOW_S` (:func:`uvsim.simulate.initial_state_from_run`)."""
+    try:
+        return initial_state_from_run(run, initial_velocity=initial_velocity, window_s=window_s)
+    except SimulationError as exc:
+        raise CalibrationError(str(exc)) from None
 
 
 def prepare_runs(runs: Sequence, *, initial_velocity: str = "zero") -> RunBatch:

@@ -13,7 +13,7 @@ import json
 import math
 from pathlib import Path
 
-from uvsim.errors import CalibrationError
+from uvsim.commands import parse_pairs
 
 ADDED_MASS_ROWS = ("X_udot", "Y_vdot", "Z_wdot", "K_pdot", "M_qdot", "N_rdot")
 
@@ -49,21 +49,6 @@ def register(sub) -> None:
                                                  "GA convergence)")
     p.add_argument("--progress", action="store_true", help="show a progress bar per generation")
     p.set_defaults(func=_run)
-
-
-def _parse_weights(text):
-    if not text:
-        return None
-    out = {}
-    for part in text.split(","):
-        if "=" not in part:
-            raise CalibrationError(f"--weights: expected NAME=W pairs separated by commas, got {part!r}")
-        k, v = part.split("=", 1)
-        try:
-            out[k.strip()] = float(v)
-        except ValueError:
-            raise CalibrationError(f"--weights: weight of {k.strip()!r} is not a number: {v!r}") from None
-    return out
 
 
 def _fmt(v):
@@ -141,7 +126,7 @@ def _run(args) -> int:
     cal = Calibrator(dofs=args.dof, population=args.population, generations=args.generations, seed=args.seed,
                      margin=args.margin, workers=args.workers, dask=args.dask, checkpoint=ckpt, resume=args.resume,
                      refine=not args.no_refine, estimate_initial_velocity=args.estimate_initial_velocity,
-                     signal_weights=_parse_weights(args.weights), low_speed_exponent=args.low_speed_exponent,
+                     signal_weights=parse_pairs(args.weights, "--weights"), low_speed_exponent=args.low_speed_exponent,
                      progress=args.progress)
     cal.fit(ds, args.vehicle)
     rep = cal.report_

@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from uvsim.errors import CalibrationError
+from uvsim.commands import parse_pairs
 
 
 def register(subparsers) -> None:
@@ -36,21 +36,6 @@ def register(subparsers) -> None:
 
 def _list(s):
     return [x.strip() for x in s.split(",") if x.strip()] if s else None
-
-
-def _noise(s, what="--noise"):
-    if not s:
-        return None
-    out = {}
-    for item in s.split(","):
-        if "=" not in item:
-            raise CalibrationError(f"{what}: expected group=value pairs, got {item!r}")
-        k, v = item.split("=", 1)
-        try:
-            out[k.strip()] = float(v)
-        except ValueError:
-            raise CalibrationError(f"{what}: {k.strip()}: expected a number, got {v!r}") from None
-    return out
 
 
 def _fmt(d: dict) -> str:
@@ -87,7 +72,7 @@ def run(args) -> int:
 
     say = None if args.quiet else (lambda m: print(f"uvsim diagnose: {m}", flush=True))
     diag = diagnose(args.data, args.vehicle, retune=_list(args.retune), only=_list(args.only),
-                    noise=_noise(args.noise), weights=_noise(args.weights, "--weights"), max_nfev=args.max_nfev,
+                    noise=parse_pairs(args.noise, "--noise"), weights=parse_pairs(args.weights, "--weights"), max_nfev=args.max_nfev,
                     progress=say)
     print(format_table(diag.report))
     if args.json_out:

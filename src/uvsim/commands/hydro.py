@@ -8,7 +8,6 @@ HULL / NAME: a built-in hull (``remus100``), a hull YAML file, or for ``table`` 
 """
 from __future__ import annotations
 
-import argparse
 import json
 
 import numpy as np

@@ -22,6 +22,9 @@ def register(sub) -> None:
     p.add_argument("--current", default=None, help="constant NED current N,E,D in m/s")
     p.add_argument("--method", default="rk4", help="rk4 (default) or a scipy solve_ivp method (RK45, DOP853, ...)")
     p.add_argument("--substeps", type=int, default=1, help="RK4 steps per sample interval (default 1)")
+    p.add_argument("--initial-window", type=float, default=0.0, metavar="S",
+                   help="estimate the initial position/attitude by a quadratic fit over the first S seconds "
+                        "(default 0: the first measured sample)")
     p.set_defaults(func=_run)
 
 
@@ -33,7 +36,8 @@ def _run(args) -> int:
     veh = load_vehicle(args.vehicle)
     run = read_run(args.run)
     current = _triple(args.current) if args.current else None
-    res = simulate_run(veh, run, current=current, method=args.method, substeps=args.substeps)
+    res = simulate_run(veh, run, current=current, method=args.method, substeps=args.substeps,
+                       initial_window_s=args.initial_window)
     df = res.to_pandas()
     cols = ["t", "x", "y", "z", "qw", "qx", "qy", "qz", "roll", "pitch", "yaw", "u", "v", "w", "p", "q", "r"]
     extra = [c for c in df.columns if c not in cols]

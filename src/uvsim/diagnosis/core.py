@@ -188,7 +188,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     scales_va = [{**noise_levels([r]), **user_noise} for r in val]
     est = noise_levels(train + val)
     noise_used = {**est, **user_noise}
-    # initial position/attitude: straight-line fit over the first second (residuals.initial_pose)
+    # initial position/attitude: quadratic fit over the first second (residuals.refine_initial_states)
     batch_tr, batch_va = refine_initial_states(prepare_runs(train)), refine_initial_states(prepare_runs(val))
     for runs, scs, b in ((train, scales_tr, batch_tr), (val, scales_va, batch_va)):
         for r, sc, m in zip(runs, scs, b.measured):

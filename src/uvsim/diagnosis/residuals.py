@@ -47,6 +47,7 @@ from uvsim.errors import CalibrationError
 from uvsim.kinematics import quat_to_rotation
 from uvsim.metrics import present_groups, residual_components, signals_from_run
 from uvsim.model import Model
+from uvsim.simulate import initial_state_from_run
 
 #: Floor of an estimated noise level (m, rad, m/s, rad/s): below the 1e-6 rounding
 #: of the logs written by uvsim, so it only matters for noise-free data.
@@ -199,57 +200,20 @@ def simulate(vehicle, runs, effects=None, overrides=None) -> list[dict]:
     return simulate_dataset(vehicle, runs, overrides, effects)
 
 
-#: Window (s) of the straight-line fit that estimates a run's initial position and attitude.
+#: Window (s) of the fit that estimates a run's initial position and attitude.
 INITIAL_WINDOW_S = 1.0
 
 
-def initial_pose(run, window_s: float = INITIAL_WINDOW_S) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """Initial NED position (3,) and attitude quaternion (4,) of a run, estimated by a
-    least-squares straight line through the samples of the first ``window_s`` seconds,
-    evaluated at the first time stamp (NaN samples skipped).
-
-    An open-loop simulation inherits the error of its initial state, and a heading
-    error grows into a position error along the path (0.005 rad over 6 m is 30 mm,
-    15 times a 2 mm motion-capture noise).  The line's value at ``t0`` has a variance
-    ``2 (2n - 1) / (n (n + 1))`` times that of one sample (0.32 for n = 11 samples,
-    0.08 for n = 51).  Returns None for what the run does not log; the position
-    keeps NaN for axes not logged."""
-    t = run.t
-    sel = t <= t[0] + window_s
-    if sel.sum() < 3:
-        return None, None
-    tt = t[sel] - t[0]
-
-    def line_at_t0(x):
-        ok = np.isfinite(x)
-        if ok.sum() < 3:
-            return np.nan
-        A = np.column_stack([np.ones(ok.sum()), tt[ok]])
-        return float(np.linalg.lstsq(A, x[ok], rcond=None)[0][0])
-
-    pos = None
-    if run.has_position:
-        p = run.position[sel]
-        pos = np.array([line_at_t0(p[:, j]) for j in range(3)])
-    q0 = None
-    if run.has_attitude:
-        q = run.quaternion[sel]
-        ok = np.isfinite(q).all(axis=1)
-        if ok.sum() >= 3:
-            ref = q[np.argmax(ok)]
-            q = np.where((q @ ref < 0)[:, None], -q, q)  # one hemisphere
-            q0 = np.array([line_at_t0(q[:, j]) for j in range(4)])
-            q0 = q0 / np.linalg.norm(q0)
-    return pos, q0
-
-
 def refine_initial_states(batch, window_s: float = INITIAL_WINDOW_S):
-    """Replace a :class:`uvsim.calibration.batching.RunBatch`'s first-sample initial
-    positions and attitudes by :func:`initial_pose` estimates (in place); returns it."""
+    """Re-estimate a :class:`uvsim.calibration.batching.RunBatch`'s initial positions and
+    attitudes over the first ``window_s`` seconds (:func:`uvsim.simulate.initial_state_from_run`;
+    an open-loop simulation inherits the error of its initial state, and a heading error grows
+    into a position error along the path: 0.005 rad over 6 m is 30 mm, 15 times a 2 mm
+    motion-capture noise).  In place; returns the batch."""
     for i, run in enumerate(batch.runs):
-        pos, q0 = initial_pose(run, window_s)
-        if pos is not None:
-            batch.pos0[i] = np.where(np.isfinite(pos), pos, batch.pos0[i])
-        if q0 is not None:
+        pos, q0, _, _ = initial_state_from_run(run, window_s=window_s)
+        if run.has_position:
+            batch.pos0[i] = pos
+        if run.has_attitude:
             batch.q0[i] = q0
     return batch

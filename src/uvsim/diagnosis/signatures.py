@@ -98,7 +98,6 @@ def evidence(vehicle, runs, force_res) -> list[dict]:
     out = []
     body, ned = d["body"], d["ned"]
     forces_ok = np.isfinite(ned[:, :3]).all(axis=1)
-    moments_ok = np.isfinite(body[:, 3:]).all(axis=1)
 
     # --- constant in NED (vs body) -------------------------------------------
     if forces_ok.sum() > 10:

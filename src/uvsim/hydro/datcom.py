@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from uvsim.hydro.body import BodyModel, Coefficients, normal_axial_to_lift_drag, wrap_angle
+from uvsim.hydro.body import BodyModel, Coefficients, wrap_angle
 from uvsim.hydro.friction import skin_friction
 from uvsim.hydro.jorgensen import jorgensen
 
