@@ -8,7 +8,7 @@ G = 9.81
 #: Fresh water density at about 20 degC, kg/m^3 (seed 002 sec. 3 runs its CFD at 20 degC).
 RHO_FRESH = 998.0
 
-#: Sea water density, kg/m^3 (Fossen 2021, Table 8.? uses 1025 kg/m^3).
+#: Sea water density, kg/m^3: the value used throughout Fossen (2021) for sea water.
 RHO_SEA = 1025.0
 
 #: Kinematic viscosity of water at 20 degC, m^2/s (ITTC 2011 fresh-water tables).
