@@ -156,3 +156,19 @@ def test_vehicle_show_json(capsys):
     assert np.array(d["inertia"]).shape == (3, 3)
     assert d["linear_damping"][0] == -0.153 and d["quadratic_damping"][5] == -0.425
     assert main(["vehicle", "show", "nautilus"]) == 2
+
+
+def test_coupled_damping_parameters_round_trip(tmp_path):
+    """Named entries D_L[i,j] of a coupled damping model are overridable and written back."""
+    from uvsim.vehicle import vehicle_from_dict
+
+    d = yaml.safe_load(vehicle_path("bluerov2_heavy").read_text())
+    DL = np.diag([-0.15, -0.18, -0.24, -0.38, -0.2, -0.13])
+    DL[5, 1] = -0.05
+    d["damping"] = {"type": "coupled", "linear": DL.tolist(), "quadratic": np.diag([-35, -43, -70, -0.39, -0.43, -0.43]).tolist()}
+    v = vehicle_from_dict(d, source="coupled")
+    assert v.parameters()["D_L[5,1]"] == -0.05
+    v2 = v.with_parameters({"D_L[5,1]": -0.08, "D_Q[0,0]": -30.0})
+    assert v2.parameters()["D_L[5,1]"] == -0.08 and v2.parameters()["D_Q[0,0]"] == -30.0
+    v3 = load_vehicle(uvsim.save_vehicle(v2, tmp_path / "c.yaml"))
+    assert v3.parameters()["D_L[5,1]"] == -0.08

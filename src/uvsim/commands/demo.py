@@ -4,17 +4,12 @@
    (src/uvsim/data/datasets/bluerov2_tank: 6 DOFs x 10 runs, PWM inputs) with the
    calibrated model (seed 000 Table 5) and the initial one (Table 2), prints the RMSE of
    each against the "measured" runs and writes plots.
-2. Runs the calibration workflow (when available; see ``DEMO_STEPS``).
+2. Runs the calibration workflow (:func:`uvsim.calibration.demo.run`).
 """
 from __future__ import annotations
 
-import importlib
 import time
 from pathlib import Path
-
-#: Further demo steps: "module:function" called as function(out_dir: Path, dataset) -> None.
-DEMO_STEPS = ["uvsim.calibration.demo:run"]
-
 
 def register(sub) -> None:
     p = sub.add_parser("demo", help="run the main job on the shipped tank dataset (what `make demo` runs)")
@@ -30,18 +25,19 @@ def shipped_dataset_path() -> Path:
 
 
 def simulate_dataset_report(dataset, vehicles: dict) -> tuple[dict, dict]:
-    """Simulate every run with each vehicle; return (sims[label][run] -> states, table rows)."""
-    from uvsim.metrics import pooled_rmse, signals_from_run, signals_from_states
-    from uvsim.simulate import INITIAL_WINDOW_S, simulate_run
+    """Simulate every run with each vehicle (one batched call per vehicle; initial state
+    estimated over the first 0.5 s, :func:`uvsim.simulate.initial_state_from_run`).
+    Returns (sims[label][run name] -> states (n, n_y), rmse[label][dof] -> pooled RMSEs)."""
+    from uvsim.calibration.batching import simulate_dataset
+    from uvsim.metrics import pooled_rmse, signals_from_run
 
     sims, rows = {}, {}
     for label, veh in vehicles.items():
         sims[label] = {}
         pairs_by_dof: dict = {}
-        for run in dataset.runs:
-            y = simulate_run(veh, run, initial_window_s=INITIAL_WINDOW_S).y
-            sims[label][run.name] = y
-            pairs_by_dof.setdefault(run.dof, []).append((signals_from_run(run), signals_from_states(y)))
+        for run, pred in zip(dataset.runs, simulate_dataset(veh, dataset.runs)):
+            sims[label][run.name] = pred["states"]
+            pairs_by_dof.setdefault(run.dof, []).append((signals_from_run(run), pred))
         rows[label] = {dof: pooled_rmse(pairs) for dof, pairs in pairs_by_dof.items()}
     return sims, rows
 
@@ -60,7 +56,8 @@ def _run(args) -> int:
           f"noise: position 2 mm, attitude 0.005-0.01 rad)")
     sims, rows = simulate_dataset_report(ds, vehicles)
     n_steps = sum(len(r.t) - 1 for r in ds.runs) * len(vehicles)
-    print(f"simulated {len(ds.runs) * len(vehicles)} runs ({n_steps} RK4 steps) in {time.perf_counter() - t0:.1f} s\n")
+    print(f"simulated {len(ds.runs) * len(vehicles)} runs ({n_steps} RK4 steps, batched) in "
+          f"{time.perf_counter() - t0:.1f} s\n")
     print(f"{'DOF':6s} {'signal':14s} " + " ".join(f"{lbl:>32s}" for lbl in vehicles))
     for dof in ("surge", "sway", "heave", "roll", "pitch", "yaw"):
         keys = sorted(rows[next(iter(rows))].get(dof, {}))
@@ -80,15 +77,9 @@ def _run(args) -> int:
     p = tank_runs(by_dof, sims, out / "tank_runs.png", title="BlueROV2 Heavy tank runs: measured vs simulated")
     print(f"plot: {p}")
     if not args.skip_calibration:
-        for step in DEMO_STEPS:
-            mod, fn = step.split(":")
-            try:
-                module = importlib.import_module(mod)
-            except ModuleNotFoundError as exc:
-                if exc.name != mod:
-                    raise
-                continue
-            print()
-            getattr(module, fn)(out, ds)
+        from uvsim.calibration.demo import run as calibration_demo
+
+        print()
+        calibration_demo(out, ds)
     print(f"\ndone in {time.perf_counter() - t0:.1f} s; outputs in {out}/")
     return 0

@@ -64,11 +64,7 @@ def _load_builtin() -> None:
 
     _loaded = True
     for name in _BUILTIN_MODULES:
-        try:
-            importlib.import_module(name)
-        except ModuleNotFoundError as exc:
-            if exc.name != name:
-                raise
+        importlib.import_module(name)
 
 
 __all__ = ["Context", "ForceTerm", "make_term", "param", "register", "registered"]

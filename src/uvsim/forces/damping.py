@@ -123,3 +123,12 @@ class CoupledDamping(ForceTerm):
 
     def to_dict(self):
         return {"type": "coupled", "linear": self.DL.tolist(), "quadratic": self.DQ.tolist()}
+
+    def with_parameters(self, values):
+        DL, DQ = self.DL.copy(), self.DQ.copy()
+        for key, val in values.items():
+            for tag, A in (("D_L", DL), ("D_Q", DQ)):
+                if key.startswith(tag + "["):
+                    i, j = (int(x) for x in key[len(tag) + 1:-1].split(","))
+                    A[i, j] = float(val)
+        return CoupledDamping(DL, DQ)
