@@ -182,6 +182,29 @@ def identifiability(vehicle, batch: RunBatch, problem, values: Mapping[str, floa
     }
 
 
+def _add_columns(names, pair, init, start, lower, upper, cols, x0, lb, ub) -> None:
+    """Append the scaled least-squares columns of parameters ``names`` (each scaled by
+    its initial magnitude) to ``cols, x0, lb, ub``; the two parameters of ``pair`` (an
+    unidentifiable inertia + added-inertia pair, or None) become one column for their
+    sum, keeping their split ratio at the start value."""
+    for k in names:
+        if pair and k in pair:
+            continue
+        s = abs(init[k]) or 1.0
+        cols.append(("param", k, s))
+        x0.append(start[k] / s)
+        lb.append(lower[k] / s)
+        ub.append(upper[k] / s)
+    if pair:
+        a, b = pair
+        S = start[a] + start[b]
+        s = abs(init[a] + init[b])
+        cols.append(("sum", ((a, b), start[a] / S), s))
+        x0.append(S / s)
+        lb.append((lower[a] + lower[b]) / s)
+        ub.append((upper[a] + upper[b]) / s)
+
+
 def refine_dof(vehicle, batch: RunBatch, problem, start: Mapping[str, float], *, merge_inertia: str = "auto",
                estimate_initial_velocity: bool = False, max_nfev: int = 40, ident: dict | None = None) -> dict:
     """Least-squares refinement of one DOF from ``start`` values (module doc).
@@ -217,23 +240,7 @@ def refine_dof(vehicle, batch: RunBatch, problem, start: Mapping[str, float], *,
                     merged = pair
     init = dict(zip(names, problem.initial))
     cols, x0, lb, ub = [], [], [], []
-    for k in names:
-        if merged and k in merged:
-            continue
-        s = abs(init[k]) or 1.0
-        cols.append(("param", k, s))
-        x0.append(start[k] / s)
-        lb.append(lower[k] / s)
-        ub.append(upper[k] / s)
-    if merged:
-        a, b = merged
-        S = start[a] + start[b]
-        rho = start[a] / S
-        s = abs(init[a] + init[b])
-        cols.append(("sum", ((a, b), rho), s))
-        x0.append(S / s)
-        lb.append((lower[a] + lower[b]) / s)
-        ub.append((upper[a] + upper[b]) / s)
+    _add_columns(names, merged, init, start, lower, upper, cols, x0, lb, ub)
     nu_runs = []
     if estimate_initial_velocity:
         ax = DOF_AXIS[problem.dof]
@@ -333,23 +340,7 @@ def refine_joint(vehicle, batch: RunBatch, problems: dict, start: Mapping[str, f
         upper.update(dict(zip(p.names, p.upper)))
     cols, x0, lb, ub = [], [], [], []
     for d, p in problems.items():
-        pair = merged.get(d)
-        for k in p.names:
-            if pair and k in pair:
-                continue
-            s = abs(init[k]) or 1.0
-            cols.append(("param", k, s))
-            x0.append(start[k] / s)
-            lb.append(lower[k] / s)
-            ub.append(upper[k] / s)
-        if pair:
-            a, b = pair
-            S = start[a] + start[b]
-            s = abs(init[a] + init[b])
-            cols.append(("sum", ((a, b), start[a] / S), s))
-            x0.append(S / s)
-            lb.append((lower[a] + lower[b]) / s)
-            ub.append((upper[a] + upper[b]) / s)
+        _add_columns(p.names, merged.get(d), init, start, lower, upper, cols, x0, lb, ub)
     x0 = np.clip(np.array(x0, float), lb, ub)
     base = {k: start[k] for k in init}
     F = _Residuals(vehicle, batch, _Joint(problems, dict(scales), dict(weights or {})), cols, base)

@@ -1,4 +1,4 @@
-"""Plots of simulated vs measured runs (demo, ``uvsim simulate``)."""
+"""Plots of simulated vs measured tank runs (``uvsim demo``)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -55,29 +55,3 @@ def tank_runs(runs_by_dof: dict, sims: dict[str, dict], path: str | Path, title:
     plt.close(fig)
     return path
 
-
-def trajectory(df, path: str | Path, title: str = "") -> Path:
-    """NED trajectory (north-east and depth) plus Euler angles and body velocities of a
-    simulated run (a DataFrame with the LOG_FORMAT columns)."""
-    path = Path(path)
-    fig, ax = plt.subplots(1, 3, figsize=(15, 4))
-    ax[0].plot(df["y"], df["x"])
-    ax[0].set_xlabel("east y (m)")
-    ax[0].set_ylabel("north x (m)")
-    ax[0].axis("equal")
-    for c in ("roll", "pitch", "yaw"):
-        ax[1].plot(df["t"], np.degrees(np.unwrap(df[c])), label=c)
-    ax[1].set_ylabel("deg")
-    ax[1].legend()
-    for c in ("u", "v", "w", "p", "q", "r"):
-        ax[2].plot(df["t"], df[c], label=c)
-    ax[2].legend(ncol=2)
-    for a in ax[1:]:
-        a.set_xlabel("t (s)")
-        a.grid(alpha=0.3)
-    if title:
-        fig.suptitle(title)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
