@@ -225,9 +225,7 @@ class Model:
         # current (seed 000 eq. 2)
         if self.has_current:
             if self.current_fn is not None:
-                vc, vc_dot = self.current_fn(t)
-                vc = np.broadcast_to(np.asarray(vc, float), (n, 3))
-                vc_dot = np.broadcast_to(np.asarray(vc_dot, float), (n, 3))
+                vc, vc_dot = self._current_at(t, n)
             else:
                 vc, vc_dot = self.current_ned, None
             vc_b = (vc[:, None, :] @ R)[:, 0]  # R^T v_c
@@ -272,6 +270,18 @@ class Model:
         for i, s in self.state_slices.items():
             parts.append(self.terms[i].state_derivative(ctx, self.preps[i], y[:, s]))
         return np.concatenate(parts, axis=1)
+
+    def _current_at(self, t, n: int):
+        """``(v_c (n, 3), v_c_dot (n, 3))`` of the time-varying current at ``t``: a float
+        (one time for every row) or an array (n,) of per-row times (batched runs on
+        different time grids), evaluated row by row (``current(t)`` takes one time)."""
+        if np.ndim(t) == 0:
+            vc, vc_dot = self.current_fn(float(t))
+            return (np.broadcast_to(np.asarray(vc, float), (n, 3)),
+                    np.broadcast_to(np.asarray(vc_dot, float), (n, 3)))
+        pairs = [self.current_fn(float(ti)) for ti in np.asarray(t, float)]
+        return (np.array([np.asarray(a, float).reshape(3) for a, _ in pairs]),
+                np.array([np.asarray(b, float).reshape(3) for _, b in pairs]))
 
     def _mass_update(self, t, y, pos, R, nu, nu_r, u):
         """Rebuild M_RB with the mass changes of mass-changing terms (VBS, moving masses)."""

@@ -124,21 +124,25 @@ def _rk4_steps(model, T, U, y0, substeps, on_blowup, progress):
     shared_t = bool(np.all(T == T[:1]))
     for i in range(n_t - 1):
         u = U[:, i]
+        # shared grid: scalar t and h; per-row grids: t (n,) and h (n,) per row, so every
+        # row's stages are evaluated at its own times (time-varying currents, schedules)
         if shared_t:
-            h = (T[0, i + 1] - T[0, i]) / substeps
+            t = T[0, i]
+            h = (T[0, i + 1] - t) / substeps
+            hc = h
         else:
-            h = ((T[:, i + 1] - T[:, i]) / substeps)[:, None]
-        t = T[0, i]
+            t = T[:, i].copy()
+            h = (T[:, i + 1] - t) / substeps
+            hc = h[:, None]
         for _ in range(substeps):
             k1 = rhs(t, y, u)
-            k2 = rhs(t + 0.5 * h if shared_t else t, y + (0.5 * h) * k1, u)
-            k3 = rhs(t + 0.5 * h if shared_t else t, y + (0.5 * h) * k2, u)
-            k4 = rhs(t + h if shared_t else t, y + h * k3, u)
-            y = y + (h / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
+            k2 = rhs(t + 0.5 * h, y + (0.5 * hc) * k1, u)
+            k3 = rhs(t + 0.5 * h, y + (0.5 * hc) * k2, u)
+            k4 = rhs(t + h, y + hc * k3, u)
+            y = y + (hc / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
             q = y[:, 3:7]
             q /= np.sqrt((q * q).sum(axis=1))[:, None]
-            if shared_t:
-                t = t + h
+            t = t + h
         Y[:, i + 1] = y
         if (i & 15) == 15 or i == n_t - 2:
             fin = np.isfinite(y).all(axis=1) & (np.abs(y[:, 7:13]).max(axis=1) < BLOWUP_SPEED)

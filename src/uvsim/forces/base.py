@@ -34,8 +34,8 @@ class Context:
 
     Attributes
     ----------
-    t : float
-        Time, s.
+    t : float or (n,) array
+        Time, s: one float when every row shares the time grid, else each row's own time.
     pos : (n, 3) NED position, m.
     q : (n, 4) unit quaternion body -> NED, scalar first.
     R : (n, 3, 3) rotation matrix body -> NED.
@@ -50,7 +50,7 @@ class Context:
     mass_changed : True when a mass-changing term altered weight / CG at this stage.
     """
 
-    t: float
+    t: Any
     pos: np.ndarray
     q: np.ndarray
     R: np.ndarray
