@@ -255,10 +255,19 @@ def test_t_not_strictly_increasing_names_first_row(tmp_path):
         read_run(p)
 
 
-def test_no_position_and_no_attitude(tmp_path):
-    p = save(tmp_path, frame(x=None, y=None, z=None, roll=None, pitch=None, yaw=None, u=np.ones(N)))
-    with raises(p, "run.csv", "no position", "no attitude"):
+def test_no_measured_column_at_all(tmp_path):
+    p = save(tmp_path, frame(x=None, y=None, z=None, roll=None, pitch=None, yaw=None))
+    with raises(p, "run.csv", "no measured columns", "rates (p, q, r)"):
         read_run(p)
+
+
+def test_gyro_only_run_is_accepted(tmp_path):
+    """Issue 14: an IMU-only run (rates, no position, no attitude) is a valid run."""
+    p = save(tmp_path, frame(x=None, y=None, z=None, roll=None, pitch=None, yaw=None,
+                             p=np.zeros(N), q=np.full(N, 0.1), r=np.zeros(N)))
+    run = read_run(p)
+    assert run.signals() == ["rates"] and not run.has_attitude
+    assert np.isnan(run.quaternion).all()
 
 
 def test_no_inputs(tmp_path):
@@ -338,10 +347,44 @@ def test_quaternion_with_an_entirely_empty_component_is_partial(tmp_path):
         read_run(p)
 
 
-def test_partial_euler_columns(tmp_path):
-    p = save(tmp_path, frame(yaw=None))
-    with raises(p, "run.csv", "partial Euler", "['roll', 'pitch']"):
+def test_roll_pitch_without_yaw(tmp_path):
+    """Issue 14: a magnetometer-free IMU logs roll and pitch only: accepted, yaw is NaN,
+    and there is no full attitude (no quaternion)."""
+    run = read_run(save(tmp_path, frame(yaw=None)))
+    assert run.has_attitude and not run.has_full_attitude
+    assert run.euler_mask.tolist() == [True, True, False]
+    assert np.isnan(run.euler[:, 2]).all() and np.isfinite(run.euler[:, :2]).all()
+    assert np.isnan(run.quaternion).all()
+    assert run.measured_columns["attitude"] == ["roll", "pitch"]
+
+
+def test_depth_and_accelerometer_columns(tmp_path):
+    acc = {"acc_x": np.zeros(N), "acc_y": np.zeros(N), "acc_z": np.full(N, -9.81)}
+    dep = np.full(N, np.nan)
+    dep[::3] = 1.5
+    run = read_run(save(tmp_path, frame(x=None, y=None, z=None, depth=dep, **acc)))
+    assert run.signals() == ["depth", "attitude", "acceleration"]
+    np.testing.assert_array_equal(run.depth, dep)
+    np.testing.assert_array_equal(run.acceleration[:, 2], np.full(N, -9.81))
+    assert run.extra_columns == []
+
+
+def test_partial_accelerometer_columns(tmp_path):
+    p = save(tmp_path, frame(acc_x=np.zeros(N), acc_z=np.zeros(N)))
+    with raises(p, "run.csv", "partial acceleration", "['acc_x', 'acc_z']"):
         read_run(p)
+
+
+def test_manifest_vehicle_name_resolves_beside_the_manifest(tmp_path):
+    """Issue 14: ``vehicle: myrov`` with myrov.yaml next to manifest.yaml is that file;
+    a built-in name without such a file stays a built-in."""
+    run = read_run(save(tmp_path, frame()))
+    write_dataset(tmp_path / "ds", [run], vehicle="myrov")
+    (tmp_path / "ds" / "myrov.yaml").write_text("name: myrov\n")
+    ds = read_dataset(tmp_path / "ds")
+    assert ds.vehicle_file == tmp_path / "ds" / "myrov.yaml"
+    write_dataset(tmp_path / "ds2", [run], vehicle="bluerov2_heavy")
+    assert read_dataset(tmp_path / "ds2").vehicle_file is None
 
 
 def test_quaternion_and_euler_must_agree(tmp_path):

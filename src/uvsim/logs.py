@@ -33,7 +33,16 @@ QUAT_COLUMNS = ("qw", "qx", "qy", "qz")
 EULER_COLUMNS = ("roll", "pitch", "yaw")
 VELOCITY_COLUMNS = ("u", "v", "w")
 RATE_COLUMNS = ("p", "q", "r")
-MEASURED_COLUMNS = POSITION_COLUMNS + QUAT_COLUMNS + EULER_COLUMNS + VELOCITY_COLUMNS + RATE_COLUMNS
+#: Depth (m, NED z, positive down) measured by a pressure sensor at its own position on the
+#: body (vehicle file ``sensors.pressure.position``; default the body origin).
+DEPTH_COLUMN = "depth"
+#: Accelerometer specific force (m/s^2, body axes) at the IMU position (``sensors.imu.position``):
+#: ``f = R^T (a - g e_3)``, so a vehicle at rest and level reads (0, 0, -g).
+ACCEL_COLUMNS = ("acc_x", "acc_y", "acc_z")
+#: Battery voltage (V) per sample, an optional auxiliary input of PWM thrust curves.
+VOLTAGE_COLUMN = "voltage"
+MEASURED_COLUMNS = (POSITION_COLUMNS + (DEPTH_COLUMN,) + QUAT_COLUMNS + EULER_COLUMNS + VELOCITY_COLUMNS
+                    + RATE_COLUMNS + ACCEL_COLUMNS)
 
 #: Accepted ESC command range, microseconds.  Hobby/RC ESCs take 1000-2000 us
 #: pulses with 1500 us neutral; the Blue Robotics BlueESC is specified for
@@ -177,19 +186,20 @@ def _validate(df: pd.DataFrame, source: str) -> tuple[pd.DataFrame, list[str], s
             f"{source}: column 't' must be strictly increasing; {_row(i, source)} has t = {float(t[i])!r} "
             f"after t = {float(t[i - 1])!r}"
         )
-    for group, names in (("quaternion", QUAT_COLUMNS), ("Euler", EULER_COLUMNS)):
+    # a quaternion is all-or-nothing; Euler angles may be any subset (an IMU without a
+    # magnetometer logs roll and pitch only, a compass yaw only)
+    for group, names in (("quaternion", QUAT_COLUMNS), ("acceleration", ACCEL_COLUMNS)):
         present = [c for c in names if c in cols]
         if present and len(present) != len(names):
             raise LogFormatError(
                 f"{source}: partial {group} columns {present}; expected all of {list(names)} "
                 "(an entirely empty column counts as absent)"
             )
-    has_pos = any(c in cols for c in POSITION_COLUMNS)
-    has_att = all(c in cols for c in QUAT_COLUMNS) or all(c in cols for c in EULER_COLUMNS)
-    if not (has_pos or has_att):
+    if not any(c in cols for c in MEASURED_COLUMNS):
         raise LogFormatError(
-            f"{source}: no position (x, y, z) and no attitude (qw..qz or roll, pitch, yaw) columns; "
-            "a run needs at least one of them"
+            f"{source}: no measured columns; a run needs at least one of position (x, y, z), depth, "
+            "attitude (qw..qz or any of roll, pitch, yaw), velocity (u, v, w), rates (p, q, r) or "
+            "acceleration (acc_x, acc_y, acc_z)"
         )
     kind, in_cols = _actuator_columns(cols, source)
     for c in in_cols:
@@ -315,7 +325,38 @@ class Run:
 
     @property
     def has_attitude(self) -> bool:
+        """True when the run logs any attitude channel (quaternion or any Euler angle)."""
         return self.has_quaternion or self.has_euler
+
+    @property
+    def has_full_attitude(self) -> bool:
+        """True when the run logs the whole attitude (a quaternion or roll, pitch and yaw)."""
+        return self.has_quaternion or all(c in self.data.columns for c in EULER_COLUMNS)
+
+    @property
+    def euler_mask(self) -> np.ndarray:
+        """(3,) bool: which of roll, pitch, yaw the run logs (all three for a quaternion)."""
+        if self.has_quaternion:
+            return np.ones(3, bool)
+        return np.array([c in self.data.columns for c in EULER_COLUMNS])
+
+    @property
+    def has_depth(self) -> bool:
+        return DEPTH_COLUMN in self.data.columns
+
+    @property
+    def depth(self) -> np.ndarray:
+        """Pressure-sensor depth (m, NED z of the sensor), shape (n,); all NaN when absent."""
+        return self._cols((DEPTH_COLUMN,))[:, 0]
+
+    @property
+    def has_acceleration(self) -> bool:
+        return self._has(ACCEL_COLUMNS)
+
+    @property
+    def acceleration(self) -> np.ndarray:
+        """Accelerometer specific force (m/s^2, body axes, at the IMU), shape (n, 3); NaN when absent."""
+        return self._cols(ACCEL_COLUMNS)
 
     @property
     def quaternion(self) -> np.ndarray:
@@ -323,18 +364,20 @@ class Run:
 
         From the qw..qz columns (normalized, sign as logged) or else from
         roll/pitch/yaw via :func:`uvsim.kinematics.euler_to_quat`.  Rows with
-        any component missing are all NaN; all NaN without attitude columns."""
+        any component missing are all NaN; all NaN without a full attitude (a
+        run with roll and pitch only has no quaternion: use :attr:`euler`)."""
         if self.has_quaternion:
             q = self._cols(QUAT_COLUMNS)
             return q / np.linalg.norm(q, axis=1, keepdims=True)
-        if self.has_euler:
+        if self.has_full_attitude:
             return euler_to_quat(self._cols(EULER_COLUMNS))
         return np.full((len(self.data), 4), np.nan)
 
     @property
     def euler(self) -> np.ndarray:
         """ZYX Euler angles roll, pitch, yaw (rad), shape (n, 3): the logged
-        columns, or else from the quaternion via :func:`uvsim.kinematics.quat_to_euler`."""
+        columns (NaN for angles not logged), or else from the quaternion via
+        :func:`uvsim.kinematics.quat_to_euler`."""
         if self.has_euler:
             return self._cols(EULER_COLUMNS)
         if self.has_quaternion:
@@ -361,22 +404,24 @@ class Run:
         "attitude": ["qw", "qx", "qy", "qz"], "rates": ["p", "q", "r"]}``."""
         groups = {
             "position": POSITION_COLUMNS,
+            "depth": (DEPTH_COLUMN,),
             "attitude": QUAT_COLUMNS + EULER_COLUMNS,
             "velocity": VELOCITY_COLUMNS,
             "rates": RATE_COLUMNS,
+            "acceleration": ACCEL_COLUMNS,
         }
         out = {g: [c for c in names if c in self.data.columns] for g, names in groups.items()}
         return {g: cols for g, cols in out.items() if cols}
 
     def signals(self) -> list[str]:
-        """Measured signal groups present, in the order position, attitude,
-        velocity, rates (the axes are in :attr:`measured_columns`)."""
+        """Measured signal groups present, in the order position, depth, attitude,
+        velocity, rates, acceleration (the axes are in :attr:`measured_columns`)."""
         return list(self.measured_columns)
 
     @property
     def extra_columns(self) -> list[str]:
         """Columns that are not part of the log format (kept in ``data``)."""
-        known = set(("t",) + MEASURED_COLUMNS) | set(self._input_columns)
+        known = set(("t", VOLTAGE_COLUMN) + MEASURED_COLUMNS) | set(self._input_columns)
         return [c for c in self.data.columns if c not in known]
 
 
@@ -401,11 +446,19 @@ class Dataset:
 
     @property
     def vehicle_file(self) -> Path | None:
-        """``vehicle`` as a path (relative to the dataset directory) when it
-        names a .yaml/.yml file; None when it is a built-in name or absent."""
-        if self.vehicle is None or Path(self.vehicle).suffix.lower() not in (".yaml", ".yml"):
+        """``vehicle`` as a path relative to the dataset directory: when it names a
+        .yaml/.yml file, or when a bare name ``NAME`` has ``NAME.yaml``/``NAME.yml``
+        beside the manifest (a file beside the data wins over a built-in of the same
+        name); None for a built-in name or when absent."""
+        if self.vehicle is None:
             return None
-        return self.path / self.vehicle
+        if Path(self.vehicle).suffix.lower() in (".yaml", ".yml"):
+            return self.path / self.vehicle
+        for ext in (".yaml", ".yml"):
+            cand = self.path / f"{self.vehicle}{ext}"
+            if cand.is_file():
+                return cand
+        return None
 
     def by_dof(self, dof: str) -> list[Run]:
         _check_choice(dof, DOFS, "dof", str(self.path), none_ok=False)
