@@ -172,3 +172,22 @@ def test_coupled_damping_parameters_round_trip(tmp_path):
     assert v2.parameters()["D_L[5,1]"] == -0.08 and v2.parameters()["D_Q[0,0]"] == -30.0
     v3 = load_vehicle(uvsim.save_vehicle(v2, tmp_path / "c.yaml"))
     assert v3.parameters()["D_L[5,1]"] == -0.08
+
+
+def test_sensor_positions_load_validate_and_round_trip():
+    """Issue 14: a vehicle file declares sensor positions (pressure sensor aft, IMU)."""
+    from uvsim.vehicle import vehicle_from_dict
+
+    d = uvsim.load_vehicle("bluerov2_heavy").to_dict()
+    d["sensors"] = {"pressure": {"position": [-0.15, 0.0, 0.0], "source": "measured"}, "imu": {"position": [0, 0, 0.02]}}
+    v = vehicle_from_dict(d)
+    np.testing.assert_array_equal(v.sensors["pressure"], [-0.15, 0.0, 0.0])
+    assert vehicle_from_dict(v.to_dict()).sensors.keys() == v.sensors.keys()
+    assert v.with_parameters({"X_u": -1.0}).sensors.keys() == v.sensors.keys()
+    for bad, frag in (({"presure": {"position": [0, 0, 0]}}, "unknown sensor"),
+                      ({"imu": {"position": [0, 0]}}, "3 finite numbers"),
+                      ({"imu": {"position": [50, 0, 0]}}, "from the body origin"),
+                      ({"imu": [0, 0, 0]}, "expected a mapping")):
+        d["sensors"] = bad
+        with pytest.raises(uvsim.VehicleError, match=frag):
+            vehicle_from_dict(d)

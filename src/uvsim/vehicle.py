@@ -78,6 +78,8 @@ class Vehicle:
     g: float = G
     rho: float = 1000.0
     current_ned: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    #: sensor name -> position (3,) on the body, m (``sensors:`` section, :data:`SENSOR_NAMES`)
+    sensors: dict = field(default_factory=dict)
     description: str = ""
     source: str = "<memory>"
     raw: dict = field(default_factory=dict, repr=False)
@@ -191,6 +193,8 @@ class Vehicle:
             "damping": self.damping.to_dict(),
             "effects": [e.to_dict() for e in self.effects],
         }
+        if self.sensors:
+            d["sensors"] = {k: {"position": [float(x) for x in p]} for k, p in self.sensors.items()}
         if self.raw.get("thrusters") is not None:
             d["thrusters"] = copy.deepcopy(self.raw["thrusters"])
         if self.raw.get("sources"):
@@ -294,6 +298,35 @@ def _vec3(d: Mapping, key: str, where: str, default=None) -> np.ndarray:
     return a
 
 
+#: Sensors whose position on the body enters a measurement model (docs/log_format.md):
+#: ``imu`` (the accelerometer: specific force at that point), ``pressure`` (the ``depth``
+#: column is the depth of that point), ``dvl`` (``u, v, w`` are the velocity of that point).
+SENSOR_NAMES = ("imu", "pressure", "dvl")
+#: Largest sensor offset from the body origin accepted, m (a sensor is on the vehicle).
+MAX_SENSOR_OFFSET = 10.0
+
+
+def _sensors(spec, f: str) -> dict:
+    """``sensors:`` section -> {name: position (3,)}; validated."""
+    if spec is None:
+        return {}
+    if not isinstance(spec, dict):
+        raise VehicleError(f"{f}: sensors: expected a mapping such as {{pressure: {{position: [x, y, z]}}}}")
+    out = {}
+    for name, val in spec.items():
+        if name not in SENSOR_NAMES:
+            raise VehicleError(f"{f}: sensors.{name}: unknown sensor; expected one of {', '.join(SENSOR_NAMES)}")
+        if not isinstance(val, dict) or set(val) - {"position", "source"}:
+            raise VehicleError(f"{f}: sensors.{name}: expected a mapping {{position: [x, y, z]}} "
+                               "(m, body frame; optional source)")
+        pos = _vec3(val, "position", f"{f}: sensors.{name}")
+        if np.linalg.norm(pos) > MAX_SENSOR_OFFSET:
+            raise VehicleError(f"{f}: sensors.{name}.position {pos.tolist()} is more than {MAX_SENSOR_OFFSET:g} m "
+                               "from the body origin (expected metres, body frame)")
+        out[name] = pos
+    return out
+
+
 def vehicle_from_dict(d: dict, *, source: str = "<dict>", actuators: Actuators | None = None) -> Vehicle:
     """Build and validate a :class:`Vehicle` from a vehicle-file dictionary."""
     f = source
@@ -351,6 +384,7 @@ def vehicle_from_dict(d: dict, *, source: str = "<dict>", actuators: Actuators |
             f"{w}: diagonal added mass must be given as positive magnitudes (M_A = -diag(X_udot, ...) in SNAME sign)"
         )
 
+    sensors = _sensors(d.get("sensors"), f)
     damping = make_term(d["damping"], context=f"{f}: damping")
     effects_spec = d.get("effects") or []
     if not isinstance(effects_spec, list):
@@ -373,6 +407,7 @@ def vehicle_from_dict(d: dict, *, source: str = "<dict>", actuators: Actuators |
         g=g,
         rho=rho,
         current_ned=current,
+        sensors=sensors,
         description=str(d.get("description", "")),
         source=source,
         raw=d,
