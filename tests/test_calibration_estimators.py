@@ -4,7 +4,7 @@ import pandas as pd
 import pytest
 
 import uvsim
-from uvsim.calibration import derivatives as D
+from uvsim.estimation import derivatives as D
 from uvsim.calibration import estimators as E
 from uvsim.errors import CalibrationError
 from uvsim.logs import Run

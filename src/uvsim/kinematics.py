@@ -110,5 +110,16 @@ def attitude_error_angle(q_a: np.ndarray, q_b: np.ndarray) -> np.ndarray:
 
 
 def unwrap_angles(angles: np.ndarray, axis: int = 0) -> np.ndarray:
-    """Continuous angle history (``numpy.unwrap`` along ``axis``)."""
-    return np.unwrap(np.asarray(angles, dtype=float), axis=axis)
+    """Continuous angle history (``numpy.unwrap`` along ``axis``).  Missing (NaN)
+    samples stay NaN and are skipped: each series is unwrapped over its valid samples."""
+    a = np.asarray(angles, dtype=float)
+    ok = np.isfinite(a)
+    if ok.all():
+        return np.unwrap(a, axis=axis)
+    out = np.moveaxis(a.copy(), axis, -1)
+    flat = out.reshape(-1, out.shape[-1])
+    for row in flat:
+        sel = np.isfinite(row)
+        if sel.any():
+            row[sel] = np.unwrap(row[sel])
+    return np.moveaxis(flat.reshape(out.shape), -1, axis)

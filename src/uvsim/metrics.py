@@ -49,7 +49,8 @@ from typing import Iterable, Mapping
 import numpy as np
 
 from uvsim.errors import CalibrationError
-from uvsim.kinematics import attitude_error_angle, quat_conjugate, quat_multiply, quat_to_euler
+from uvsim.kinematics import attitude_error_angle, quat_to_euler
+from uvsim.measurements import UNITS, rotation_vector_error, wrap
 
 #: Signal groups and their channel names, in a fixed order.
 GROUPS = {
@@ -116,22 +117,6 @@ def channel_mask(measured: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
 
 
 # ----------------------------------------------------------------------------- residual components
-def rotation_vector_error(q_meas: np.ndarray, q_pred: np.ndarray) -> np.ndarray:
-    """Rotation vector (rad, body frame of the measurement) of ``q_meas^-1 (x) q_pred``.
-
-    Shapes broadcast, (..., 4) -> (..., 3); its norm is the attitude error angle.
-    Smooth at zero error (unlike the angle itself), so it suits least squares."""
-    dq = quat_multiply(quat_conjugate(q_meas), q_pred)
-    sgn = np.where(dq[..., :1] < 0, -1.0, 1.0)
-    v = dq[..., 1:] * sgn
-    s = np.linalg.norm(v, axis=-1, keepdims=True)
-    w = np.abs(dq[..., :1])
-    ang = 2.0 * np.arctan2(s, w)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        factor = np.where(s > 1e-12, ang / np.where(s > 1e-12, s, 1.0), 2.0)
-    return v * factor
-
-
 def residual_components(measured: Mapping[str, np.ndarray],
                         predicted: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
     """Error components, per group present in ``measured``.
@@ -196,10 +181,6 @@ def fit_percent(y: np.ndarray, y_hat: np.ndarray) -> float:
     return float(100.0 * (1.0 - np.linalg.norm(y - y_hat) / den))
 
 
-def _wrap(a):
-    return (a + np.pi) % (2 * np.pi) - np.pi
-
-
 def _channel_series(measured, predicted, g):
     """(y, y_hat, err) arrays (n, 3) for group ``g`` of one run; angles unwrapped."""
     if g == "attitude":
@@ -209,7 +190,7 @@ def _channel_series(measured, predicted, g):
         em = np.full(qm.shape[:-1] + (3,), np.nan)
         em[ok] = quat_to_euler(qm[ok])
         ep = quat_to_euler(qp)
-        err = _wrap(em - ep)
+        err = wrap(em - ep)
         if ok.any():  # unwrap the measured angles along time over the valid samples
             em[ok] = np.unwrap(em[ok], axis=0)
         y_hat = em - err  # the prediction on the measured angle's branch
@@ -430,3 +411,82 @@ def weighted_abs_error(measured: Mapping[str, np.ndarray], predicted: Mapping[st
         total = total + a.sum(axis=(-2, -1)) / scales[g] / n
     total = np.asarray(total, float)
     return np.where(np.isfinite(total), total, np.inf)
+
+
+# ----------------------------------------------------------------------------- measurement models
+#: Report-key unit suffix of each measurement group (``position_m``, ``acceleration_mps2``, ...).
+UNIT_SUFFIX = {"position": "m", "depth": "m", "attitude": "rad", "velocity": "mps", "rates": "radps",
+               "acceleration": "mps2"}
+
+
+def measurement_metrics(meas, pred) -> dict:
+    """Per-channel and per-group metrics of one run through its measurement model.
+
+    Parameters
+    ----------
+    meas : :class:`uvsim.measurements.RunMeasurements`.
+    pred : its predicted measurements (:meth:`~uvsim.measurements.RunMeasurements.predict`
+        of one simulated run, arrays (n, k)).
+
+    Returns
+    -------
+    dict with ``channels`` ({channel: {"rmse", "nrmse", "fit_percent", "n", "unit"}}, over
+    the channel's native samples; angles as wrapped Euler-angle differences, Fit on the
+    unwrapped measured angle), ``groups`` ({group: {"rmse", "fit_percent", "n"}}: position,
+    velocity, rates, acceleration as the RMS of the 3-D error over the logged axes,
+    attitude as the error angle for a full attitude) and ``<group>_<unit>`` keys with the
+    group RMSEs (e.g. ``position_m``, ``depth_m``, ``attitude_rad``)."""
+    from uvsim.kinematics import unwrap_angles
+
+    channels, groups, out = {}, {}, {}
+    res = meas.residuals(pred)
+    for g, grp in meas.groups.items():
+        names = grp.channels
+        if g == "attitude":
+            if grp.mode == "quaternion":
+                y = quat_to_euler(grp.values)
+                yh_raw = quat_to_euler(np.asarray(pred[g]))
+            else:
+                y = np.array(grp.values, float)
+                yh_raw = np.asarray(pred[g], float)
+            err = np.where(grp.valid, wrap(y - yh_raw), np.nan)
+            y = unwrap_angles(np.where(grp.valid, y, np.nan))
+            y_hat = y - err
+        else:
+            y = np.where(grp.valid, grp.values, np.nan)
+            err = res[g]
+            y_hat = y - err
+        for j, c in enumerate(names):
+            if not grp.logged[j]:
+                continue
+            ok = np.isfinite(err[:, j])
+            channels[c] = {"rmse": float(rmse(err[ok, j])) if ok.any() else float("nan"),
+                           "nrmse": nrmse(y[:, j], y_hat[:, j]), "fit_percent": fit_percent(y[:, j], y_hat[:, j]),
+                           "n": int(ok.sum()), "unit": UNITS[g]}
+        cols = np.flatnonzero(grp.logged)
+        if g == "attitude" and grp.mode == "quaternion":
+            e = np.linalg.norm(res[g], axis=1)
+            r, n = float(rmse(e)), int(np.isfinite(e).sum())
+        else:
+            e = res[g][:, cols]
+            okr = np.isfinite(e).all(axis=1)
+            r = float(np.sqrt(np.mean(np.sum(e[okr] ** 2, axis=1)))) if okr.any() else float("nan")
+            n = int(okr.sum())
+        groups[g] = {"rmse": r, "fit_percent": fit_percent(y[:, cols], y_hat[:, cols]), "n": n}
+        out[f"{g}_{UNIT_SUFFIX[g]}"] = r
+    out["channels"] = channels
+    out["groups"] = groups
+    return out
+
+
+def pooled_group_rmse(metrics_list) -> dict[str, float]:
+    """Group RMSEs over several runs (outputs of :func:`measurement_metrics`), pooled
+    sample by sample; keys ``<group>_<unit>``."""
+    sq: dict[str, float] = {}
+    cnt: dict[str, int] = {}
+    for m in metrics_list:
+        for g, d in m["groups"].items():
+            if d["n"]:
+                sq[g] = sq.get(g, 0.0) + (d["rmse"] ** 2 * d["n"] if np.isfinite(d["rmse"]) else np.inf)
+                cnt[g] = cnt.get(g, 0) + d["n"]
+    return {f"{g}_{UNIT_SUFFIX[g]}": float(np.sqrt(sq[g] / cnt[g])) for g in UNIT_SUFFIX if g in cnt}

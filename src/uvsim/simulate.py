@@ -18,7 +18,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from uvsim.errors import SimulationError
-from uvsim.kinematics import euler_to_quat, quat_to_euler
+from uvsim.kinematics import euler_to_quat, quat_to_euler, quat_to_rotation, unwrap_angles
 from uvsim.model import NU, POS, QUAT, Model
 
 #: Speeds beyond which a trajectory is declared blown up (m/s or rad/s): far above
@@ -49,6 +49,8 @@ class SimulationResult:
     input_names: list | None = None
     vehicle: str = ""
     meta: dict = field(default_factory=dict)
+    #: (n_t, 6) or (n_batch, n_t, 6) accelerations at the samples, when requested
+    nu_dot: np.ndarray | None = None
 
     @property
     def position(self) -> np.ndarray:
@@ -108,13 +110,16 @@ def _check_time(t: np.ndarray, where: str) -> None:
 
 
 def _rk4_loop(model: Model, T: np.ndarray, U: np.ndarray, y0: np.ndarray, substeps: int, on_blowup: str,
-              progress=None) -> np.ndarray:
-    """Core RK4 loop.  ``T`` (n, n_t) times, ``U`` (n, n_t, k) inputs, ``y0`` (n, n_y)."""
+              progress=None, accel: np.ndarray | None = None) -> np.ndarray:
+    """Core RK4 loop.  ``T`` (n, n_t) times, ``U`` (n, n_t, k) inputs, ``y0`` (n, n_y).
+    ``accel`` (n, n_t, 6), if given, receives ``nu_dot`` at every sample: the model's
+    acceleration at the sample's state with that sample's (held) input, i.e. the first
+    RK4 stage of the step that starts there (what an accelerometer at that time sees)."""
     with np.errstate(all="ignore"):  # blow-ups are detected below and reported, not warned about
-        return _rk4_steps(model, T, U, y0, substeps, on_blowup, progress)
+        return _rk4_steps(model, T, U, y0, substeps, on_blowup, progress, accel)
 
 
-def _rk4_steps(model, T, U, y0, substeps, on_blowup, progress):
+def _rk4_steps(model, T, U, y0, substeps, on_blowup, progress, accel=None):
     n, n_t = T.shape
     Y = np.empty((n, n_t, model.n_y))
     y = y0.copy()
@@ -134,8 +139,10 @@ def _rk4_steps(model, T, U, y0, substeps, on_blowup, progress):
             t = T[:, i].copy()
             h = (T[:, i + 1] - t) / substeps
             hc = h[:, None]
-        for _ in range(substeps):
+        for sub in range(substeps):
             k1 = rhs(t, y, u)
+            if accel is not None and sub == 0:
+                accel[:, i] = k1[:, 7:13]
             k2 = rhs(t + 0.5 * h, y + (0.5 * hc) * k1, u)
             k3 = rhs(t + 0.5 * h, y + (0.5 * hc) * k2, u)
             k4 = rhs(t + h, y + hc * k3, u)
@@ -159,6 +166,9 @@ def _rk4_steps(model, T, U, y0, substeps, on_blowup, progress):
                 Y[bad, : i + 2] = np.where(np.isfinite(Y[bad, : i + 2]), Y[bad, : i + 2], np.nan)
         if progress is not None:
             progress.update(1)
+    if accel is not None:
+        t_end = T[0, -1] if shared_t else T[:, -1]
+        accel[:, -1] = rhs(t_end, y, U[:, -1])[:, 7:13]
     return Y
 
 
@@ -251,7 +261,8 @@ def _solve_ivp(model: Model, t, U, y0, method, rtol, atol, on_blowup):
 
 def simulate_batch(vehicle, t, inputs, *, input_kind: str = "force", y0=None, pos0=None, q0=None, nu0=None,
                    overrides: Mapping[str, Any] | None = None, current=None, substeps: int = 1,
-                   on_blowup: str = "nan", model: Model | None = None, progress: bool = False) -> SimulationResult:
+                   on_blowup: str = "nan", model: Model | None = None, progress: bool = False,
+                   return_acceleration: bool = False) -> SimulationResult:
     """Simulate ``n`` trajectories at once with RK4 (numpy-vectorized).
 
     Parameters
@@ -264,6 +275,9 @@ def simulate_batch(vehicle, t, inputs, *, input_kind: str = "force", y0=None, po
     y0 : (n, n_y) full initial states, or give ``pos0`` (n, 3), ``q0`` (n, 4), ``nu0`` (n, 6).
     on_blowup : "nan" (default; a diverging trajectory becomes NaN from then on and
         the others continue) or "raise".
+    return_acceleration : also return ``nu_dot`` (n, n_t, 6) at every sample in
+        ``result.nu_dot`` (the model's acceleration with that sample's input; used by
+        accelerometer measurement models).
 
     Returns
     -------
@@ -304,11 +318,14 @@ def simulate_batch(vehicle, t, inputs, *, input_kind: str = "force", y0=None, po
         from tqdm.auto import tqdm
 
         bar = tqdm(total=T.shape[1] - 1, desc="simulate", unit="step", leave=False)
-    Y = _rk4_loop(model, T, U, y0, substeps, on_blowup, bar)
+    acc = np.empty((n, T.shape[1], 6)) if return_acceleration else None
+    Y = _rk4_loop(model, T, U, y0, substeps, on_blowup, bar, acc)
     if bar is not None:
         bar.close()
-    return SimulationResult(T[0] if np.all(T == T[:1]) else T, Y, model.state_names, U, model.input_kind,
-                            input_names(model.input_kind, U.shape[2]), model.vehicle.name)
+    res = SimulationResult(T[0] if np.all(T == T[:1]) else T, Y, model.state_names, U, model.input_kind,
+                           input_names(model.input_kind, U.shape[2]), model.vehicle.name)
+    res.nu_dot = acc
+    return res
 
 
 #: Window (s) over which the initial position and attitude are estimated by a
@@ -335,7 +352,7 @@ def _initial_value(t: np.ndarray, a: np.ndarray, window_s: float) -> np.ndarray:
     return out
 
 
-def initial_state_from_run(run, *, initial_velocity: str = "zero", window_s: float = 0.0
+def initial_state_from_run(run, *, initial_velocity: str = "zero", window_s: float = 0.0, sensors=None
                            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Initial state of a logged run from what it measured (partial initial state).
 
@@ -343,10 +360,13 @@ def initial_state_from_run(run, *, initial_velocity: str = "zero", window_s: flo
     attitude (as unwrapped Euler angles) are the first valid sample (``window_s = 0``,
     the default, as ``uvsim simulate`` does) or a quadratic fit over the first
     ``window_s`` seconds evaluated at the first sample (calibration and diagnosis use
-    :data:`INITIAL_WINDOW_S`); axes not logged start at 0 / level.  Velocities are the
-    first logged sample where present; where absent, ``initial_velocity="zero"`` (runs
-    start at rest, seed 000) or ``"differentiate"`` (a Savitzky-Golay derivative of the
-    logged motion at the start, :mod:`uvsim.calibration.derivatives`)."""
+    :data:`INITIAL_WINDOW_S`); axes and angles not logged start at 0 (a run with roll and
+    pitch only starts at yaw 0).  Without a logged ``z``, the depth of a pressure sensor
+    gives it: ``z = depth - (R r_p)_z`` with ``r_p = sensors["pressure"]`` (default the
+    body origin).  Velocities are the first logged sample where present; where absent,
+    ``initial_velocity="zero"`` (runs start at rest, seed 000) or ``"differentiate"`` (a
+    Savitzky-Golay derivative of the logged motion at the start,
+    :mod:`uvsim.estimation.derivatives`)."""
     if initial_velocity not in INITIAL_VELOCITY_MODES:
         raise SimulationError(f"initial_velocity {initial_velocity!r}: expected one of {INITIAL_VELOCITY_MODES}")
     t = run.t
@@ -354,18 +374,21 @@ def initial_state_from_run(run, *, initial_velocity: str = "zero", window_s: flo
     pos0 = np.where(np.isfinite(pos), pos, 0.0)
     q0 = np.array([1.0, 0.0, 0.0, 0.0])
     if run.has_attitude:
-        e = run.euler
-        ok = np.isfinite(e).all(axis=1)
-        if ok.any():
-            eu = np.full_like(e, np.nan)
-            eu[ok] = np.unwrap(e[ok], axis=0)
-            q0 = euler_to_quat(_initial_value(t, eu, window_s))
+        e = unwrap_angles(run.euler)
+        e0 = _initial_value(t, e, window_s)
+        q0 = euler_to_quat(np.where(np.isfinite(e0), e0, 0.0))
+    if not np.isfinite(pos[2]) and getattr(run, "has_depth", False):
+        d0 = _initial_value(t, run.depth[:, None], window_s)[0]
+        if np.isfinite(d0):
+            r_p = (sensors or {}).get("pressure")
+            off = float(quat_to_rotation(q0)[2] @ np.asarray(r_p, float)) if r_p is not None else 0.0
+            pos0[2] = d0 - off
     vel = run.velocity
     v0 = vel[0]
     known = np.isfinite(v0)
     nu0 = np.where(known, v0, 0.0)
     if initial_velocity == "differentiate" and not known.all():
-        from uvsim.calibration.derivatives import initial_velocity_estimate
+        from uvsim.estimation.derivatives import initial_velocity_estimate
 
         est = initial_velocity_estimate(run)
         nu0 = np.where(known, nu0, np.where(np.isfinite(est), est, 0.0))

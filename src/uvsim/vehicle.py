@@ -126,6 +126,7 @@ class Vehicle:
         for i, k in enumerate(ADDED_MASS_NAMES):
             p[k] = float(self.added_mass_matrix[i, i])
         p.update(dict(zip(CURRENT_NAMES, map(float, self.current_ned))))
+        p.update(self.actuators.parameters())
         for term in [self.damping, *self.effects]:
             p.update(term.parameters())
         return p
@@ -165,9 +166,13 @@ class Vehicle:
         effects = [e.with_parameters(v) if set(v) & set(e.parameters()) else e for e in self.effects]
         d["damping"] = damping.to_dict()
         d["effects"] = [e.to_dict() for e in effects]
+        actuators = self.actuators
+        if set(v) & set(actuators.parameters()):
+            actuators = actuators.with_parameters(v)
+            d["thrusters"] = actuators.specs
         if name:
             d["name"] = name
-        return vehicle_from_dict(d, source=self.source, actuators=self.actuators)
+        return vehicle_from_dict(d, source=self.source, actuators=actuators)
 
     def with_effects(self, effects: list) -> "Vehicle":
         """A copy with extra force terms appended (dicts or ``ForceTerm`` objects)."""

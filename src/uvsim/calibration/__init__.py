@@ -7,7 +7,6 @@
   simulation of logged runs (shared with diagnosis).
 * :mod:`uvsim.calibration.estimators` - seed 002's least-squares, recursive
   least-squares, steady-state and sinusoidal-test estimators.
-* :mod:`uvsim.calibration.derivatives` - Savitzky-Golay velocities/accelerations.
 """
 from uvsim.calibration.batching import RunBatch, as_batch, prepare_runs, residuals, simulate_dataset, simulate_rows  # noqa: F401
 from uvsim.calibration.calibrator import Calibrator  # noqa: F401

@@ -12,7 +12,7 @@ built from what it measured (partial initial state, issue 7):
 * velocities / rates: the first logged sample where present; where absent,
   ``initial_velocity="zero"`` (default, seed 000: runs start at rest),
   ``"differentiate"`` (a Savitzky-Golay derivative of the smoothed logged
-  positions / attitude at the start, :func:`uvsim.calibration.derivatives`) or a
+  positions / attitude at the start, :func:`uvsim.estimation.derivatives`) or a
   value given per run (e.g. estimated with the parameters by the refinement).
 
 :func:`simulate_dataset` and :func:`residuals` are the general entry points used

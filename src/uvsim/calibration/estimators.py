@@ -22,7 +22,7 @@ Yaw (sec. 5.2, eq. 28-33)
     total and ``N_rdot = total - I_zz``.
 
 Where ``w``/``r`` or their derivatives are not logged they come from
-:mod:`uvsim.calibration.derivatives` (Savitzky-Golay differentiation).
+:mod:`uvsim.estimation.derivatives` (Savitzky-Golay differentiation).
 """
 from __future__ import annotations
 
@@ -30,7 +30,7 @@ import functools
 
 import numpy as np
 
-from uvsim.calibration.derivatives import body_acceleration, body_velocity, smooth_derivative
+from uvsim.estimation.derivatives import body_acceleration, body_velocity, smooth_derivative
 from uvsim.errors import CalibrationError
 from uvsim.vehicle import load_vehicle
 

@@ -16,7 +16,7 @@ Two kinds, both per run and over time:
   (forces and moments), where a constant-in-NED effect (current, ballast) looks
   constant.
 
-Smoothing and differentiation (:mod:`uvsim.calibration.derivatives`): a
+Smoothing and differentiation (:mod:`uvsim.estimation.derivatives`): a
 Savitzky-Golay filter (cubic, 1 s window, ``FORCE_WINDOW_S``) differentiates the logged position
 (rotated into the body frame with the logged attitude) and the unwrapped ZYX
 Euler angles (converted to body rates, Fossen 2021 eq. 2.28); logged velocities
@@ -42,7 +42,7 @@ from __future__ import annotations
 import numpy as np
 
 from uvsim.calibration.batching import simulate_dataset
-from uvsim.calibration.derivatives import body_acceleration, body_velocity, smooth_derivative
+from uvsim.estimation.derivatives import body_acceleration, body_velocity, smooth_derivative
 from uvsim.errors import CalibrationError
 from uvsim.kinematics import quat_to_rotation
 from uvsim.metrics import present_groups, residual_components, signals_from_run

@@ -5,6 +5,22 @@ column of the allocation matrix is ``[d_i; r_i x d_i]`` (Fossen 2021 eq. 11.6), 
 ``tau = B f`` for thrusts ``f`` (N).  A vehicle may instead give the matrix itself
 (seed 002 eq. 9).  Inputs can be generalized forces (used as ``tau``), per-thruster
 thrust (N) or per-thruster ESC PWM (us, mapped by each thruster's curve).
+
+Calibratable actuator parameters (issue 14; each a named model parameter, default 1 or
+the vehicle file's value):
+
+* ``thruster_gain_i`` (-): thruster i delivers ``gain_i`` times its curve (a fouled,
+  damaged or weaker unit; seed 000 sec. 6 and the logs' authors report such units);
+* ``thruster_reverse_i`` (-): extra factor on its reverse (negative) thrust, beyond the
+  curve's own reverse branch (propeller asymmetry, seed 002 sec. 5);
+* ``thruster_x_i``, ``thruster_y_i``, ``thruster_z_i`` (m): its position (lever arm),
+  when the vehicle gives thruster positions (``units``);
+* ``force_gain_X`` ... ``force_gain_N`` and ``force_reverse_X`` ... (-): the same per
+  degree of freedom for generalized-force inputs.
+
+So the delivered thrust is ``f_i = gain_i * curve_i(u_i) * (reverse_i if curve_i(u_i) < 0
+else 1)`` and ``tau = B(r) f``.  With every parameter at its default the mapping is
+exactly the allocation above.
 """
 from __future__ import annotations
 
@@ -23,6 +39,36 @@ def allocation_matrix(positions, directions) -> np.ndarray:
     return np.vstack([D.T, np.cross(P, D).T])
 
 
+DOF_LETTERS = "XYZKMN"
+#: Accepted range of a gain or reverse ratio in a vehicle file (a thruster delivering
+#: more than twice its measured curve is a unit error, not a calibration).
+FACTOR_RANGE = (0.0, 2.0)
+
+
+def _factor(val, where: str) -> float:
+    try:
+        v = float(val)
+    except (TypeError, ValueError):
+        raise VehicleError(f"{where}: expected a number, got {val!r}") from None
+    lo, hi = FACTOR_RANGE
+    if not (np.isfinite(v) and lo < v <= hi):
+        raise VehicleError(f"{where} = {val!r}: expected a factor in ({lo:g}, {hi:g}] (1 = as the thrust curve)")
+    return v
+
+
+def _per_dof(spec, where: str) -> np.ndarray:
+    out = np.ones(6)
+    if spec is None:
+        return out
+    if not isinstance(spec, dict):
+        raise VehicleError(f"{where}: expected a mapping of DOF letters X, Y, Z, K, M, N to factors")
+    for k, v in spec.items():
+        if k not in DOF_LETTERS or len(k) != 1:
+            raise VehicleError(f"{where}.{k}: unknown degree of freedom; expected one of X, Y, Z, K, M, N")
+        out[DOF_LETTERS.index(k)] = _factor(v, f"{where}.{k}")
+    return out
+
+
 @register("actuators")
 class Actuators(ForceTerm):
     """Maps the run's inputs to ``tau``.
@@ -34,15 +80,72 @@ class Actuators(ForceTerm):
     names : thruster names.
     """
 
-    def __init__(self, matrix=None, curves=None, names=None, specs=None):
+    def __init__(self, matrix=None, curves=None, names=None, specs=None, *, positions=None, directions=None,
+                 gains=None, reverse=None, force_gain=None, force_reverse=None):
         self.matrix = None if matrix is None else np.asarray(matrix, float)
         self.curves = curves
         self.names = names
         self.specs = specs  # vehicle-file form, kept for to_dict
+        k = self.n_thrusters
+        self.positions = None if positions is None else np.asarray(positions, float)
+        self.directions = None if directions is None else np.asarray(directions, float)
+        self.gains = np.ones(k) if gains is None else np.asarray(gains, float)
+        self.reverse = np.ones(k) if reverse is None else np.asarray(reverse, float)
+        self.force_gain = np.ones(6) if force_gain is None else np.asarray(force_gain, float)
+        self.force_reverse = np.ones(6) if force_reverse is None else np.asarray(force_reverse, float)
 
     @property
     def n_thrusters(self) -> int:
         return 0 if self.matrix is None else self.matrix.shape[1]
+
+    def parameters(self) -> dict[str, float]:
+        """Named actuator parameters (module docstring) with their current values."""
+        out = {}
+        for i in range(self.n_thrusters):
+            out[f"thruster_gain_{i + 1}"] = float(self.gains[i])
+            out[f"thruster_reverse_{i + 1}"] = float(self.reverse[i])
+            if self.positions is not None:
+                for a, c in enumerate("xyz"):
+                    out[f"thruster_{c}_{i + 1}"] = float(self.positions[i, a])
+        for j, c in enumerate(DOF_LETTERS):
+            out[f"force_gain_{c}"] = float(self.force_gain[j])
+            out[f"force_reverse_{c}"] = float(self.force_reverse[j])
+        return out
+
+    def with_parameters(self, values) -> "Actuators":
+        """A copy with some actuator parameters replaced (vehicle-file spec updated too)."""
+        import copy
+
+        own = {k: float(v) for k, v in values.items() if k in self.parameters()}
+        if not own:
+            return self
+        spec = copy.deepcopy(self.specs) if isinstance(self.specs, dict) else {}
+        units = spec.get("units")
+        for i in range(self.n_thrusters):
+            if units is None:
+                continue
+            u = units[i]
+            if f"thruster_gain_{i + 1}" in own:
+                u["gain"] = own[f"thruster_gain_{i + 1}"]
+            if f"thruster_reverse_{i + 1}" in own:
+                u["reverse_ratio"] = own[f"thruster_reverse_{i + 1}"]
+            for a, c in enumerate("xyz"):
+                key = f"thruster_{c}_{i + 1}"
+                if key in own:
+                    pos = [float(x) for x in u["position"]]
+                    pos[a] = own[key]
+                    u["position"] = pos
+        for tag, field in (("gain", "force_gain"), ("reverse", "force_reverse_ratio")):
+            for c in DOF_LETTERS:
+                key = f"force_{tag}_{c}"
+                if key in own:
+                    spec.setdefault(field, {})[c] = own[key]
+        if units is None and any(k.startswith("thruster_") for k in own):
+            # a configuration matrix without units: keep gains / ratios in lists
+            g = [own.get(f"thruster_gain_{i + 1}", float(self.gains[i])) for i in range(self.n_thrusters)]
+            r = [own.get(f"thruster_reverse_{i + 1}", float(self.reverse[i])) for i in range(self.n_thrusters)]
+            spec["gains"], spec["reverse_ratios"] = g, r
+        return build_actuators(spec, "thrusters")
 
     def prepare(self, params, n):
         groups = []
@@ -54,7 +157,36 @@ class Actuators(ForceTerm):
             groups = [(c, np.array(idx)) for c, idx in seen.values()]
         # inputs are held over a sample interval, so the four RK4 stages see the same
         # array object: map PWM -> thrust once per interval (cache keyed on identity)
-        return {"groups": groups, "u": None, "f": None}
+        prep = {"groups": groups, "u": None, "f": None, "gain": None, "rev": None, "B": self.matrix,
+                "fgain": None, "frev": None}
+        k = self.n_thrusters
+
+        def vec(name, default):
+            v = params.get(name, default)
+            return np.broadcast_to(np.asarray(v, float), (n,))
+
+        if k:
+            g = np.stack([vec(f"thruster_gain_{i + 1}", self.gains[i]) for i in range(k)], -1)
+            r = np.stack([vec(f"thruster_reverse_{i + 1}", self.reverse[i]) for i in range(k)], -1)
+            if np.any(g != 1.0):
+                prep["gain"] = g[0] if np.all(g == g[:1]) else g
+            if np.any(r != 1.0):
+                prep["rev"] = r[0] if np.all(r == r[:1]) else r
+            if self.positions is not None:
+                P = np.stack([np.stack([vec(f"thruster_{c}_{i + 1}", self.positions[i, a]) for a, c in enumerate("xyz")],
+                                       -1) for i in range(k)], 1)  # (n, k, 3)
+                if np.any(P != self.positions[None]):
+                    Bn = np.broadcast_to(self.matrix, (n, 6, k)).copy()
+                    d = self.matrix[:3].T  # unit directions (k, 3)
+                    Bn[:, 3:, :] = np.swapaxes(np.cross(P, d[None]), 1, 2)
+                    prep["B"] = Bn[0] if np.all(Bn == Bn[:1]) else Bn
+        fg = np.stack([vec(f"force_gain_{c}", self.force_gain[j]) for j, c in enumerate(DOF_LETTERS)], -1)
+        fr = np.stack([vec(f"force_reverse_{c}", self.force_reverse[j]) for j, c in enumerate(DOF_LETTERS)], -1)
+        if np.any(fg != 1.0):
+            prep["fgain"] = fg
+        if np.any(fr != 1.0):
+            prep["frev"] = fr
+        return prep
 
     def thrusts(self, u, kind, groups):
         if kind == "thrust":
@@ -72,12 +204,16 @@ class Actuators(ForceTerm):
         kind = ctx.input_kind
         u = ctx.u
         if kind == "force":
-            return u
+            if prep["fgain"] is None and prep["frev"] is None:
+                return u
+            return _scaled(u, prep["fgain"], prep["frev"])
         if self.matrix is None:
             raise SimulationError(f"inputs are per-thruster {kind} but the vehicle defines no thrusters")
         if prep["u"] is u:
             return prep["f"]
-        tau = self.thrusts(u, kind, prep["groups"]) @ self.matrix.T
+        f = _scaled(self.thrusts(u, kind, prep["groups"]), prep["gain"], prep["rev"])
+        B = prep["B"]
+        tau = f @ B.T if B.ndim == 2 else np.einsum("nij,nj->ni", B, f)
         prep["u"], prep["f"] = u, tau
         return tau
 
@@ -97,6 +233,15 @@ class Actuators(ForceTerm):
         return {"type": "actuators"}
 
 
+def _scaled(f, gain, rev):
+    """``f * gain * (rev where f < 0)``; ``gain``/``rev`` None (1), (k,) or (n, k)."""
+    if rev is not None:
+        f = np.where(f < 0, f * rev, f)
+    if gain is not None:
+        f = f * gain
+    return f
+
+
 def build_actuators(spec, where: str) -> Actuators:
     """Build :class:`Actuators` from a vehicle file's ``thrusters`` section.
 
@@ -114,6 +259,11 @@ def build_actuators(spec, where: str) -> Actuators:
     """
     if spec is None:
         return Actuators()
+    if isinstance(spec, dict) and not ({"units", "configuration_matrix", "type"} & set(spec)):
+        # only generalized-force factors (a vehicle driven by X..N inputs)
+        return Actuators(force_gain=_per_dof(spec.get("force_gain"), f"{where}: thrusters.force_gain"),
+                         force_reverse=_per_dof(spec.get("force_reverse_ratio"),
+                                                f"{where}: thrusters.force_reverse_ratio"), specs=spec)
     if isinstance(spec, dict) and "type" in spec:
         # a registered Actuators subclass (e.g. SAM's command inputs, uvsim.sam.subsystems)
         from uvsim.forces import make_term
@@ -144,7 +294,7 @@ def build_actuators(spec, where: str) -> Actuators:
         units = spec["units"]
         if not isinstance(units, list) or not units:
             raise VehicleError(f"{where}: thrusters.units: expected a non-empty list")
-        P, D, names, curves = [], [], [], []
+        P, D, names, curves, gains, rev = [], [], [], [], [], []
         for i, unit in enumerate(units):
             field = f"thrusters.units[{i}]"
             for key in ("position", "direction"):
@@ -159,7 +309,11 @@ def build_actuators(spec, where: str) -> Actuators:
             D.append(d)
             names.append(str(unit.get("name", f"T{i + 1}")))
             curves.append(curve_for(unit.get("curve", default_curve), f"{field}.curve"))
+            gains.append(_factor(unit.get("gain", 1.0), f"{where}: {field}.gain"))
+            rev.append(_factor(unit.get("reverse_ratio", 1.0), f"{where}: {field}.reverse_ratio"))
         B = allocation_matrix(P, D)
+        positions = np.asarray(P, float)
+        directions = np.asarray(D, float)
     elif "configuration_matrix" in spec:
         B = np.asarray(spec["configuration_matrix"], dtype=float)
         if B.ndim != 2 or B.shape[0] != 6 or not np.all(np.isfinite(B)):
@@ -169,6 +323,12 @@ def build_actuators(spec, where: str) -> Actuators:
         if len(names) != n:
             raise VehicleError(f"{where}: thrusters.names: {len(names)} names for {n} matrix columns")
         curves = [curve_for(default_curve, "thrusters.curve")] * n
+        positions = directions = None
+        gains = [_factor(g, f"{where}: thrusters.gains[{i}]") for i, g in enumerate(spec.get("gains", [1.0] * n))]
+        rev = [_factor(g, f"{where}: thrusters.reverse_ratios[{i}]")
+               for i, g in enumerate(spec.get("reverse_ratios", [1.0] * n))]
+        if len(gains) != n or len(rev) != n:
+            raise VehicleError(f"{where}: thrusters.gains / reverse_ratios: expected {n} values each")
     else:
         raise VehicleError(f"{where}: thrusters: expected 'units' or 'configuration_matrix'")
     if np.linalg.matrix_rank(B) == 0:
@@ -177,4 +337,6 @@ def build_actuators(spec, where: str) -> Actuators:
         curves = None
     elif any(c is None for c in curves):
         raise VehicleError(f"{where}: thrusters: either every thruster has a curve or none does")
-    return Actuators(B, curves, names, spec)
+    return Actuators(B, curves, names, spec, positions=positions, directions=directions, gains=gains, reverse=rev,
+                     force_gain=_per_dof(spec.get("force_gain"), f"{where}: thrusters.force_gain"),
+                     force_reverse=_per_dof(spec.get("force_reverse_ratio"), f"{where}: thrusters.force_reverse_ratio"))

@@ -1,0 +1,16 @@
+"""The fitting machinery shared by calibration and diagnosis.
+
+* :mod:`~uvsim.fitting.parameters` - which parameters are free, their bounds, the
+  physical-by-construction map (:class:`ParameterSpace`);
+* :mod:`~uvsim.fitting.nodes` - window-start states estimated from the log;
+* :mod:`~uvsim.fitting.objective` - the windowed (multiple-shooting) prediction-error
+  residual of a set of runs, through :mod:`uvsim.measurements`;
+* :mod:`~uvsim.fitting.solver` - Levenberg-Marquardt with the per-run nuisance
+  eliminated, robust uncertainty;
+* :mod:`~uvsim.fitting.fitter` - :func:`fit`: continuation over window lengths, results;
+* :mod:`~uvsim.fitting.equation_error` - the inverse-dynamics (equation-error) fit that
+  seeds the candidates of a diagnosis;
+* :mod:`~uvsim.fitting.compare` - block-bootstrap comparison of models on validation runs.
+"""
+from uvsim.fitting.fitter import FitResult, fit, identifiability  # noqa: F401
+from uvsim.fitting.parameters import FreeParameter, ParameterSpace, make_space  # noqa: F401

@@ -1,0 +1,216 @@
+"""One call that fits free model parameters to logged runs: ``fit(vehicle, runs, space)``.
+
+The fit minimizes the windowed prediction error of :mod:`uvsim.fitting.objective`
+with the nuisance-eliminating Levenberg-Marquardt of :mod:`uvsim.fitting.solver`,
+over a *continuation* in the window length (``horizons``, e.g. ``(2.0, 6.0)`` s: the
+result of each stage starts the next; short windows keep the cost close to quadratic,
+longer ones add the long-horizon information), for runs of any input kinds (one
+windowed problem per input kind, one shared parameter vector).  It is the refinement
+of :class:`uvsim.calibration.Calibrator` and the candidate fit of
+:func:`uvsim.diagnosis.diagnose`.
+
+Results: fitted values, cluster-robust 1-sigma uncertainties
+(:func:`uvsim.fitting.solver.covariance`), the identifiability of the free parameters
+(:func:`identifiability`), parameters at a bound or at the physical limit, per-run
+nuisance estimates (gyro biases) and per-window costs (for model comparison,
+:mod:`uvsim.fitting.compare`).
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+
+from uvsim.errors import CalibrationError
+from uvsim.fitting.objective import WindowedProblem
+from uvsim.fitting.parameters import ParameterSpace
+from uvsim.fitting.solver import covariance, solve
+from uvsim.measurements import measurements_for
+
+#: Relative singular value below which a direction of the free parameters counts as
+#: not identifiable by the data.
+NULL_TOL = 1e-3
+#: |correlation| above which two parameters are reported as strongly correlated.
+CORR_REPORT = 0.9
+DEFAULT_HORIZONS = (2.0,)
+
+
+@dataclass
+class FitResult:
+    """Outcome of :func:`fit` (attributes are JSON-friendly apart from ``problems``)."""
+
+    names: list
+    values: dict
+    std: dict
+    covariance: np.ndarray
+    cost: float
+    n_residuals: int
+    stages: list
+    gyro_bias: dict
+    at_bounds: list
+    physical_limit: list
+    identifiability: dict
+    z: np.ndarray = field(repr=False, default=None)
+    nus: list = field(repr=False, default_factory=list)
+    problems: list = field(repr=False, default_factory=list)
+    window_costs: list = field(repr=False, default_factory=list)
+    #: index into the fitted runs of each entry of ``nus`` / ``window_costs``
+    order: list = field(repr=False, default_factory=list)
+
+    def summary(self) -> dict:
+        return {"values": self.values, "std": self.std, "cost": self.cost, "n_residuals": self.n_residuals,
+                "stages": self.stages, "gyro_bias": self.gyro_bias, "at_bounds": self.at_bounds,
+                "physical_limit": self.physical_limit, "identifiability": self.identifiability}
+
+
+def group_by_input(runs: Sequence) -> list[list[int]]:
+    """Indices of runs grouped by (input kind, input count), in first-seen order."""
+    groups: dict = {}
+    for i, r in enumerate(runs):
+        groups.setdefault((r.input_kind, r.inputs.shape[1]), []).append(i)
+    return list(groups.values())
+
+
+#: Runs per windowed problem.  The problems are the units of work of the solver's
+#: workers; a fixed size (not the number of workers) keeps results independent of it.
+RUNS_PER_PROBLEM = 8
+
+
+def build_problems(vehicle, runs, meas, space: ParameterSpace, horizon, z_ref, *, gyro_bias=True,
+                   initial_velocity="zero") -> tuple[list, list]:
+    """:class:`WindowedProblem` s of at most :data:`RUNS_PER_PROBLEM` runs of one input
+    kind each; returns (problems, run order)."""
+    probs, order = [], []
+    for idx in group_by_input(runs):
+        for a in range(0, len(idx), RUNS_PER_PROBLEM):
+            sub = idx[a:a + RUNS_PER_PROBLEM]
+            probs.append(WindowedProblem(vehicle, [runs[i] for i in sub], [meas[i] for i in sub], space, horizon,
+                                         z_ref=z_ref, gyro_bias=gyro_bias, initial_velocity=initial_velocity))
+            order += sub
+    return probs, order
+
+
+def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence = DEFAULT_HORIZONS,
+        max_iter: int = 20, gyro_bias: bool = True, noise=None, weights=None, initial_velocity: str = "zero",
+        z0=None, progress=None, workers: int = 1) -> FitResult:
+    """Fit ``space``'s free parameters of ``vehicle`` to ``runs`` (module docstring).
+
+    Parameters
+    ----------
+    vehicle : Vehicle (effects already added).
+    runs : :class:`uvsim.logs.Run` list (training runs).
+    space : the free parameters.
+    meas : their measurement models (built from ``noise``/``weights`` when omitted).
+    horizons : window lengths, s, of the continuation stages (None = whole runs).
+    max_iter : Levenberg-Marquardt iterations per stage.
+    gyro_bias : fit a constant gyro bias per run that logs rates.
+    z0 : start (scaled) instead of the space's start values.
+    progress : callable(message) for stage / iteration reports.
+    workers : processes for the simulations (results do not depend on it).
+    """
+    runs = list(runs)
+    if not runs:
+        raise CalibrationError("no runs to fit")
+    if meas is None:
+        meas = [measurements_for(r, vehicle, noise=noise, weights=weights) for r in runs]
+    say = progress or (lambda msg: None)
+    z = space.z0 if z0 is None else np.asarray(z0, float)
+    stages = []
+    res = None
+    problems = []
+    for H in horizons:
+        t0 = time.perf_counter()
+        problems, order = build_problems(vehicle, runs, meas, space, H, z, gyro_bias=gyro_bias,
+                                         initial_velocity=initial_velocity)
+        label = "whole runs" if H is None else f"{H:g} s windows"
+        say(f"fitting {space.p} parameter(s) on {len(runs)} run(s), {label}")
+        res = solve(problems, z, max_iter=max_iter, workers=workers,
+                    progress=lambda it, c, label=label: say(f"  {label}: iteration {it}, cost {c:.6g}"))
+        z = res["z"]
+        stages.append({"horizon_s": H, "iterations": res["iterations"], "cost": float(res["cost"]),
+                       "message": res["message"], "windows": int(sum(p.lay.W for p in problems)),
+                       "simulated_parameter_sets": int(res["evaluations"]),
+                       "seconds": float(time.perf_counter() - t0)})
+    blocks = res["blocks"]
+    cov = covariance(blocks) if space.p else None
+    sc = space.scale
+    values = space.as_dict(z)
+    if cov is not None:
+        C = cov["robust"] * np.outer(sc, sc)
+        std = {k: float(np.sqrt(max(C[i, i], 0.0))) for i, k in enumerate(space.names)}
+        ident = identifiability(cov["information"] / np.outer(sc, sc), space.names, C)
+    else:
+        C, std, ident = np.zeros((0, 0)), {}, {}
+    # per-run nuisance: gyro biases (in the problems' run order)
+    gb = {}
+    k = 0
+    for prob in problems:
+        for r, run in enumerate(prob.runs):
+            _, b = prob.split_nuisance(r, res["nus"][k])
+            if b is not None:
+                gb[run.name] = [float(x) for x in b]
+            k += 1
+    n_res = int(sum(b.n for b in blocks))
+    return FitResult(space.names, values, std, C, float(res["cost"]), n_res, stages, gb, space.at_bounds(z),
+                     space.physical_limit(z), ident, z, res["nus"], problems, [b.window_sse for b in blocks],
+                     order)
+
+
+def identifiability(info: np.ndarray, names: Sequence[str], cov: np.ndarray | None = None) -> dict:
+    """Identifiability of the free parameters from the information matrix ``info``
+    (p, p) in physical units (``J^T J`` with the nuisance profiled out).
+
+    The columns are normalized (``D^-1/2 info D^-1/2``, ``D = diag(info)``); its
+    eigenvalues are the squared singular values of the column-normalized Jacobian.
+    A direction with relative singular value below :data:`NULL_TOL` changes no residual:
+    the data cannot separate the parameters along it (e.g. ``I_xx`` and ``K_pdot`` in
+    decoupled roll runs, which enter only as their sum).
+
+    Returns dict with ``parameters``, ``relative_singular_values``, ``condition_number``,
+    ``not_identifiable`` (directions: {name: coefficient}), ``identifiable_combinations``
+    (readable, e.g. ``"I_xx + K_pdot"``) and ``correlations`` (pairs with |r| >
+    :data:`CORR_REPORT`, from ``cov``)."""
+    names = list(names)
+    p = len(names)
+    d = np.sqrt(np.maximum(np.diag(info), 1e-300))
+    N = info / np.outer(d, d)
+    ev, V = np.linalg.eigh(0.5 * (N + N.T))
+    ev = np.maximum(ev[::-1], 0.0)
+    V = V[:, ::-1]
+    s = np.sqrt(ev)
+    srel = s / s[0] if p and s[0] > 0 else s
+    null, comb, involved = [], [], set()
+    for kk in np.flatnonzero(srel < NULL_TOL):
+        v = V[:, kk] / d  # back to physical units
+        v = v / np.max(np.abs(v))
+        if v[np.argmax(np.abs(v))] < 0:
+            v = -v
+        direction = {names[i]: float(round(v[i], 4)) for i in range(p) if abs(v[i]) > 0.05}
+        null.append({"direction": direction, "relative_singular_value": float(srel[kk])})
+        inv = [i for i in range(p) if abs(v[i]) > 0.05]
+        involved.update(inv)
+        if len(inv) == 2:
+            a, b = v[inv[1]], -v[inv[0]]
+            m = max(abs(a), abs(b))
+            a, b = a / m, b / m
+            if a < 0:
+                a, b = -a, -b
+            ta = names[inv[0]] if abs(a - 1) < 1e-3 else f"{a:.3g}*{names[inv[0]]}"
+            tb = names[inv[1]] if abs(abs(b) - 1) < 1e-3 else f"{abs(b):.3g}*{names[inv[1]]}"
+            comb.append(f"{ta} {'+' if b >= 0 else '-'} {tb}")
+        else:
+            comb.append("combinations orthogonal to " + " ".join(f"{c:+.3g}*{n}" for n, c in direction.items()))
+    comb += [names[i] for i in range(p) if i not in involved]
+    corr_pairs = {}
+    if cov is not None and p:
+        sd = np.sqrt(np.maximum(np.diag(cov), 1e-300))
+        corr = cov / np.outer(sd, sd)
+        for i in range(p):
+            for j in range(i + 1, p):
+                if abs(corr[i, j]) > CORR_REPORT:
+                    corr_pairs[f"{names[i]}~{names[j]}"] = float(corr[i, j])
+    return {"parameters": names, "relative_singular_values": [float(x) for x in srel],
+            "condition_number": float(srel[0] / srel[-1]) if p and srel[-1] > 0 else float("inf"),
+            "correlations": corr_pairs, "not_identifiable": null, "identifiable_combinations": comb}

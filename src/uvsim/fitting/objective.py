@@ -1,0 +1,378 @@
+"""The windowed prediction-error objective shared by calibration and diagnosis.
+
+Every run is cut into windows of about ``horizon`` seconds (the whole run when
+``horizon`` is None).  Each window is simulated from its own node state (reference
+from the log, free components as nuisance variables, :mod:`uvsim.fitting.nodes`), all
+windows of all runs and all parameter sets as rows of one batched RK4 call
+(:func:`uvsim.simulate_batch`).  The residual of a parameter set is, run by run:
+
+1. the normalized measurement residual of every logged sample
+   (:meth:`uvsim.measurements.RunMeasurements.normalized`); sample ``i`` is predicted
+   by the window that starts at or before it (the sample that ends a window is
+   predicted by the next one, whose node it is);
+2. continuity defects: the free node components of window ``k`` minus the end state of
+   window ``k - 1``, divided by :data:`DEFECT_SIGMA` (the lifted, soft-constrained form
+   of multiple shooting: Bock & Plitt 1984; continuity is reached at convergence rather
+   than imposed during the iterations, which keeps long runs well-posed);
+3. priors on the free node components (their reference is a measurement-derived
+   estimate; :data:`uvsim.fitting.nodes.PRIOR_SIGMA`) and on the gyro biases.
+
+Long horizons make the output-error cost rugged (the trajectory of an ROV that yaws away
+under the Munk moment depends very nonlinearly on the parameters); short windows keep it
+close to quadratic.  :func:`uvsim.fitting.solver.fit` lengthens the horizon by
+continuation (Ljung 1999, *System Identification*, sec. 7.2 on k-step-ahead prediction
+errors; the multiple-shooting idea of Bock & Plitt 1984).
+
+Term states (e.g. a thruster lag) at the node times are carried along a reference
+trajectory for each parameter set (:meth:`WindowedProblem._term_states`), so windows
+stay independent rows.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+from uvsim.errors import CalibrationError
+from uvsim.fitting.nodes import NodeModel
+from uvsim.kinematics import quat_multiply
+from uvsim.measurements import rotation_vector_error
+from uvsim.model import Model
+from uvsim.simulate import INITIAL_WINDOW_S, _rk4_loop, initial_state_from_run
+
+#: Standard deviation of a continuity defect (m, rad, m/s, rad/s): the mismatch allowed
+#: between a window's end state and the next node, of the order of the state error a
+#: window accumulates from noise in its node; small against the motion.
+DEFECT_SIGMA = np.array([0.005, 0.005, 0.005, 0.005, 0.005, 0.005, 0.005, 0.005, 0.005, 0.01, 0.01, 0.01])
+#: Prior standard deviation of a run's gyro bias, rad/s (MEMS gyros: a few 0.01 rad/s).
+GYRO_BIAS_SIGMA = 0.05
+#: Residual given to a diverged simulation (in noise sigmas).
+FILL = 30.0
+#: Largest number of simulated rows per batched call (memory; throughput is flat above ~500).
+MAX_ROWS = 6000
+
+
+def _expmap(dtheta: np.ndarray) -> np.ndarray:
+    """Unit quaternion (..., 4) of a rotation vector (..., 3)."""
+    a = np.linalg.norm(dtheta, axis=-1, keepdims=True)
+    s = np.where(a > 1e-12, np.sin(0.5 * a) / np.where(a > 1e-12, a, 1.0), 0.5)
+    return np.concatenate([np.cos(0.5 * a), dtheta * s], axis=-1)
+
+
+def apply_tangent(x: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """State(s) (..., 13) moved by tangent perturbation(s) (..., 12): position + dp,
+    q (x) exp(dtheta), nu + dnu."""
+    shape = np.broadcast_shapes(x.shape[:-1], d.shape[:-1]) + (13,)
+    out = np.array(np.broadcast_to(x, shape), float, copy=True)
+    out[..., 0:3] = x[..., 0:3] + d[..., 0:3]
+    out[..., 3:7] = quat_multiply(x[..., 3:7], _expmap(d[..., 3:6]))
+    out[..., 7:13] = x[..., 7:13] + d[..., 6:12]
+    return out
+
+
+def tangent_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a - b`` in tangent coordinates (..., 12) for states (..., 13)."""
+    return np.concatenate([a[..., 0:3] - b[..., 0:3], rotation_vector_error(b[..., 3:7], a[..., 3:7]),
+                           a[..., 7:13] - b[..., 7:13]], axis=-1)
+
+
+@dataclass
+class Layout:
+    """Windows of all runs.  ``bounds[r]``: list of (start, end) sample rows of run r's
+    windows; ``win_run`` (W,), ``first`` (W,) index of the first window of each run in
+    the global list, ``length`` (W,) samples per window, ``T``/``U`` (W, L[, k]) padded
+    times and inputs, and per run the owner window ``own_win`` and position ``own_pos``
+    of every sample."""
+
+    bounds: list
+    win_run: np.ndarray
+    first: np.ndarray
+    length: np.ndarray
+    T: np.ndarray
+    U: np.ndarray
+    own_win: list
+    own_pos: list
+
+    @property
+    def W(self) -> int:
+        return self.win_run.size
+
+
+def layout(runs, horizon: float | None) -> Layout:
+    """Cut runs into windows of about ``horizon`` seconds (module docstring); a last
+    piece shorter than half a horizon joins the previous window."""
+    bounds, win_run, first = [], [], []
+    for r, run in enumerate(runs):
+        t = run.t
+        n = t.size
+        if horizon is None or t[-1] - t[0] <= horizon * 1.5:
+            cuts = [0, n - 1]
+        else:
+            cuts = [0]
+            while True:
+                nxt = int(np.searchsorted(t, t[cuts[-1]] + horizon - 1e-9))
+                if nxt >= n - 1 or t[-1] - t[nxt] < 0.5 * horizon:
+                    cuts.append(n - 1)
+                    break
+                cuts.append(nxt)
+        first.append(len(win_run))
+        bounds.append(list(zip(cuts[:-1], cuts[1:])))
+        win_run += [r] * (len(cuts) - 1)
+    win_run = np.array(win_run, int)
+    length = np.array([e - s + 1 for b in bounds for s, e in b], int)
+    L = int(length.max())
+    k = runs[0].inputs.shape[1]
+    T = np.empty((win_run.size, L))
+    U = np.empty((win_run.size, L, k))
+    own_win, own_pos = [], []
+    w = 0
+    for r, run in enumerate(runs):
+        t, u = run.t, run.inputs
+        ow = np.empty(t.size, int)
+        op = np.empty(t.size, int)
+        for j, (s, e) in enumerate(bounds[r]):
+            m = e - s + 1
+            T[w, :m], T[w, m:] = t[s:e + 1], t[e]
+            U[w, :m], U[w, m:] = u[s:e + 1], u[e]
+            last = j == len(bounds[r]) - 1
+            rows = np.arange(s, e + 1 if last else e)
+            ow[rows], op[rows] = w, rows - s
+            w += 1
+        own_win.append(ow)
+        own_pos.append(op)
+    return Layout(bounds, win_run, np.array(first, int), length, T, U, own_win, own_pos)
+
+
+class WindowedProblem:
+    """Residuals of a set of runs for batches of (parameters, node perturbations, gyro
+    biases) under windowed prediction (module docstring).
+
+    Parameters
+    ----------
+    vehicle : the model (with any effects already added).
+    runs : :class:`uvsim.logs.Run` list (one input kind).
+    meas : their :class:`uvsim.measurements.RunMeasurements`.
+    space : :class:`uvsim.fitting.parameters.ParameterSpace`.
+    horizon : window length, s (None: whole runs).
+    z_ref : parameters of the reference simulation (default ``space.z0``).
+    gyro_bias : fit a constant gyro bias per run that logs rates.
+    """
+
+    def __init__(self, vehicle, runs, meas, space, horizon=None, *, z_ref=None, gyro_bias=True,
+                 initial_velocity: str = "zero"):
+        kinds = {(r.input_kind, r.inputs.shape[1]) for r in runs}
+        if len(kinds) != 1:
+            raise CalibrationError(f"runs mix input kinds/counts: {sorted(kinds)}; fit them in separate groups")
+        self.vehicle, self.runs, self.meas, self.space = vehicle, list(runs), list(meas), space
+        self.input_kind = runs[0].input_kind
+        self.horizon = horizon
+        self.lay = layout(self.runs, horizon)
+        self.nodes = [NodeModel(r, m) for r, m in zip(self.runs, self.meas)]
+        self.free = np.array([nm.free for nm in self.nodes])             # (R, 12)
+        self.bias_runs = np.array([gyro_bias and m.has_gyro for m in self.meas])
+        self.accel = any(m.needs_acceleration for m in self.meas)
+        self.initial_velocity = initial_velocity
+        z_ref = space.z0 if z_ref is None else np.asarray(z_ref, float)
+        self._prepare_nodes(z_ref)
+
+    # ------------------------------------------------------------------ set-up
+    def model(self, Z: np.ndarray, rows_per_set: int) -> Model:
+        Z = np.atleast_2d(Z)
+        return Model(self.vehicle, self.space.overrides(Z, rows_per_set), n=Z.shape[0] * rows_per_set,
+                     input_kind=self.input_kind)
+
+    def full_runs(self, z: np.ndarray, nu0: np.ndarray | None = None):
+        """States (R, n_max, n_y) of whole-run simulations from the runs' estimated initial
+        states with parameters z (the reference trajectory; also the open-loop prediction)."""
+        R = len(self.runs)
+        n = max(r.t.size for r in self.runs)
+        T = np.empty((R, n))
+        U = np.empty((R, n, self.runs[0].inputs.shape[1]))
+        P0, Q0, N0 = [], [], []
+        for i, run in enumerate(self.runs):
+            m = run.t.size
+            T[i, :m], T[i, m:] = run.t, run.t[-1]
+            U[i, :m], U[i, m:] = run.inputs, run.inputs[-1]
+            p, q, v, _ = initial_state_from_run(run, initial_velocity=self.initial_velocity, window_s=INITIAL_WINDOW_S,
+                                                sensors=self.meas[i].sensors)
+            P0.append(p), Q0.append(q), N0.append(v)
+        model = self.model(np.asarray(z)[None], R)
+        y0 = model.initial_state(np.array(P0), np.array(Q0), np.array(N0) if nu0 is None else nu0, U[:, 0])
+        acc = np.empty((R, n, 6)) if self.accel else None
+        Y = _rk4_loop(model, T, U, y0, 1, "nan", accel=acc)
+        return Y, acc, model
+
+    def _prepare_nodes(self, z_ref):
+        Yref, _, model = self.full_runs(z_ref)
+        self.n_term = model.n_y - 13
+        W = self.lay.W
+        self.x_ref = np.empty((W, 13))
+        self.prior_sigma = np.empty((W, 12))
+        for r, nm in enumerate(self.nodes):
+            starts = np.array([s for s, _ in self.lay.bounds[r]])
+            ref, sig = nm.references(starts, Yref[r, : self.runs[r].t.size])
+            w0 = self.lay.first[r]
+            self.x_ref[w0:w0 + starts.size] = ref
+            self.prior_sigma[w0:w0 + starts.size] = sig
+        self._yref = Yref
+
+    # ------------------------------------------------------------------ nuisance layout
+    def nuisance_size(self, r: int) -> int:
+        nw = len(self.lay.bounds[r])
+        return nw * int(self.free[r].sum()) + (3 if self.bias_runs[r] else 0)
+
+    def split_nuisance(self, r: int, nu: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+        """(node perturbations (W_r, 12), gyro bias (3,) or None) of run r's nuisance vector."""
+        nw = len(self.lay.bounds[r])
+        c = self.free[r]
+        d = np.zeros((nw, 12))
+        k = int(c.sum())
+        d[:, c] = nu[: nw * k].reshape(nw, k)
+        b = nu[nw * k: nw * k + 3] if self.bias_runs[r] else None
+        return d, b
+
+    def zero_nuisance(self) -> list:
+        return [np.zeros(self.nuisance_size(r)) for r in range(len(self.runs))]
+
+    # ------------------------------------------------------------------ simulation
+    def _term_states(self, model: Model, Z: np.ndarray) -> np.ndarray | None:
+        """Term states (P * W, n_term) at the node times: the terms' own states carried
+        along the reference trajectory (vehicle states from ``self._yref``), for each
+        parameter set (rows of ``model``: set-major, one row per run)."""
+        if self.n_term == 0:
+            return None
+        P = Z.shape[0]
+        R = len(self.runs)
+        n = self._yref.shape[1]
+        T = np.empty((R, n))
+        U = np.empty((R, n, self.runs[0].inputs.shape[1]))
+        for i, run in enumerate(self.runs):
+            m = run.t.size
+            T[i, :m], T[i, m:] = run.t, run.t[-1]
+            U[i, :m], U[i, m:] = run.inputs, run.inputs[-1]
+        m_run = self.model(Z, R)
+        y = np.repeat(self._yref[None, :, 0], P, 0).reshape(P * R, -1).copy()
+        y[:, 13:] = m_run.initial_state(u0=np.tile(U[:, 0], (P, 1)))[:, 13:]
+        Tt, Ut = np.tile(T, (P, 1)), np.tile(U, (P, 1, 1))
+        xs = np.empty((P * R, n, self.n_term))
+        xs[:, 0] = y[:, 13:]
+        with np.errstate(all="ignore"):
+            for i in range(n - 1):  # RK4 on the term states only, vehicle states teacher-forced
+                h = (Tt[:, i + 1] - Tt[:, i])[:, None]
+                ya = np.tile(self._yref[:, i, :13], (P, 1))
+                yb = np.tile(self._yref[:, i + 1, :13], (P, 1))
+                ym = 0.5 * (ya + yb)
+                x = y[:, 13:]
+                u = Ut[:, i]
+
+                def f(yy, xx, tt):
+                    return m_run.rhs(tt, np.concatenate([yy, xx], 1), u)[:, 13:]
+
+                k1 = f(ya, x, Tt[:, i])
+                k2 = f(ym, x + 0.5 * h * k1, Tt[:, i] + 0.5 * h[:, 0])
+                k3 = f(ym, x + 0.5 * h * k2, Tt[:, i] + 0.5 * h[:, 0])
+                k4 = f(yb, x + h * k3, Tt[:, i + 1])
+                y[:, 13:] = x + h / 6.0 * (k1 + 2 * (k2 + k3) + k4)
+                xs[:, i + 1] = y[:, 13:]
+        out = np.empty((P, self.lay.W, self.n_term))
+        xs = xs.reshape(P, R, n, self.n_term)
+        for r in range(R):
+            for j, (s, _) in enumerate(self.lay.bounds[r]):
+                out[:, self.lay.first[r] + j] = xs[:, r, s]
+        return out.reshape(P * self.lay.W, self.n_term)
+
+    def simulate(self, Z: np.ndarray, D: np.ndarray):
+        """Simulate every window for parameter sets Z (P, p) and node perturbations
+        D (P, W, 12).  Returns (states (P, W, L, n_y), accelerations or None)."""
+        P = Z.shape[0]
+        W, L = self.lay.W, self.lay.T.shape[1]
+        Ys, As = [], []
+        per_call = max(1, MAX_ROWS // W)
+        for a in range(0, P, per_call):
+            Zc, Dc = Z[a:a + per_call], D[a:a + per_call]
+            pc = Zc.shape[0]
+            model = self.model(Zc, W)
+            y0 = np.empty((pc * W, model.n_y))
+            y0[:, :13] = apply_tangent(np.tile(self.x_ref, (pc, 1)), Dc.reshape(pc * W, 12))
+            if model.n_y > 13:
+                y0[:, 13:] = self._term_states(model, Zc)
+            acc = np.empty((pc * W, L, 6)) if self.accel else None
+            # one BLAS thread: the per-stage matrix products are small, and threaded BLAS on
+            # them is several times slower on a 2-core machine (docs/performance.md)
+            with threadpool_limits(1, "blas"):
+                Y = _rk4_loop(model, np.tile(self.lay.T, (pc, 1)), np.tile(self.lay.U, (pc, 1, 1)), y0, 1, "nan",
+                              accel=acc)
+            Ys.append(Y.reshape(pc, W, L, -1))
+            if acc is not None:
+                As.append(acc.reshape(pc, W, L, 6))
+        return np.concatenate(Ys), (np.concatenate(As) if As else None)
+
+    # ------------------------------------------------------------------ residuals
+    def run_prediction(self, Y, A, r: int):
+        """States (P, n_r, n_y) and accelerations of run r's samples, from their windows."""
+        ow, op = self.lay.own_win[r], self.lay.own_pos[r]
+        return Y[:, ow, op], (None if A is None else A[:, ow, op])
+
+    def measurement_residuals(self, Y, A, r: int, bias: np.ndarray | None) -> np.ndarray:
+        """Normalized measurement residuals (P, m_r) of run r."""
+        y, a = self.run_prediction(Y, A, r)
+        pred = self.meas[r].predict(y, a, bias)
+        with np.errstate(all="ignore"):
+            return self.meas[r].normalized(pred, fill=FILL)
+
+    def end_states(self, Y, r: int) -> np.ndarray:
+        """End states (P, W_r, n_y) of run r's windows."""
+        w0 = self.lay.first[r]
+        nw = len(self.lay.bounds[r])
+        idx = np.arange(w0, w0 + nw)
+        return Y[:, idx, self.lay.length[idx] - 1]
+
+    def defects(self, Y, D, r: int) -> np.ndarray:
+        """Continuity defects (P, W_r - 1, k) of run r's free node components."""
+        w0 = self.lay.first[r]
+        nw = len(self.lay.bounds[r])
+        if nw < 2:
+            return np.zeros((Y.shape[0], 0, int(self.free[r].sum())))
+        ends = self.end_states(Y, r)[:, :-1, :13]
+        nodes = apply_tangent(self.x_ref[w0 + 1:w0 + nw][None], D[:, w0 + 1:w0 + nw])
+        d = tangent_difference(nodes, ends)
+        with np.errstate(all="ignore"):
+            out = (d / DEFECT_SIGMA)[..., self.free[r]]
+        return np.where(np.isfinite(out), out, FILL)
+
+    def priors(self, D, bias, r: int) -> np.ndarray:
+        """Prior residuals (P, q_r) of run r's nuisance (node perturbations, gyro bias)."""
+        w0 = self.lay.first[r]
+        nw = len(self.lay.bounds[r])
+        c = self.free[r]
+        pr = (D[:, w0:w0 + nw] / self.prior_sigma[w0:w0 + nw][None])[..., c].reshape(D.shape[0], -1)
+        if self.bias_runs[r]:
+            pr = np.concatenate([pr, np.atleast_2d(bias) / GYRO_BIAS_SIGMA], 1)
+        return pr
+
+    def assemble(self, nus: list, P: int = 1):
+        """Global node perturbations D (P, W, 12) and gyro biases (per run: (P, 3) or
+        None) from per-run nuisance vectors (each (q_r,) or (P, q_r))."""
+        D = np.zeros((P, self.lay.W, 12))
+        biases = []
+        for r, nu in enumerate(nus):
+            nu = np.broadcast_to(np.atleast_2d(nu), (P, np.size(nu) if np.ndim(nu) == 1 else np.shape(nu)[-1]))
+            nw = len(self.lay.bounds[r])
+            k = int(self.free[r].sum())
+            w0 = self.lay.first[r]
+            D[:, w0:w0 + nw][..., self.free[r]] = nu[:, : nw * k].reshape(P, nw, k)
+            biases.append(nu[:, nw * k: nw * k + 3] if self.bias_runs[r] else None)
+        return D, biases
+
+    def residuals(self, z: np.ndarray, nus: list) -> list:
+        """Per run, the residual vector [measurements, defects, priors] at one point."""
+        D, biases = self.assemble(nus)
+        Y, A = self.simulate(np.asarray(z, float)[None], D)
+        out = []
+        for r in range(len(self.runs)):
+            b = biases[r]
+            parts = [self.measurement_residuals(Y, A, r, b)[0], self.defects(Y, D, r)[0].ravel(),
+                     self.priors(D, b if b is not None else None, r)[0]]
+            out.append(np.concatenate(parts))
+        return out

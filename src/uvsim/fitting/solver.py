@@ -1,0 +1,395 @@
+"""Levenberg-Marquardt on a windowed problem, with the per-run nuisance eliminated.
+
+The unknowns are the global parameters ``z`` (p, scaled, bounded) and, per run, the
+nuisance vector ``nu_r`` (free node components of its windows and its gyro bias).
+A run's residual depends on ``z`` and its own ``nu_r`` only, so the normal equations
+have an arrow structure and the nuisance is eliminated run by run (Schur complement,
+as in bundle adjustment: Triggs et al. 2000, "Bundle adjustment - a modern
+synthesis", sec. 6.1)::
+
+    S dz = -(g_z - sum_r B_r^T D_r^-1 g_r),   S = A - sum_r B_r^T D_r^-1 B_r
+    dnu_r = -D_r^-1 (g_r + B_r dz)
+
+with ``A = J_z^T J_z``, ``B_r = J_r^T J_z``, ``D_r = J_r^T J_r`` (+ Levenberg-Marquardt
+damping ``lambda diag``), ``g = J^T r``.  Damping update and stopping rules after
+Madsen, Nielsen & Tingleff (2004), "Methods for non-linear least squares problems",
+sec. 3.2 (Nielsen's update).  Bounds on ``z``: a step that would leave the box is cut
+back into it, and a variable at a bound whose step points outward is held for that
+step (a simple active set).
+
+Jacobians are forward differences: one batched simulation of all windows for the base
+point, one per global parameter and one per free node component (every window's
+component perturbed at once: windows are independent rows, so each window's residuals
+see only their own node; the continuity defects, which involve two windows, are
+differentiated from the same simulations piece by piece).  Gyro-bias derivatives need
+no simulation.
+
+Uncertainty: ``S`` at the solution is the information on ``z`` after the nuisance is
+profiled out; the reported covariance is the cluster-robust sandwich
+``S^-1 (sum_w s_w s_w^T) S^-1`` with ``s_w`` the projected score of window ``w``
+(Liang & Zeger 1986): residuals of one window may be correlated in any way, windows
+are treated as independent, so the uncertainty is not made optimistic by the strong
+autocorrelation of trajectory residuals.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+from uvsim.fitting.objective import DEFECT_SIGMA, GYRO_BIAS_SIGMA, WindowedProblem, apply_tangent, tangent_difference
+
+#: Forward-difference steps: scaled parameters (relative) and node components (m, rad, m/s, rad/s).
+FD_STEP_Z = 1e-5
+FD_STEP_NODE = 1e-5
+FD_STEP_BIAS = 1e-6
+
+
+@dataclass
+class RunNormal:
+    """One run's contribution to the normal equations at the current point:
+    ``rss = r.r``, ``A = Jz^T Jz`` (p, p), ``gz = Jz^T r``, ``D = Jn^T Jn`` (q, q),
+    ``B = Jn^T Jz`` (q, p), ``gn = Jn^T r`` (Jz: Jacobian w.r.t. the global parameters,
+    Jn: w.r.t. the run's nuisance), the residual sum of squares of each window
+    ``window_sse`` (W_r,) and, when requested, the projected score of each window
+    ``scores`` (W_r, p) (nuisance profiled out; for the robust covariance)."""
+
+    rss: float
+    n: int = 0
+    A: np.ndarray | None = None
+    gz: np.ndarray | None = None
+    D: np.ndarray | None = None
+    B: np.ndarray | None = None
+    gn: np.ndarray | None = None
+    window_sse: np.ndarray | None = None
+    scores: np.ndarray | None = None
+
+
+def _run_meta(prob: WindowedProblem, r: int):
+    """Entry -> local window of run r's measurement residuals, and its free comps."""
+    rows = prob.meas[r].row_index()
+    w_local = prob.lay.own_win[r][rows] - prob.lay.first[r]
+    return w_local, np.flatnonzero(prob.free[r])
+
+
+def linearize(prob: WindowedProblem, z: np.ndarray, nus: list, *, jacobian: bool = True, scores: bool = False):
+    """Per run of ``prob``, its :class:`RunNormal` at (z, nus) (residual only when
+    ``jacobian`` is False)."""
+    p = z.size
+    comps = np.flatnonzero(prob.free.any(axis=0))
+    D0, biases = prob.assemble(nus)
+    Zs = [z]
+    Ds = [D0[0]]
+    if jacobian:
+        hz = FD_STEP_Z * np.maximum(1.0, np.abs(z))
+        hi = prob.space.z_upper
+        sign = np.where(z + hz > hi, -1.0, 1.0)
+        hz = hz * sign
+        for j in range(p):
+            zz = z.copy()
+            zz[j] += hz[j]
+            Zs.append(zz)
+            Ds.append(D0[0])
+        for c in comps:
+            d = D0[0].copy()
+            d[:, c] += FD_STEP_NODE
+            Zs.append(z)
+            Ds.append(d)
+    Z = np.array(Zs)
+    D = np.array(Ds)
+    Y, A = prob.simulate(Z, D)
+    blocks = []
+    for r in range(len(prob.runs)):
+        b = biases[r]
+        bb = None if b is None else np.repeat(b, Z.shape[0], 0)
+        meas = prob.measurement_residuals(Y, A, r, bb)          # (P, m_meas)
+        dfc = prob.defects(Y, D, r)                              # (P, W_r - 1, k)
+        pri = prob.priors(D, bb, r)                              # (P, q_r)
+        res0 = np.concatenate([meas[0], dfc[0].ravel(), pri[0]])
+        if not jacobian:
+            blocks.append(RunNormal(float(res0 @ res0), res0.size))
+            continue
+        full = np.concatenate([meas, dfc.reshape(Z.shape[0], -1), pri], 1)
+        Jz = ((full[1:1 + p] - full[0]) / hz[:, None]).T
+        w_local, free = _run_meta(prob, r)
+        nw = len(prob.lay.bounds[r])
+        k = free.size
+        q = prob.nuisance_size(r)
+        m_meas, m_def = meas.shape[1], dfc[0].size
+        Jn = np.zeros((res0.size, q))
+        # measurement rows: each entry sees only its own window's node
+        for j, c in enumerate(free):
+            ci = int(np.flatnonzero(comps == c)[0])
+            dm = (meas[1 + p + ci] - meas[0]) / FD_STEP_NODE
+            Jn[np.arange(m_meas), w_local * k + j] = dm
+        # defect rows: d_w = node_w (-) end_{w-1}
+        if nw > 1:
+            w0 = prob.lay.first[r]
+            ends0 = prob.end_states(Y[:1], r)[0, :-1, :13]
+            node0 = apply_tangent(prob.x_ref[w0 + 1:w0 + nw], D0[0, w0 + 1:w0 + nw])
+            d0 = tangent_difference(node0, ends0)[:, free] / DEFECT_SIGMA[free]
+            for j, c in enumerate(free):
+                ci = int(np.flatnonzero(comps == c)[0])
+                ends_p = prob.end_states(Y[1 + p + ci:2 + p + ci], r)[0, :-1, :13]
+                d_end = (tangent_difference(node0, ends_p)[:, free] / DEFECT_SIGMA[free] - d0) / FD_STEP_NODE
+                dd = D0[0, w0 + 1:w0 + nw].copy()
+                dd[:, c] += FD_STEP_NODE
+                node_p = apply_tangent(prob.x_ref[w0 + 1:w0 + nw], dd)
+                d_node = (tangent_difference(node_p, ends0)[:, free] / DEFECT_SIGMA[free] - d0) / FD_STEP_NODE
+                for w in range(1, nw):
+                    rows = m_meas + (w - 1) * k + np.arange(k)
+                    Jn[rows, (w - 1) * k + j] = d_end[w - 1]
+                    Jn[rows, w * k + j] = d_node[w - 1]
+        # prior rows (diagonal)
+        w0 = prob.lay.first[r]
+        sig = prob.prior_sigma[w0:w0 + nw][:, free].ravel()
+        base = m_meas + m_def
+        Jn[base + np.arange(nw * k), np.arange(nw * k)] = 1.0 / sig
+        if prob.bias_runs[r]:
+            yb, ab = prob.run_prediction(Y[:1], None if A is None else A[:1], r)
+            for j in range(3):
+                b1 = b.copy()
+                b1[0, j] += FD_STEP_BIAS
+                pred = prob.meas[r].predict(yb, ab, b1)
+                with np.errstate(all="ignore"):
+                    m1 = prob.meas[r].normalized(pred, fill=30.0)[0]
+                Jn[:m_meas, nw * k + j] = (m1 - meas[0]) / FD_STEP_BIAS
+                Jn[base + nw * k + j, nw * k + j] = 1.0 / GYRO_BIAS_SIGMA
+        cluster = np.concatenate([w_local, np.repeat(np.arange(1, nw), k), np.repeat(np.arange(nw), k),
+                                  np.zeros(3 if prob.bias_runs[r] else 0, int)])
+        blocks.append(_normal_pieces(res0, Jz, Jn, cluster, nw, scores))
+    return blocks
+
+
+def _normal_pieces(r, Jz, Jn, cluster, nw, scores) -> RunNormal:
+    sse = np.zeros(nw)
+    np.add.at(sse, cluster, r * r)
+    out = RunNormal(float(r @ r), r.size, Jz.T @ Jz, Jz.T @ r, Jn.T @ Jn, Jn.T @ Jz, Jn.T @ r, sse)
+    if scores:
+        Jt = Jz - Jn @ np.linalg.lstsq(out.D, out.B, rcond=None)[0] if Jn.shape[1] else Jz
+        sc = np.zeros((nw, Jz.shape[1]))
+        np.add.at(sc, cluster, Jt * r[:, None])
+        out.scores = sc
+    return out
+
+
+def _cost(blocks) -> float:
+    return 0.5 * float(sum(b.rss for b in blocks))
+
+
+def _normal(blocks, lam: float):
+    """Reduced system S dz = rhs plus the per-run pieces for back-substitution."""
+    p = blocks[0].A.shape[0] if blocks else 0
+    S = np.zeros((p, p))
+    rhs = np.zeros(p)
+    per = []
+    for b in blocks:
+        S += b.A + lam * np.diag(np.diag(b.A))
+        rhs -= b.gz
+        if b.D.shape[0]:
+            Dm = b.D + lam * np.diag(np.diag(b.D))
+            Dinv_B = np.linalg.solve(Dm, b.B)
+            Dinv_g = np.linalg.solve(Dm, b.gn)
+            S -= b.B.T @ Dinv_B
+            rhs += b.B.T @ Dinv_g
+            per.append((Dinv_B, Dinv_g))
+        else:
+            per.append(None)
+    return S, rhs, per
+
+
+def _predicted_decrease(blocks, dz, dnus) -> float:
+    """Decrease of 1/2 |r|^2 predicted by the linearization for the step (dz, dnus)."""
+    pred = 0.0
+    for b, dn in zip(blocks, dnus):
+        g = float(b.gz @ dz) + (float(b.gn @ dn) if dn.size else 0.0)
+        h = float(dz @ b.A @ dz) + (float(2 * dn @ b.B @ dz + dn @ b.D @ dn) if dn.size else 0.0)
+        pred += -g - 0.5 * h
+    return pred
+
+
+def _step(blocks, lam, z, lo, hi):
+    S, rhs, per = _normal(blocks, lam)
+    p = z.size
+    held = np.zeros(p, bool)
+    for _ in range(p + 1):
+        Sh, rh = S.copy(), rhs.copy()
+        Sh[held, :] = 0.0
+        Sh[:, held] = 0.0
+        Sh[held, held] = 1.0
+        rh[held] = 0.0
+        dz = np.linalg.lstsq(Sh, rh, rcond=None)[0] if p else np.zeros(0)
+        out = ((z <= lo + 1e-12) & (dz < 0)) | ((z >= hi - 1e-12) & (dz > 0))
+        if not (out & ~held).any():
+            break
+        held |= out
+    dz = np.clip(z + dz, lo, hi) - z
+    dnus = []
+    for pr in per:
+        if pr is None:
+            dnus.append(np.zeros(0))
+        else:
+            Dinv_B, Dinv_g = pr
+            dnus.append(-(Dinv_g + Dinv_B @ dz))
+    return dz, dnus
+
+
+def _problems(prob) -> list:
+    return list(prob) if isinstance(prob, (list, tuple)) else [prob]
+
+
+def _split(seq, sizes):
+    out, i = [], 0
+    for n in sizes:
+        out.append(list(seq[i:i + n]))
+        i += n
+    return out
+
+
+class SerialEvaluator:
+    """Linearizes every problem in this process (problems in order, their runs in order)."""
+
+    def __init__(self, probs):
+        self.probs = list(probs)
+        self.sizes = [len(p.runs) for p in self.probs]
+
+    def linearize(self, z, nus, *, jacobian=True, scores=False) -> list:
+        out = []
+        for p, n in zip(self.probs, _split(nus, self.sizes)):
+            out += linearize(p, z, n, jacobian=jacobian, scores=scores)
+        return out
+
+    def close(self):
+        pass
+
+
+_WORKER_PROBS = None
+
+
+def _init_worker(probs):
+    global _WORKER_PROBS
+    _WORKER_PROBS = probs
+
+
+def _worker_linearize(args):
+    i, z, nus, jacobian, scores = args
+    with threadpool_limits(1, "blas"):
+        return linearize(_WORKER_PROBS[i], z, nus, jacobian=jacobian, scores=scores)
+
+
+class PoolEvaluator(SerialEvaluator):
+    """Linearizes the problems in ``workers`` local processes, one problem per task.
+    The problems (chunks of runs) do not depend on the number of workers, so the
+    results equal the serial ones."""
+
+    def __init__(self, probs, workers: int):
+        import multiprocessing as mp
+        from concurrent.futures import ProcessPoolExecutor
+
+        super().__init__(probs)
+        method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
+        self._pool = ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context(method),
+                                         initializer=_init_worker, initargs=(self.probs,))
+
+    def linearize(self, z, nus, *, jacobian=True, scores=False) -> list:
+        tasks = [(i, z, n, jacobian, scores) for i, n in enumerate(_split(nus, self.sizes))]
+        out = []
+        for res in self._pool.map(_worker_linearize, tasks):
+            out += res
+        return out
+
+    def close(self):
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+def solve(prob, z0: np.ndarray, nus0: list | None = None, *, max_iter: int = 20,
+          ftol: float = 1e-6, xtol: float = 1e-7, progress=None, workers: int = 1) -> dict:
+    """Levenberg-Marquardt from (z0, nus0) (module docstring).
+
+    ``prob`` is a :class:`WindowedProblem` or a list of them sharing one parameter space
+    (e.g. one per input kind and chunk of runs); ``nus0`` lists the runs' nuisance
+    vectors in order.  ``workers`` > 1 linearizes the problems in that many processes
+    (same result).  Returns dict with ``z``, ``nus``, ``cost`` (1/2 sum r^2), ``blocks``
+    (:class:`RunNormal` per run at the solution, with window scores), ``iterations``,
+    ``evaluations`` (parameter sets simulated per run chunk), ``message``, ``history``
+    (cost per accepted step), ``seconds``.  Runs with one BLAS thread per process (small
+    matrix products; see :mod:`uvsim.fitting.objective`)."""
+    probs = _problems(prob)
+    ev = PoolEvaluator(probs, int(workers)) if workers and int(workers) > 1 and len(probs) > 1 \
+        else SerialEvaluator(probs)
+    try:
+        with threadpool_limits(1, "blas"):
+            return _solve(probs, ev, z0, nus0, max_iter=max_iter, ftol=ftol, xtol=xtol, progress=progress)
+    finally:
+        ev.close()
+
+
+def _solve(probs, ev, z0, nus0, *, max_iter, ftol, xtol, progress):
+    t0 = time.perf_counter()
+    space = probs[0].space
+    lo, hi = space.z_lower, space.z_upper
+    z = np.clip(np.asarray(z0, float), lo, hi)
+    if nus0 is None:
+        nus0 = [n for p in probs for n in p.zero_nuisance()]
+    nus = [np.array(n, float) for n in nus0]
+    n_sets = 1 + z.size + max(int(p.free.any(axis=0).sum()) for p in probs)
+    blocks = ev.linearize(z, nus)
+    cost = _cost(blocks)
+    history = [cost]
+    lam, nu_f = 1e-3, 2.0
+    evals = n_sets
+    message = "maximum number of iterations reached"
+    it = 0
+    for it in range(1, max_iter + 1):
+        dz, dnus = _step(blocks, lam, z, lo, hi)
+        z_new = z + dz
+        nus_new = [a + b for a, b in zip(nus, dnus)]
+        c_new = _cost(ev.linearize(z_new, nus_new, jacobian=False))
+        evals += 1
+        pred = _predicted_decrease(blocks, dz, dnus)
+        rho = (cost - c_new) / pred if pred > 0 else -1.0
+        if np.isfinite(c_new) and rho > 0:
+            small = (cost - c_new) <= ftol * cost
+            step_small = np.linalg.norm(dz) <= xtol * (np.linalg.norm(z) + xtol)
+            z, nus, cost = z_new, nus_new, c_new
+            history.append(cost)
+            lam *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
+            nu_f = 2.0
+            if progress is not None:
+                progress(it, cost)
+            if small or step_small:
+                message = "converged: relative cost decrease below ftol" if small else "converged: step below xtol"
+                break
+            blocks = ev.linearize(z, nus)
+            evals += n_sets
+        else:
+            lam *= nu_f
+            nu_f *= 2.0
+            if lam > 1e12 or pred <= 0:
+                message = ("converged: no further decrease predicted" if pred <= 0 else
+                           "stopped: no decrease possible (damping limit)")
+                break
+    blocks = ev.linearize(z, nus, scores=True)  # at the solution, with the window scores
+    evals += n_sets
+    return {"z": z, "nus": nus, "cost": cost, "blocks": blocks, "iterations": it, "evaluations": evals,
+            "message": message, "history": history, "seconds": time.perf_counter() - t0}
+
+
+def covariance(blocks) -> dict:
+    """Plain and cluster-robust covariances of z at a solution (module docstring);
+    ``blocks`` from :func:`solve` (with window scores)."""
+    S, _, per = _normal(blocks, 0.0)
+    p = S.shape[0]
+    Sinv = np.linalg.pinv(S)
+    q = sum(b.D.shape[0] for b in blocks)
+    clusters = sum(int(b.window_sse.size) for b in blocks)
+    n = sum(b.n for b in blocks)
+    rss = float(sum(b.rss for b in blocks))
+    meat = np.zeros((p, p))
+    for b in blocks:
+        meat += b.scores.T @ b.scores
+    s2 = rss / max(n - p - q, 1)
+    return {"plain": s2 * Sinv, "robust": Sinv @ meat @ Sinv, "information": S, "s2": s2, "n": n, "q": q,
+            "clusters": clusters}

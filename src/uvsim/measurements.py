@@ -1,0 +1,369 @@
+"""Measurement models: what each logged column measures, predicted from the state.
+
+Calibration, diagnosis and ``uvsim simulate --compare`` compare a model with a log
+through these models, so a log may carry any subset of the channels below
+(docs/log_format.md).  Sensor positions ``r_s`` on the body come from the vehicle
+file's ``sensors:`` section (default: the body origin).  ``R`` is the body->NED
+rotation of the state, ``k = R^T e_3`` the NED down axis in body coordinates,
+``nu = [v, omega]``.
+
+=============  ==================  ==================================================
+group          columns             model (predicted measurement)
+=============  ==================  ==================================================
+position       x, y, z             NED position of the body origin (motion capture)
+depth          depth               ``z + (R r_p)_z``: depth of the pressure sensor at r_p
+attitude       qw..qz, or any of   full attitude: compared as the rotation vector of
+               roll, pitch, yaw    ``q_meas^-1 (x) q_pred`` (3 components); partial
+                                   Euler angles (e.g. roll and pitch of a magnetometer-
+                                   free IMU): each logged angle, wrapped difference
+velocity       u, v, w             ``v + omega x r_d``: velocity of the DVL at r_d
+rates          p, q, r             ``omega + b``: gyro with a constant bias ``b`` per run
+                                   (a nuisance parameter the fits estimate)
+acceleration   acc_x..acc_z        specific force at the IMU r_i:
+                                   ``v_dot + omega x v + omega_dot x r_i +
+                                   omega x (omega x r_i) - g k`` (a level vehicle at
+                                   rest reads (0, 0, -g))
+=============  ==================  ==================================================
+
+Every logged channel has a noise level (``sigma``, estimated on its native samples
+by :mod:`uvsim.estimation.noise` or given by the user) and a weight; residuals are
+divided by ``sigma`` and multiplied by ``sqrt(weight)``, so metres, radians, rad/s and
+m/s^2 add up and a correct model leaves about 1 per entry.  A slow sensor logged on a
+faster grid by holding or interpolating its value counts only at its native samples
+(:func:`uvsim.estimation.noise.sample_kind`); :attr:`RunMeasurements.notes` says so.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Mapping
+
+import numpy as np
+
+from uvsim.errors import CalibrationError
+from uvsim.estimation.noise import SampleKind, noise_sigma, sample_kind
+from uvsim.kinematics import euler_to_quat, quat_conjugate, quat_multiply, quat_to_euler, quat_to_rotation, unwrap_angles
+from uvsim.logs import ACCEL_COLUMNS, DEPTH_COLUMN, EULER_COLUMNS, POSITION_COLUMNS, RATE_COLUMNS, VELOCITY_COLUMNS
+
+#: Signal groups and their channels, in a fixed order.
+GROUPS = {
+    "position": POSITION_COLUMNS,
+    "depth": (DEPTH_COLUMN,),
+    "attitude": EULER_COLUMNS,
+    "velocity": VELOCITY_COLUMNS,
+    "rates": RATE_COLUMNS,
+    "acceleration": ACCEL_COLUMNS,
+}
+UNITS = {"position": "m", "depth": "m", "attitude": "rad", "velocity": "m/s", "rates": "rad/s",
+         "acceleration": "m/s^2"}
+CHANNEL_GROUP = {c: g for g, cs in GROUPS.items() for c in cs}
+#: Default standard gravity if the vehicle gives none, m/s^2 (Fossen 2021).
+G_DEFAULT = 9.81
+
+
+def wrap(a):
+    """Angles wrapped to (-pi, pi]."""
+    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
+
+
+def rotation_vector_error(q_meas: np.ndarray, q_pred: np.ndarray) -> np.ndarray:
+    """Rotation vector (rad, body frame of the measurement) of ``q_meas^-1 (x) q_pred``.
+
+    Shapes broadcast, (..., 4) -> (..., 3); its norm is the attitude error angle.
+    Smooth at zero error (unlike the angle itself), so it suits least squares."""
+    dq = quat_multiply(quat_conjugate(q_meas), q_pred)
+    sgn = np.where(dq[..., :1] < 0, -1.0, 1.0)
+    v = dq[..., 1:] * sgn
+    s = np.linalg.norm(v, axis=-1, keepdims=True)
+    w = np.abs(dq[..., :1])
+    ang = 2.0 * np.arctan2(s, w)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        factor = np.where(s > 1e-12, ang / np.where(s > 1e-12, s, 1.0), 2.0)
+    return v * factor
+
+
+@dataclass
+class Group:
+    """One signal group of a run.
+
+    Attributes
+    ----------
+    name : group name (key of :data:`GROUPS`).
+    values : (n, k) measured values (attitude in ``quaternion`` mode: (n, 4) quaternions).
+    logged : (k,) bool, which channels of the group the run logged.
+    valid : (n, k) bool, rows that carry a measurement of each channel (native samples).
+    sigma : (k,) noise level per channel (NaN for channels not logged).
+    kinds : per channel, how it was logged (:class:`uvsim.estimation.noise.SampleKind`) or None.
+    mode : attitude only: "quaternion" (full attitude) or "euler" (some angles).
+    """
+
+    name: str
+    values: np.ndarray
+    logged: np.ndarray
+    valid: np.ndarray
+    sigma: np.ndarray
+    kinds: list
+    mode: str = ""
+
+    @property
+    def channels(self) -> tuple:
+        return GROUPS[self.name]
+
+
+@dataclass
+class RunMeasurements:
+    """The measurement model of one run: its logged groups, noise levels, sensor
+    positions and weights (module docstring).
+
+    Build it with :func:`measurements_for`.  ``predict`` maps simulated states to
+    predicted measurements and ``residuals`` / ``normalized`` compare them."""
+
+    name: str
+    t: np.ndarray
+    groups: dict
+    sensors: dict
+    g: float
+    weights: dict = field(default_factory=dict)
+    notes: list = field(default_factory=list)
+    run_weight: float = 1.0
+
+    # ------------------------------------------------------------------ structure
+    @property
+    def n(self) -> int:
+        return self.t.size
+
+    @property
+    def needs_acceleration(self) -> bool:
+        return "acceleration" in self.groups
+
+    @property
+    def has_gyro(self) -> bool:
+        return "rates" in self.groups
+
+    def channel_weights(self, group: str) -> np.ndarray:
+        """(k,) weights: ``weights[group]`` x ``weights[channel]`` (default 1)."""
+        w = float(self.weights.get(group, 1.0))
+        return np.array([w * float(self.weights.get(c, 1.0)) for c in GROUPS[group]])
+
+    def used(self, group: str) -> np.ndarray:
+        """(n, k) bool: entries that enter a fit (valid and weight > 0)."""
+        grp = self.groups[group]
+        return grp.valid & (self.channel_weights(group) > 0)[None, :]
+
+    def n_used(self) -> int:
+        return int(sum(self.used(g).sum() for g in self.groups))
+
+    # ------------------------------------------------------------------ prediction
+    def predict(self, y: np.ndarray, nu_dot: np.ndarray | None = None,
+                gyro_bias: np.ndarray | None = None) -> dict[str, np.ndarray]:
+        """Predicted measurements from states ``y`` (..., n, n_y) and accelerations
+        ``nu_dot`` (..., n, 6) (needed only for the accelerometer); ``gyro_bias``
+        (..., 3) rad/s.  Returns group -> (..., n, k) (attitude: (..., n, 4)
+        quaternions in quaternion mode, Euler angles otherwise)."""
+        y = np.asarray(y, float)
+        out: dict[str, np.ndarray] = {}
+        q = y[..., 3:7]
+        nu = y[..., 7:13]
+        R = None
+
+        def rot():
+            nonlocal R
+            if R is None:
+                R = quat_to_rotation(q)
+            return R
+
+        for g, grp in self.groups.items():
+            if g == "position":
+                out[g] = y[..., 0:3]
+            elif g == "depth":
+                r = self.sensors.get("pressure")
+                z = y[..., 2]
+                if r is not None and np.any(r):
+                    z = z + np.einsum("...j,j->...", rot()[..., 2, :], r)
+                out[g] = z[..., None]
+            elif g == "attitude":
+                out[g] = q if grp.mode == "quaternion" else quat_to_euler(q)
+            elif g == "velocity":
+                v = nu[..., :3]
+                r = self.sensors.get("dvl")
+                if r is not None and np.any(r):
+                    v = v + np.cross(nu[..., 3:], np.broadcast_to(r, v.shape))
+                out[g] = v
+            elif g == "rates":
+                w = nu[..., 3:]
+                out[g] = w if gyro_bias is None else w + np.asarray(gyro_bias)[..., None, :]
+            elif g == "acceleration":
+                if nu_dot is None:
+                    raise CalibrationError(f"run {self.name}: the accelerometer model needs the simulated accelerations")
+                out[g] = specific_force(y, nu_dot, self.sensors.get("imu"), self.g)
+        return out
+
+    # ------------------------------------------------------------------ residuals
+    def residuals(self, pred: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """Measured minus predicted per group, (..., n, k) in the channel unit (attitude:
+        rotation-vector components or wrapped angle differences); NaN where the entry
+        is not a measurement."""
+        out = {}
+        for g, grp in self.groups.items():
+            p = np.asarray(pred[g])
+            if g == "attitude" and grp.mode == "quaternion":
+                e = rotation_vector_error(grp.values, p)
+            elif g == "attitude":
+                e = wrap(grp.values - p)
+            else:
+                e = grp.values - p
+            out[g] = np.where(grp.valid, e, np.nan)
+        return out
+
+    def normalized(self, pred: Mapping[str, np.ndarray], *, fill: float | None = None) -> np.ndarray:
+        """One residual vector (..., m): every used entry divided by its channel's noise
+        level and multiplied by ``sqrt(weight x run weight)``; entries in a fixed order
+        (group, then channel, then time), so the length does not depend on the
+        parameters.  Non-finite predictions become ``fill`` (default: raise)."""
+        parts = []
+        for g, e in self.residuals(pred).items():
+            grp = self.groups[g]
+            used = self.used(g)
+            scale = np.sqrt(self.channel_weights(g) * self.run_weight) / np.where(grp.logged, grp.sigma, 1.0)
+            r = e * scale
+            r = np.moveaxis(r, -1, -2)[..., used.T]  # (..., m_g): channel-major, time inside
+            parts.append(r)
+        if not parts:
+            return np.zeros(np.shape(next(iter(pred.values())))[:-2] + (0,))
+        v = np.concatenate(parts, axis=-1)
+        bad = ~np.isfinite(v)
+        if bad.any():
+            if fill is None:
+                raise CalibrationError(f"run {self.name}: non-finite prediction (diverged simulation)")
+            v = np.where(bad, fill, v)
+        return v
+
+    def row_index(self) -> np.ndarray:
+        """(m,) sample row of every entry of :meth:`normalized`'s vector (same order)."""
+        rows = []
+        for g in self.groups:
+            used = self.used(g)
+            rr = np.broadcast_to(np.arange(self.n)[:, None], used.shape)
+            rows.append(rr.T[used.T])
+        return np.concatenate(rows) if rows else np.zeros(0, int)
+
+    def describe(self) -> dict:
+        """JSON-ready summary: per logged channel its noise level, unit and sampling."""
+        out = {}
+        for g, grp in self.groups.items():
+            for j, c in enumerate(grp.channels):
+                if not grp.logged[j]:
+                    continue
+                k = grp.kinds[j]
+                out[c] = {"sigma": float(grp.sigma[j]), "unit": UNITS[g],
+                          "sampling": k.kind if k is not None else "native",
+                          "native_rate_hz": (float(1.0 / k.native_interval_s)
+                                             if k is not None and np.isfinite(k.native_interval_s) else None),
+                          "samples_used": int(grp.valid[:, j].sum())}
+        return out
+
+
+def specific_force(y: np.ndarray, nu_dot: np.ndarray, r_imu: np.ndarray | None, g: float) -> np.ndarray:
+    """Accelerometer specific force (..., n, 3) at body point ``r_imu`` (module
+    docstring): ``v_dot + omega x v + omega_dot x r + omega x (omega x r) - g R^T e_3``."""
+    nu = y[..., 7:13]
+    v, w = nu[..., :3], nu[..., 3:]
+    vd, wd = nu_dot[..., :3], nu_dot[..., 3:]
+    R = quat_to_rotation(y[..., 3:7])
+    f = vd + np.cross(w, v) - g * R[..., 2, :]
+    if r_imu is not None and np.any(r_imu):
+        r = np.broadcast_to(np.asarray(r_imu, float), v.shape)
+        f = f + np.cross(wd, r) + np.cross(w, np.cross(w, r))
+    return f
+
+
+def _noise_for(group: str, values: np.ndarray, native: np.ndarray) -> float:
+    if group == "attitude":
+        values = unwrap_angles(values)
+    return noise_sigma(values, native)
+
+
+def measurements_for(run, vehicle=None, *, noise: Mapping[str, float] | None = None,
+                     weights: Mapping[str, float] | None = None, run_weight: float | None = None,
+                     sensors: Mapping[str, np.ndarray] | None = None) -> RunMeasurements:
+    """The measurement model of ``run`` (a :class:`uvsim.logs.Run`).
+
+    Parameters
+    ----------
+    vehicle : gives the sensor positions (``vehicle.sensors``) and ``g``; None: sensors
+        at the body origin, g = 9.81.
+    noise : 1-sigma noise levels by group or channel name (e.g. ``{"depth": 0.01,
+        "attitude": 0.005, "yaw": 0.02}``), in the channel units; estimated from the
+        log (native samples, fourth differences) where not given.
+    weights : weights by group or channel (default 1; 0 leaves a channel out of fits).
+    run_weight : the run's weight (default: ``run.weight`` from the manifest).
+    sensors : sensor positions overriding the vehicle's.
+    """
+    noise = dict(noise or {})
+    known = set(GROUPS) | set(CHANNEL_GROUP)
+    for what, d in (("noise", noise), ("weights", weights or {})):
+        bad = sorted(set(d) - known)
+        if bad:
+            raise CalibrationError(f"{what}: unknown signal(s) {bad}; expected groups {list(GROUPS)} or channels "
+                                   f"{list(CHANNEL_GROUP)}")
+        for k, v in d.items():
+            try:
+                ok = np.isfinite(float(v)) and (float(v) > 0 if what == "noise" else float(v) >= 0)
+            except (TypeError, ValueError):
+                ok = False
+            if not ok:
+                raise CalibrationError(f"{what}.{k}: expected a {'positive' if what == 'noise' else 'non-negative'} "
+                                       f"number, got {v!r}")
+    sens = dict(getattr(vehicle, "sensors", {}) or {})
+    sens.update(sensors or {})
+    g = float(getattr(vehicle, "g", G_DEFAULT))
+    t = run.t
+    n = t.size
+    groups: dict[str, Group] = {}
+    notes: list[str] = []
+
+    def build(name, values, logged, mode=""):
+        k = len(GROUPS[name])
+        valid = np.zeros((n, k), bool)
+        sigma = np.full(k, np.nan)
+        kinds: list = [None] * k
+        comp = values
+        if name == "attitude" and mode == "quaternion":
+            comp = unwrap_angles(quat_to_euler(values))  # noise per Euler angle, sampling from the quaternion
+        for j in range(k):
+            if not logged[j]:
+                continue
+            col = comp[:, j]
+            sk: SampleKind = sample_kind(t, col)
+            kinds[j] = sk
+            valid[:, j] = sk.native
+            if sk.kind in ("held", "interpolated"):
+                notes.append(f"run {run.name}: " + sk.describe(GROUPS[name][j]))
+            ch = GROUPS[name][j]
+            given = noise.get(ch, noise.get(name))
+            sigma[j] = float(given) if given is not None else _noise_for(name, col, sk.native)
+            if not np.isfinite(sigma[j]):
+                raise CalibrationError(
+                    f"run {run.name}: cannot estimate the noise level of {ch!r} (fewer than 8 native samples); "
+                    f"give it (noise={{'{ch}': ...}} or --noise {ch}=...)")
+        if name == "attitude" and mode == "quaternion":
+            valid[:] = valid.all(axis=1, keepdims=True)  # a quaternion sample is all or nothing
+        groups[name] = Group(name, values, np.asarray(logged, bool), valid, sigma, kinds, mode)
+
+    cols = run.data.columns
+    if run.has_position:
+        build("position", run.position, [c in cols for c in POSITION_COLUMNS])
+    if run.has_depth:
+        build("depth", run.depth[:, None], [True])
+    if run.has_attitude:
+        if run.has_full_attitude:
+            build("attitude", run.quaternion, [True, True, True], "quaternion")
+        else:
+            build("attitude", run.euler, list(run.euler_mask), "euler")
+    if run.has_velocity:
+        build("velocity", run.velocity[:, :3], [c in cols for c in VELOCITY_COLUMNS])
+    if run.has_rates:
+        build("rates", run.velocity[:, 3:], [c in cols for c in RATE_COLUMNS])
+    if run.has_acceleration:
+        build("acceleration", run.acceleration, [True, True, True])
+    return RunMeasurements(run.name, t, groups, sens, g, dict(weights or {}), notes,
+                           float(run.weight if run_weight is None else run_weight))
