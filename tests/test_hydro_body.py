@@ -117,3 +117,29 @@ def test_total_incidence():
     a, phi = total_incidence([1.0, 1.0, -1.0, 0.0], [0.0, 1.0, 0.0, 0.0], [1.0, 0.0, 0.0, 2.0])
     np.testing.assert_allclose(a, [np.pi / 4, np.pi / 4, np.pi, np.pi / 2])
     np.testing.assert_allclose(phi[:2], [0.0, np.pi / 2])
+
+
+def test_munk_couple_can_be_left_out(body):
+    """BodyModel(munk_moment=False) removes exactly the Munk couple: k V sin(2a') cos(a'/2) / (A L)
+    from Jorgensen eqs. 9/11 and 2 a V / (A L) from DATCOM eq. 19; forces are unchanged."""
+    from dataclasses import replace
+
+    no = replace(body, munk_moment=False)
+    h = body.hull
+    a = np.radians(np.array([3.0, 10.0, 40.0, 120.0, 170.0, -30.0]))
+    full, part = jorgensen(body, a, RE), jorgensen(no, a, RE)
+    ap = np.where(np.abs(a) > np.pi / 2, np.pi - np.abs(a), np.abs(a))
+    couple = np.sign(a) * np.where(np.abs(a) > np.pi / 2, -1, 1) * body.k * h.volume / (body.A * body.L) \
+        * np.sin(2 * ap) * np.cos(ap / 2)
+    np.testing.assert_allclose(full.CM - part.CM, couple, rtol=1e-12, atol=1e-15)
+    np.testing.assert_array_equal(full.CN, part.CN)
+    np.testing.assert_array_equal(full.CA, part.CA)
+    d_full, d_part = datcom(body, np.radians(5.0), RE), datcom(no, np.radians(5.0), RE)
+    assert float(d_full.CM - d_part.CM) == pytest.approx(2 * np.radians(5.0) * h.volume / (body.A * body.L), rel=1e-12)
+    with pytest.raises(HydroError, match="munk_moment"):
+        BodyModel(body.hull, munk_moment="yes")
+
+
+def test_default_cdn_is_jorgensens_subcritical(body):
+    assert body.cdn_model == "subcritical"
+    np.testing.assert_allclose(body.cdn(np.radians([10.0, 90.0]), [1e5, 1e7]), crossflow.subcritical_cdn())

@@ -207,3 +207,108 @@ def test_gimbal_without_propulsion_is_an_error():
     veh.effects = [e for e in veh.effects if e.kind != "sam_propulsion"]
     with pytest.raises(VehicleError, match="sam_propulsion"):
         Model(veh, input_kind="thrust")
+
+
+# ----------------------------------------------------------------------------- one Munk moment
+def _lamb_k(fineness):
+    """Lamb's k1, k2 of a prolate spheroid of fineness ratio l/d (Lamb 1932 sec. 373), written here
+    independently of uvsim.hydro."""
+    e = np.sqrt(1.0 - fineness ** -2)
+    L = np.log((1 + e) / (1 - e))
+    a0 = 2 * (1 - e * e) / e ** 3 * (0.5 * L - e)
+    b0 = 1 / e ** 2 - (1 - e * e) / (2 * e ** 3) * L
+    return a0 / (2 - a0), b0 / (2 - b0)
+
+
+def _hull_only(dataset, munk_moment):
+    import copy
+
+    from uvsim.vehicle import load_vehicle, vehicle_from_dict
+
+    d = copy.deepcopy(load_vehicle("sam").raw)
+    d["damping"]["components"] = [c for c in d["damping"]["components"] if c["kind"] == "body"]
+    d["damping"].update(dataset=dataset, munk_moment=munk_moment)
+    return vehicle_from_dict(d, source="sam hull only")
+
+
+@pytest.mark.parametrize("munk_moment", ["added_mass", "table"])
+@pytest.mark.parametrize("dataset", ["jorgensen", "datcom", "multifidelity"])
+def test_pitch_moment_has_one_munk_term(dataset, munk_moment):
+    """Total pitch moment on the SAM hull at alpha = 5 deg, U = 2 m/s (everything the model applies:
+    hull table, added-mass Coriolis C_A(nu) nu, restoring; propellers off, level) = the table's
+    viscous and base-lift parts + exactly one Munk moment.  Truth from seed 003 eqs. 9 / 19 and
+    Lamb's k-factors, computed here; the double count of the old model is off by ~12.7 N m."""
+    from uvsim.hydro import crossflow
+    from uvsim.hydro.geometry import hull_from_stations
+    from uvsim.sam.model import make_model
+    from uvsim.sam.vehicle import NEUTRAL
+
+    veh = _hull_only(dataset, munk_moment)
+    spec = veh.raw["damping"]["components"][0]["hull"]["stations"]
+    h = hull_from_stations(spec["x"], spec["r"])
+    rho, U, a = 1026.0, 2.0, np.radians(5.0)
+    u, w = U * np.cos(a), U * np.sin(a)
+    A, L, xm = np.pi * 0.095 ** 2, 1.5, h.volume_centroid
+    k1, k2 = _lamb_k(L / 0.19)
+    q = 0.5 * rho * U * U
+    base = -q * (k2 - k1 if dataset == "jorgensen" else 1.0) * h.base_area * (L - xm) * (
+        np.sin(2 * a) * np.cos(a / 2) if dataset == "jorgensen" else 2 * a)
+    viscous = 0.0
+    if dataset == "jorgensen":  # eq. 9, second term (DATCOM eq. 19 below 12 deg has none)
+        viscous = q * crossflow.eta(L / 0.19) * crossflow.subcritical_cdn() * h.planform_area \
+            * (xm - h.planform_centroid) * np.sin(a) ** 2
+    if munk_moment == "added_mass":  # C_A(nu) nu with M_A = k rho V: (Z_wdot - X_udot) u w
+        munk = (k2 - k1) * rho * h.volume * u * w
+    else:  # the table's own: eq. 9 (k V sin 2a cos(a/2)) or eq. 19 (2 a V, k = 1)
+        munk = q * h.volume * ((k2 - k1) * np.sin(2 * a) * np.cos(a / 2) if dataset == "jorgensen" else 2 * a)
+    m = make_model(veh)
+    y = m.initial_state(nu=[u, 0, w, 0, 0, 0], u0=NEUTRAL[None])
+    tau = m.M @ m.rhs(0.0, y, NEUTRAL[None])[0, 7:13]
+    assert abs(munk) > 10.0
+    assert tau[4] == pytest.approx(viscous + base + munk, rel=1e-4, abs=1e-3)
+
+
+def test_added_mass_munk_needs_added_mass():
+    import copy
+
+    from uvsim.model import Model
+    from uvsim.vehicle import load_vehicle, vehicle_from_dict
+
+    d = copy.deepcopy(load_vehicle("sam").raw)
+    d["added_mass"] = {k: 0.0 for k in ("X_udot", "Y_vdot", "Z_wdot", "K_pdot", "M_qdot", "N_rdot")}
+    veh = vehicle_from_dict(d, source="no added mass")
+    with pytest.raises(VehicleError, match="munk_moment: 'added_mass'.*X_udot"):
+        Model(veh, input_kind="thrust")
+    d["damping"]["munk_moment"] = "table"
+    Model(vehicle_from_dict(d, source="no added mass"), input_kind="thrust")  # the tables keep it: fine
+
+
+@pytest.mark.parametrize("key, value", [("munk_moment", "both"), ("cdn_model", "drag_crisis")])
+def test_unknown_munk_and_cdn_choices_are_named(key, value):
+    spec = load_sam().damping.to_dict()
+    spec[key] = value
+    with pytest.raises(VehicleError, match=f"{key}: '{value}' not one of"):
+        make_term(spec)
+
+
+def test_table_munk_mode_cancels_the_added_mass_couple_per_row():
+    """munk_moment: table adds v x (M_A11 v) with the model's added mass, per row of a batch
+    (calibration overrides), so that -C_A(nu) nu leaves no Munk moment."""
+    from uvsim.model import coriolis_term
+    from uvsim.sam.model import make_model
+
+    veh = _hull_only("jorgensen", "table")
+    m = make_model(veh, n=2, overrides={"Z_wdot": np.array([37.75, 20.0]), "Y_vdot": np.array([37.75, 30.0])})
+    term = m.terms[[t.kind for t in m.terms].index("component_buildup")]
+    prep = m.preps[[t.kind for t in m.terms].index("component_buildup")]
+    nu = np.array([[1.2, 0.3, -0.4, 0.0, 0.0, 0.0], [0.8, -0.2, 0.5, 0.0, 0.0, 0.0]])
+    with_couple = term.forces(_Ctx(nu), prep)
+    plain = ComponentBuildup(**{k: v for k, v in veh.damping.to_dict().items() if k != "type"})
+    without = _forces(plain, nu)
+    ab = np.einsum("nij,nj->ni", m.M_A, nu)
+    ca = coriolis_term(nu, ab)  # C_A(nu) nu; its moment is the Munk couple for pure translation
+    np.testing.assert_allclose(with_couple[:, 3:] - without[:, 3:], ca[:, 3:], rtol=1e-12, atol=1e-12)
+    np.testing.assert_array_equal(with_couple[:, :3], without[:, :3])
+    single = np.vstack([ComponentBuildup._forces_single(term, nu[i].tolist(), term.prepare(
+        dict(m.params, Z_wdot=[37.75, 20.0][i], Y_vdot=[37.75, 30.0][i]), 1)) for i in range(2)])
+    np.testing.assert_allclose(single, with_couple, rtol=1e-10, atol=1e-10)

@@ -181,3 +181,102 @@ def test_cached_mass_model_is_identical_to_core_model(veh):
     a = uvsim.simulate(veh, t, u, input_kind="thrust")
     b = uvsim.simulate(veh, t, u, input_kind="thrust", model=make_model(veh))
     np.testing.assert_array_equal(a.y, b.y)
+
+
+# ----------------------------------------------------------------------------- review (issue 12)
+def _prop(veh):
+    return next(e for e in veh.effects if e.kind == "sam_propulsion")
+
+
+def test_reverse_thrust_ratio_is_the_cited_number(veh):
+    """Reverse / forward bollard thrust at equal |rpm| = reverse_thrust_ratio = 0.797, the T200
+    equal-rpm K_T ratio cited in sam.yaml; the shipped T200 thrust table (src/uvsim/data/thrusters,
+    which we did not write) gives 0.775 at full reverse / full forward command, consistent."""
+    from uvsim.thrusters import shipped_curve
+
+    prop = _prop(veh)
+    assert prop.coef["reverse_thrust_ratio"] == 0.797
+    rpm = np.array([[1000.0, 1400.0], [-1000.0, -1400.0]])
+    T, Q = prop.thrust_torque(rpm, np.zeros(2), prop.prepare({}, 2))
+    np.testing.assert_allclose(-T[1] / T[0], 0.797, rtol=1e-12)
+    np.testing.assert_allclose(-Q[1] / Q[0], 0.797, rtol=1e-12)
+    rev, fwd = shipped_curve("t200_16v").thrust(np.array([1100.0, 1900.0]))
+    assert -rev / fwd == pytest.approx(0.797, abs=0.03)
+
+
+def test_thrust_deduction_reduces_the_hull_force_not_the_torque(veh):
+    """Fossen's remus100.py: tau_X = (1 - t) X_prop with t = 0.1."""
+    m = make_model(veh)
+    prop = _prop(veh)
+    assert prop.coef["thrust_deduction"] == 0.1
+    u = commands(1, rpm_1=1200, rpm_2=-900)
+    y = m.initial_state(nu=[0.7, 0, 0, 0, 0, 0], u0=u)
+    f = _tau(m, "sam_propulsion", y, u)[0]
+    T, Q = prop.thrust_torque(np.array([[1200.0, -900.0]]), np.array([0.7]), prop.prepare({}, 1))
+    assert f[0] == pytest.approx(0.9 * T.sum(), rel=1e-12)
+    assert f[3] == pytest.approx(-(Q[0, 0] - Q[0, 1]), rel=1e-12)  # spins +1, -1
+
+
+@pytest.mark.parametrize("key, value, match", [("reverse_thrust_ratio", 2.0, r"\(0, 1.5\]"),
+                                               ("reverse_thrust_ratio", 0.0, "positive"),
+                                               ("thrust_deduction", 0.6, r"\[0, 0.5\)"),
+                                               ("reverse_factor", 5.0, "replaced by reverse_thrust_ratio")])
+def test_bad_propulsion_numbers_are_named(key, value, match):
+    from uvsim.errors import VehicleError
+    from uvsim.forces import make_term
+
+    spec = {"type": "sam_propulsion", key: value}
+    with pytest.raises(VehicleError, match=match):
+        make_term(spec)
+
+
+def test_added_mass_is_lamb_k_factors_times_the_displaced_water(veh):
+    """M_A = Lamb's k-factors x (rho V, I_f) of the water displaced by the hull envelope (the V of
+    the hull tables), not x the vehicle mass.  k1, k2, k' from Lamb (1932) sec. 373 written here;
+    V and I_f integrated here with scipy over the piecewise-linear station profile."""
+    from scipy.integrate import quad
+
+    from uvsim.hydro.geometry import hull_from_stations
+
+    st = veh.raw["damping"]["components"][0]["hull"]["stations"]
+    x, r = np.asarray(st["x"], float), np.asarray(st["r"], float)
+    rho = veh.damping.rho
+    a, b = 0.75, 0.095
+    e = math.sqrt(1 - (b / a) ** 2)
+    lg = math.log((1 + e) / (1 - e))
+    a0 = 2 * (1 - e * e) / e ** 3 * (0.5 * lg - e)
+    b0 = 1 / e ** 2 - (1 - e * e) / (2 * e ** 3) * lg
+    k1, k2 = a0 / (2 - a0), b0 / (2 - b0)
+    kp = e ** 4 * (b0 - a0) / ((2 - e * e) * (2 * e * e - (2 - e * e) * (b0 - a0)))
+    V = hull_from_stations(x, r).volume                  # the hull tables' V (their Munk terms)
+    rf = lambda s: np.interp(s, x, r)  # noqa: E731
+    pts = list(x[1:-1])
+    Vq = quad(lambda s: math.pi * rf(s) ** 2, 0, 1.5, points=pts, limit=200)[0]
+    xb = quad(lambda s: math.pi * rf(s) ** 2 * s, 0, 1.5, points=pts, limit=200)[0] / Vq
+    I_f = rho * quad(lambda s: math.pi * rf(s) ** 2 * ((s - xb) ** 2 + rf(s) ** 2 / 4), 0, 1.5,
+                     points=pts, limit=200)[0]
+    Ixx_f = rho * quad(lambda s: math.pi * rf(s) ** 4 / 2, 0, 1.5, points=pts, limit=200)[0]
+    assert V == pytest.approx(Vq, rel=2e-3)              # stations' trapezoid vs exact profile
+    MA = np.diag(veh.added_mass_matrix)
+    np.testing.assert_allclose(MA[:3], [k1 * rho * V, k2 * rho * V, k2 * rho * V], rtol=1e-5)
+    np.testing.assert_allclose(MA[3:], [0.3 * Ixx_f, kp * I_f, kp * I_f], rtol=1e-4)
+    # the Munk factor of the hull tables is the same k2 - k1
+    assert veh.damping.components[0].table.meta["munk_k2_minus_k1"] == pytest.approx(k2 - k1, rel=1e-9)
+
+
+def test_batched_runs_on_their_own_time_grids_match_single_runs(veh):
+    """Rows with different time grids (issue 12 item 6): the SAM terms use no time themselves, so
+    each row of a batch equals a single run on its grid (batch numpy path vs scalar path)."""
+    from uvsim.simulate import simulate_batch
+
+    grids = [np.arange(0.0, 3.0 + 1e-9, 0.02), np.linspace(0.5, 2.9, 151)]
+    n_t = max(g.size for g in grids)
+    T = np.stack([np.concatenate([g, np.full(n_t - g.size, g[-1])]) for g in grids])
+    U = np.stack([commands(n_t, rpm_1=1000 * np.sign(np.sin(3 * T[i])), rpm_2=900,
+                           tv_yaw=0.1 * np.cos(2 * T[i]), lcg=50 + 20 * (T[i] > 1.5)) for i in range(2)])
+    batch = simulate_batch(veh, T, U, input_kind="thrust", model=make_model(veh, n=2),
+                           nu0=np.array([[0.5, 0, 0, 0, 0, 0.1], [0.2, 0.1, 0, 0, 0, 0]]))
+    for i, g in enumerate(grids):
+        single = uvsim.simulate(veh, g, U[i, :g.size], input_kind="thrust", model=make_model(veh),
+                                nu0=[[0.5, 0, 0, 0, 0, 0.1], [0.2, 0.1, 0, 0, 0, 0]][i])
+        np.testing.assert_allclose(batch.y[i, :g.size], single.y, rtol=1e-8, atol=1e-9)

@@ -20,7 +20,9 @@ Maneuvers (command parameters from seed 003 where it gives them, otherwise state
   oscillation close to 1 Hz; the period is therefore taken from the paper, and the test
   checks that the vehicle follows it);
 * ``helix`` - the loop cycle plus a constant +7 deg horizontal thrust vector (sec. V-C-3
-  "the horizontal thrust vector is also used"), so that the loop precesses in yaw;
+  "the horizontal thrust vector is also used"; our reading, Fig. 24 is not available), meant
+  to make the loop precess in yaw; with a near-symmetric reverse thrust its yaw moment
+  nearly cancels over a cycle (docs/sam.md);
 * ``lcg_sweep`` - propellers off, VBS neutral, LCG all the way forward at 5 s and all
   the way back at 45 s (sec. V-C-4, Fig. 27);
 * ``accelerating_turn`` - rpm ramped from 0 to 1525 over 30 s with the horizontal thrust
@@ -170,8 +172,37 @@ def dominant_frequency(t, x, t_start: float = 0.0) -> float:
     return float(f[int(np.argmax(spec))])
 
 
+def cycle_amplitude(t, x, period: float, t_start: float = 5.0) -> float:
+    """Mean half peak-to-peak of ``x`` over the whole cycles of length ``period`` (s)
+    after ``t_start`` (the oscillation amplitude of a signal forced at that period)."""
+    t, x = np.asarray(t), np.asarray(x)
+    starts = np.arange(t_start, t[-1] - period + 1e-9, period)
+    amps = [0.5 * np.ptp(x[(t >= a) & (t < a + period)]) for a in starts]
+    return float(np.mean(amps)) if amps else float("nan")
+
+
+def circle_radius(x, y) -> float:
+    """Radius (m) of the least-squares circle through the points ``(x, y)`` (algebraic
+    fit: ``x^2 + y^2 = 2 a x + 2 b y + c``, ``R = sqrt(c + a^2 + b^2)``)."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    A = np.stack([2.0 * x, 2.0 * y, np.ones_like(x)], axis=1)
+    (a, b, c), *_ = np.linalg.lstsq(A, x * x + y * y, rcond=None)
+    return float(np.sqrt(c + a * a + b * b))
+
+
 def maneuver_metrics(name: str, df) -> dict:
-    """The numbers seed 003 states qualitatively, measured on a maneuver's frame."""
+    """The numbers seed 003 states qualitatively, measured on a maneuver's frame.
+
+    Besides extents, speeds and angle ranges: ``mean_surge_m_s`` (mean ``u`` after 5 s);
+    ``elevation_min_deg`` / ``elevation_max_deg`` for the motions in the vertical x-z plane
+    (loop, LCG sweep: angle of the body x axis in that plane, unwrapped, so a pitch past the
+    vertical shows as > 90 deg); for the loop,
+    ``loop_period_s`` (360 deg over the mean rate of that angle after 5 s); for the
+    turbo-turn, the yaw-rate ``yaw_rate_freq_hz`` and ``yaw_rate_amplitude_rad_s`` (mean
+    half peak-to-peak per 1 s command cycle after 5 s) and ``mean_yaw_rate_rad_s``; for
+    the accelerating turn, ``turn_radius_m`` (circle fitted to the horizontal path) and
+    ``sideslip_deg`` (mean ``atan2(v, u)``) over the last 5 s; for the LCG sweep, the pitch
+    settled at the end of each LCG phase (mean over 40-45 s and 80-85 s)."""
     t = df["t"].to_numpy()
     pos = df[["x", "y", "z"]].to_numpy()
     ext = pos.max(axis=0) - pos.min(axis=0)
@@ -194,22 +225,44 @@ def maneuver_metrics(name: str, df) -> dict:
     ex = R[:, :, 0]  # body x axis in NED
     elev = np.unwrap(np.arctan2(-ex[:, 2], np.hypot(ex[:, 0], ex[:, 1]) * np.sign(ex[:, 0] + 1e-300)))
     out["flight_path_rotation_deg"] = float(np.degrees(elev.max() - elev.min()))
+    if name in ("tight_loop", "lcg_sweep"):  # motions in the NED x-z plane, where elev is the pitch
+        out["elevation_min_deg"] = float(np.degrees(elev.min()))
+        out["elevation_max_deg"] = float(np.degrees(elev.max()))
     heading = np.unwrap(np.arctan2(ex[:, 1], ex[:, 0]))
     out["heading_rotation_deg"] = float(np.degrees(heading.max() - heading.min()))
+    late = t >= min(5.0, 0.5 * (t[0] + t[-1]))
+    out["mean_surge_m_s"] = float(df["u"].to_numpy()[late].mean())
     if name == "tight_loop":
         out["box_xz_m"] = float(max(ext[0], ext[2]))
+        rate = abs(elev[late][-1] - elev[late][0]) / (t[late][-1] - t[late][0])
+        out["loop_period_s"] = float(2 * np.pi / rate) if rate > 0 else float("inf")
     if name in ("turbo_turn", "helix", "tight_loop"):
         out["yaw_rate_freq_hz"] = dominant_frequency(t, df["r"].to_numpy(), 5.0)
         out["pitch_rate_freq_hz"] = dominant_frequency(t, df["q"].to_numpy(), 5.0)
     if name == "turbo_turn":
+        r = df["r"].to_numpy()
         out["box_xy_m"] = float(max(ext[0], ext[1]))
-    if name == "accelerating_turn":
-        # seed 003 monitors the turn "up to 90 deg yaw angle"
+        out["yaw_rate_amplitude_rad_s"] = cycle_amplitude(t, r, 1.0, 5.0)
+        out["mean_yaw_rate_rad_s"] = float(r[late].mean())
+        out["depth_change_m"] = float(pos[-1, 2] - pos[0, 2])
+    if name in ("accelerating_turn", "turbo_turn"):
+        # seed 003 monitors the accelerating turn "up to 90 deg yaw angle"; the field turbo-turn
+        # (sec. V-D) was "a turbo-turn over 90 deg yaw angle"
         k = int(np.argmax(np.abs(heading - heading[0]) >= np.pi / 2))
         out["time_to_90deg_heading_s"] = float(t[k]) if k > 0 else float("nan")
         out["speed_at_90deg_heading_m_s"] = float(speed[k]) if k > 0 else float("nan")
+    if name == "accelerating_turn":
+        end = t >= t[-1] - 5.0
+        out["final_speed_m_s"] = float(speed[-1])
+        out["turn_radius_m"] = circle_radius(pos[end, 0], pos[end, 1])
+        out["sideslip_deg"] = float(np.degrees(np.arctan2(df["v"].to_numpy()[end], df["u"].to_numpy()[end]).mean()))
+        out["max_abs_roll_deg"] = float(np.degrees(np.abs(df["roll"].to_numpy()).max()))
     if name == "lcg_sweep":
         p = np.degrees(df["pitch"].to_numpy())
         out["min_pitch_deg"] = float(p.min())
         out["max_pitch_deg"] = float(p.max())
+        for a, b in ((40.0, 45.0), (80.0, 85.0)):
+            sel = (t >= a) & (t < b)
+            if sel.any():
+                out[f"pitch_{a:g}_{b:g}s_deg"] = float(np.degrees(elev[sel].mean()))
     return out

@@ -28,8 +28,9 @@ def register(subparsers) -> None:
     p.add_argument("--speed", type=float, help="speed, m/s (gives Re = speed*L/nu if --re is absent)")
     p.add_argument("--nu", type=float, default=NU_WATER, help=f"kinematic viscosity, m^2/s (default {NU_WATER})")
     p.add_argument("--rho", type=float, default=RHO_SEA, help=f"water density, kg/m^3 (default {RHO_SEA})")
-    p.add_argument("--cdn-model", choices=["reynolds", "subcritical"], default="reynolds",
-                   help="cross-flow drag model (default reynolds: includes the drag crisis)")
+    p.add_argument("--cdn-model", choices=["subcritical", "reynolds"], default="subcritical",
+                   help="cross-flow drag model (default subcritical, Jorgensen's method; reynolds includes "
+                        "the smooth-cylinder drag crisis, whose force falls as the speed rises)")
     p.add_argument("--friction-line", choices=["schoenherr", "ittc57"], default="schoenherr")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.add_argument("--out", help="(table) output directory")

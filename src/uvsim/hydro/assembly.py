@@ -122,6 +122,7 @@ def build_body_table(body: BodyModel | HullGeometry | str, re_grid=None, method:
         "ref_area_m2": body.A, "ref_length_m": body.L, "moment_ref_from_nose_m": body.xm,
         "re_reference": "V * ref_length / nu", "cdn_model": body.cdn_model,
         "friction_line": body.friction_line, "munk_k2_minus_k1": body.k, "eta": body.eta_value,
+        "munk_moment_in_cm": body.munk_moment,
         "re_threshold": None if not np.isfinite(re_threshold) else float(re_threshold),
         "cfd": cfd.name if cfd is not None else None,
         "experiment": experiment.name if experiment is not None else None,

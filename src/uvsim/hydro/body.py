@@ -55,14 +55,24 @@ class BodyModel:
         Reference length for ``CM`` and the length Reynolds number, m.  Default: hull length.
     x_m : float, optional
         Moment reference station from the nose, m.  Default: volume centroid (centre of buoyancy).
-    cdn_model : {"reynolds", "subcritical"}
-        Cross-flow drag model, see :mod:`uvsim.hydro.crossflow`.
+    cdn_model : {"subcritical", "reynolds"}
+        Cross-flow drag model, see :mod:`uvsim.hydro.crossflow`.  Default ``"subcritical"``:
+        Jorgensen's method (seed 003 eqs. 7-11) uses the subcritical ``c_dn``, and the
+        ``"reynolds"`` curve's drag crisis makes the cross-flow force fall as the speed rises
+        (negative damping in a simulator; docs/hydro.md).
     friction_line : {"schoenherr", "ittc57"}
         Turbulent flat-plate line for ``C_f`` (:mod:`uvsim.hydro.friction`).
     munk : float, optional
         ``k2 - k1``; default from the equivalent prolate spheroid (:func:`crossflow.munk_factor`).
     eta : float, optional
         Cross-flow proportionality factor; default Jorgensen Fig. 4 at the hull's l/d.
+    munk_moment : bool
+        Include the potential-flow Munk couple in ``CM`` (default, as printed in seed 003):
+        the ``(k2 - k1) V`` part of eqs. 9/11 and the ``V`` part of eq. 19.  ``False`` keeps
+        only the moment of the potential normal force on the base (the ``A_b (L - x_m)``
+        part) and the viscous cross-flow moment: for a simulator whose added-mass
+        Coriolis term ``C_A(nu_r) nu_r`` already produces the Munk moment
+        ``(Z_wdot - X_udot) u w`` (docs/sam.md, "One Munk moment").
     nu : float
         Kinematic viscosity, m^2/s, used only to convert speeds to Reynolds numbers.
     """
@@ -71,15 +81,18 @@ class BodyModel:
     ref_area: float | None = None
     ref_length: float | None = None
     x_m: float | None = None
-    cdn_model: str = "reynolds"
+    cdn_model: str = "subcritical"
     friction_line: str = "schoenherr"
     munk: float | None = None
     eta: float | None = None
     nu: float = NU_WATER
+    munk_moment: bool = True
 
     def __post_init__(self):
         if self.cdn_model not in crossflow.CDN_MODELS:
             raise HydroError(f"BodyModel: cdn_model {self.cdn_model!r} not in {crossflow.CDN_MODELS}")
+        if not isinstance(self.munk_moment, bool):
+            raise HydroError(f"BodyModel: munk_moment must be True or False, got {self.munk_moment!r}")
         if self.friction_line not in FRICTION_LINES:
             raise HydroError(f"BodyModel: friction_line {self.friction_line!r} not in {FRICTION_LINES}")
         for key in ("ref_area", "ref_length", "nu"):

@@ -5,18 +5,23 @@
   third-party WebPlotDigitizer points in ``data/external/jorgensen-digitized`` (see its SOURCE.md).
 - ``c_dn``: cross-flow drag coefficient of an infinite circular cylinder.  Two models:
 
-  ``"subcritical"``
+  ``"subcritical"`` (default)
       Jorgensen (1977) Fig. 1 at cross-flow Mach number -> 0: the mean of the digitized points
       with ``M_n < 0.3`` (about 1.20).  Water flow is incompressible, so only this end of the
-      figure applies.  No Reynolds-number dependence.
-  ``"reynolds"`` (default)
+      figure applies.  No Reynolds-number dependence.  This is the ``c_dn`` of Jorgensen's
+      method (seed 003 eqs. 7-11), and with it every force of a table grows with speed.
+  ``"reynolds"``
       Smooth circular cylinder drag versus cross-flow Reynolds number ``Re_n = V sin(alpha) d / nu``
       including the drag crisis (about 1.2 subcritical, dropping near Re_n ~ 3e5 to about 0.3 and
       recovering towards 0.6-0.7 supercritical), using P. D. Sharpe's published curve fit
       (github.com/peterdsharpe/CylinderDragFits, data from Panton, "Incompressible Flow", 4th ed.,
       Wiley).  The fit formula was re-implemented here from its README; constants below.
-      Jorgensen's digitized Fig. 1 omits Stack's critical dip (SOURCE.md), which is exactly the
-      range AUV hulls fly in (Re_n = 1e4..1e6), hence this default.
+      Jorgensen's digitized Fig. 1 omits Stack's critical dip (SOURCE.md).  AUV hulls fly in
+      that range (Re_n = 1e4..1e6), but the dip makes the cross-flow force *fall* as the speed
+      rises (for the SAM hull at 90 deg: 331 N at 2.0 m/s, 241 N at 2.5 m/s), i.e. negative
+      damping in a simulator, and a real hull's roughness and free-stream turbulence make the
+      crisis shallower and earlier than the smooth-cylinder curve; so it is an option for
+      sensitivity studies, not the default (docs/hydro.md).
 
 Both data files are read once and cached.
 """
@@ -31,7 +36,7 @@ from uvsim.errors import HydroError
 
 _DATA = Path(__file__).resolve().parent.parent / "data" / "external" / "jorgensen-digitized"
 
-CDN_MODELS = ("reynolds", "subcritical")
+CDN_MODELS = ("subcritical", "reynolds")
 
 
 @lru_cache(maxsize=1)
@@ -92,14 +97,14 @@ def cylinder_cd_reynolds(re_n) -> np.ndarray:
     return 10.0 ** (sub * (1.0 - w) + sup * w)
 
 
-def cdn(re_n=None, model: str = "reynolds") -> np.ndarray:
+def cdn(re_n=None, model: str = "subcritical") -> np.ndarray:
     """Cross-flow drag coefficient c_dn of an infinite circular cylinder.
 
     Parameters
     ----------
     re_n : array_like or None
         Cross-flow Reynolds number ``V |sin alpha| d / nu``; required for ``model="reynolds"``.
-    model : {"reynolds", "subcritical"}
+    model : {"subcritical", "reynolds"}
         See the module docstring.
     """
     if model == "subcritical":

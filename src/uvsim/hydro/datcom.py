@@ -70,9 +70,11 @@ def low_alpha_drag(body: BodyModel, alpha, re: float) -> np.ndarray:
 
 
 def slender_moment(body: BodyModel, alpha) -> np.ndarray:
-    """Eq. 19 on ``body.A``: ``C_M = 2 a (V - A_b (l - x_m)) / (A_ref l)``."""
+    """Eq. 19 on ``body.A``: ``C_M = 2 a (V - A_b (l - x_m)) / (A_ref l)``; without the Munk
+    couple ``2 a V / (A_ref l)`` when ``body.munk_moment`` is False."""
     h = body.hull
-    return 2.0 * np.asarray(alpha, float) * (h.volume - h.base_area * (body.L - body.xm)) / (body.A * body.L)
+    vol = h.volume if body.munk_moment else 0.0
+    return 2.0 * np.asarray(alpha, float) * (vol - h.base_area * (body.L - body.xm)) / (body.A * body.L)
 
 
 def datcom(body: BodyModel, alpha, re: float) -> Coefficients:

@@ -40,7 +40,8 @@ def jorgensen(body: BodyModel, alpha, re: float, ca0: float | None = None,
     Returns
     -------
     Coefficients
-        Arrays of the shape of ``alpha``; ``CM`` about ``body.xm``.
+        Arrays of the shape of ``alpha``; ``CM`` about ``body.xm`` (without the Munk couple
+        ``k V`` when ``body.munk_moment`` is False).
     """
     a = wrap_angle(alpha)
     if ca0 is None:
@@ -58,7 +59,10 @@ def jorgensen(body: BodyModel, alpha, re: float, ca0: float | None = None,
     visc = eta_cdn * (h.planform_area / A) * np.sin(ap) ** 2
     cn = k * (h.base_area / A) * pot + visc  # eq. 7
     ca = np.where(back, -ca180, ca0) * np.cos(ap) ** 2  # eqs. 8, 10
-    munk_m = k * (h.volume - h.base_area * (L - xm)) / (A * L) * pot
+    # eqs. 9, 11: k (V - A_b (L - x_m)) / (A L): the Munk couple (k V) and the moment of the
+    # potential normal force on the base (-k A_b (L - x_m)); the couple is optional (BodyModel.munk_moment)
+    vol = h.volume if body.munk_moment else 0.0
+    munk_m = k * (vol - h.base_area * (L - xm)) / (A * L) * pot
     cm = np.where(back, -munk_m, munk_m) + visc * (xm - h.planform_centroid) / L  # eqs. 9, 11
     cn, cm = sign * cn, sign * cm  # C_N, C_M odd; C_A even
     cl, cd = normal_axial_to_lift_drag(a, cn, ca)

@@ -34,6 +34,14 @@ integrator stage, for each component:
    ``Y += Y_pp |p| p + Y_rr |r| r``, ``Z += Z_pp |p| p + Z_qq |q| q`` (SNAME derivatives
    of the force on the vehicle; the signs printed in eq. 26 are absorbed into them).
 
+7. the Munk moment is counted once (``munk_moment``): with ``"added_mass"`` (default) the
+   hull tables are built without the potential-flow Munk couple (``BodyModel(munk_moment=
+   False)``) and the model's added-mass Coriolis term ``C_A(nu_r) nu_r`` supplies it,
+   ``v x (M_A,11 v)`` (Fossen 2021 eq. 6.43; ``(Z_wdot - X_udot) u w`` in pitch for a
+   diagonal ``M_A``); with ``"table"`` the tables keep it (seed 003 eqs. 9, 11, 19 as
+   printed) and this term adds ``+ v x (M_A,11 v)`` to cancel the copy in ``C_A``, as
+   Fossen's remus100.py zeroes the Munk entries of ``C_A``.
+
 Zero speed gives zero force (``q = 0``) without any division by zero; flow from behind
 (``alpha`` near 180 deg) and from the side (90 deg) are ordinary table entries.  With a
 single hull at the body origin this is exactly eq. 23-25 with table-valued
@@ -58,6 +66,8 @@ from uvsim.forces.base import ForceTerm
 
 #: Body-table data sets (seed 003 sec. V-C compares Jorgensen-only, CFD and multifidelity).
 DATASETS = ("multifidelity", "jorgensen", "datcom")
+#: Where the potential-flow Munk moment comes from (exactly one place; module docstring, item 7).
+MUNK_SOURCES = ("added_mass", "table")
 ROT_NAMES = ("K_pp", "M_qq", "N_rr")
 CROSS_NAMES = ("X_qq", "X_rr", "Y_pp", "Y_rr", "Z_pp", "Z_qq")
 
@@ -94,7 +104,8 @@ def _matmul33(A, B):
 
 # ----------------------------------------------------------------------------- tables (cached)
 @lru_cache(maxsize=32)
-def _body_table(hull_json: str, dataset: str, nu: float, re_key: tuple | None):
+def _body_table(hull_json: str, dataset: str, nu: float, re_key: tuple | None, cdn_model: str = "subcritical",
+                munk_in_table: bool = False):
     from uvsim.hydro.assembly import build_body_table
     from uvsim.hydro.body import BodyModel
     from uvsim.hydro.geometry import hull_from_dict, load_hull
@@ -102,7 +113,7 @@ def _body_table(hull_json: str, dataset: str, nu: float, re_key: tuple | None):
     spec = json.loads(hull_json)
     hull = load_hull(spec) if isinstance(spec, str) else hull_from_dict(spec, name=spec.get("name", "hull"),
                                                                         where="component_buildup hull")
-    body = BodyModel(hull, nu=nu)
+    body = BodyModel(hull, nu=nu, cdn_model=cdn_model, munk_moment=munk_in_table)
     re_grid = None if re_key is None else np.asarray(re_key, float)
     return body, build_body_table(body, re_grid=re_grid, method=dataset)
 
@@ -187,13 +198,27 @@ class ComponentBuildup(ForceTerm):
         (N s^2 or kg m); omitted = eq. 25 form.
     re_grid : list of float, optional
         Reynolds numbers of the body table (default :func:`uvsim.hydro.default_re_grid`).
+    cdn_model : {"subcritical", "reynolds"}
+        Cross-flow drag coefficient of the body tables (:mod:`uvsim.hydro.crossflow`);
+        default ``"subcritical"`` (Jorgensen's method, seed 003 eqs. 7-11).
+    munk_moment : {"added_mass", "table"}
+        Where the Munk moment comes from (module docstring, item 7); default ``"added_mass"``.
     """
 
     def __init__(self, components, dataset: str = "multifidelity", rho: float = 1025.0, nu: float = 1.0e-6,
-                 rotational=None, cross_coupled=None, re_grid=None):
+                 rotational=None, cross_coupled=None, re_grid=None, cdn_model: str = "subcritical",
+                 munk_moment: str = "added_mass"):
+        from uvsim.hydro.crossflow import CDN_MODELS
+
         where = "damping (component_buildup)"
         if dataset not in DATASETS:
             raise VehicleError(f"{where}.dataset: {dataset!r} not one of {DATASETS}")
+        if cdn_model not in CDN_MODELS:
+            raise VehicleError(f"{where}.cdn_model: {cdn_model!r} not one of {CDN_MODELS}")
+        if munk_moment not in MUNK_SOURCES:
+            raise VehicleError(f"{where}.munk_moment: {munk_moment!r} not one of {MUNK_SOURCES}")
+        self.cdn_model = cdn_model
+        self.munk_moment = munk_moment
         if not isinstance(components, list) or not components:
             raise VehicleError(f"{where}.components: expected a non-empty list")
         self.dataset = dataset
@@ -231,7 +256,8 @@ class ComponentBuildup(ForceTerm):
                 raise VehicleError(f"{where}.hull: missing (a built-in hull name or a stations/myring mapping)")
             nose = _vec(spec, "nose", where)
             re_key = None if self.re_grid is None else tuple(self.re_grid)
-            body, table = _body_table(json.dumps(spec["hull"], sort_keys=True), self.dataset, self.nu, re_key)
+            body, table = _body_table(json.dumps(spec["hull"], sort_keys=True), self.dataset, self.nu, re_key,
+                                      self.cdn_model, self.munk_moment == "table")
             r = nose - C @ np.array([body.xm, 0.0, 0.0])
             return Component(name, "body", r, C, body.A, body.L, table)
         if kind == "wing":
@@ -253,6 +279,7 @@ class ComponentBuildup(ForceTerm):
 
     def to_dict(self):
         d = {"type": self.kind, "dataset": self.dataset, "rho": self.rho, "nu": self.nu,
+             "cdn_model": self.cdn_model, "munk_moment": self.munk_moment,
              "rotational": dict(self.rotational), "components": [dict(c) for c in self.spec_components]}
         if self.cross_coupled is not None:
             d["cross_coupled"] = dict(self.cross_coupled)
@@ -269,21 +296,34 @@ class ComponentBuildup(ForceTerm):
 
     # ------------------------------------------------------------------ evaluation
     _gimbal_key = None
+    _munk_M11 = None   # (3, 3) translational added mass of the vehicle, "table" mode only
 
     def bind(self, vehicle, index):
-        """Copy that reads the thrust-vector angles of the vehicle's ``sam_propulsion`` term
-        (for components with ``gimbal: true``); called by :class:`uvsim.model.Model`."""
+        """Copy bound to the vehicle (called by :class:`uvsim.model.Model`): it reads the
+        thrust-vector angles of the vehicle's ``sam_propulsion`` term (components with
+        ``gimbal: true``) and, with ``munk_moment: table``, the translational added mass
+        whose Munk couple it cancels.  With ``munk_moment: added_mass`` the vehicle's
+        added mass must produce a Munk couple (else the hull would have none)."""
         import copy
 
-        if not any(c.gimbal for c in self.components):
-            return self
-        terms = vehicle.terms
-        keys = [j for j, t in enumerate(terms) if getattr(t, "kind", None) == "sam_propulsion"]
-        if len(keys) != 1:
-            raise VehicleError(f"{vehicle.source}: damping (component_buildup): components with gimbal: true need "
-                               f"exactly one sam_propulsion effect, found {len(keys)}")
         new = copy.copy(self)
-        new._gimbal_key = keys[0]
+        where = f"{vehicle.source}: damping (component_buildup)"
+        if any(c.kind == "body" for c in self.components):
+            M11 = np.asarray(vehicle.added_mass_matrix, float)[:3, :3]
+            if self.munk_moment == "table":
+                new._munk_M11 = M11.copy()
+            elif max(M11[1, 1], M11[2, 2]) - M11[0, 0] <= 0.0:
+                raise VehicleError(
+                    f"{where}.munk_moment: 'added_mass' takes the hull's Munk moment from the added mass, but "
+                    f"added_mass gives none (Y_vdot = {M11[1, 1]:g}, Z_wdot = {M11[2, 2]:g} not above "
+                    f"X_udot = {M11[0, 0]:g}); give the hull's added mass or set munk_moment: table")
+        if any(c.gimbal for c in self.components):
+            terms = vehicle.terms
+            keys = [j for j, t in enumerate(terms) if getattr(t, "kind", None) == "sam_propulsion"]
+            if len(keys) != 1:
+                raise VehicleError(f"{where}: components with gimbal: true need exactly one sam_propulsion effect, "
+                                   f"found {len(keys)}")
+            new._gimbal_key = keys[0]
         return new
 
     def prepare(self, params, n):
@@ -294,8 +334,26 @@ class ComponentBuildup(ForceTerm):
         for c in self.components:
             comps.append((c.kind == "body", tuple(float(x) for x in c.r), tuple(float(x) for x in c.C.ravel()),
                           0.5 * self.rho * c.area, c.length, c.length / self.nu, c.table, c.gimbal))
-        return {"vals": vals, "scalar": scalar, "comps": comps,
-                "svals": {k: float(v[0]) for k, v in vals.items()}}
+        munk = None
+        if self._munk_M11 is not None:
+            # the model's M_A with the named diagonal entries (possibly per row) of params
+            M11 = np.broadcast_to(self._munk_M11, (n, 3, 3)).copy()
+            for i, k in enumerate(("X_udot", "Y_vdot", "Z_wdot")):
+                if k in params:
+                    M11[:, i, i] = np.broadcast_to(np.asarray(params[k], float), (n,))
+            munk = M11
+        return {"vals": vals, "scalar": scalar, "comps": comps, "munk": munk,
+                "svals": {k: float(v[0]) for k, v in vals.items()},
+                "smunk": None if munk is None else tuple(float(x) for x in munk[0].ravel())}
+
+    @staticmethod
+    def munk_couple(v, M11) -> np.ndarray:
+        """The Munk couple ``v x (M11 v)`` (N m, (n, 3)) of translational added mass ``M11``
+        ((3, 3) or (n, 3, 3), kg) at relative velocity ``v`` (n, 3): the moment part of the
+        added-mass Coriolis term ``C_A(nu_r) nu_r`` (Fossen 2021 eq. 6.43) on the left-hand
+        side of the equations of motion."""
+        a = v @ M11.T if M11.ndim == 2 else np.einsum("nij,nj->ni", M11, v)
+        return np.cross(v, a)
 
     def _gimbal_angles(self, ctx):
         """(n, 2) thrust-vector angles [tv_pitch, tv_yaw] (rad), or None when not bound."""
@@ -382,6 +440,14 @@ class ComponentBuildup(ForceTerm):
             K += c00 * mx + c01 * my + c02 * mz + ry * Fz - rz * Fy
             M += c10 * mx + c11 * my + c12 * mz + rz * Fx - rx * Fz
             N += c20 * mx + c21 * my + c22 * mz + rx * Fy - ry * Fx
+        sm = prep["smunk"]
+        if sm is not None:  # munk_moment "table": cancel the copy in C_A(nu_r) nu_r
+            a0 = sm[0] * u + sm[1] * v + sm[2] * w
+            a1 = sm[3] * u + sm[4] * v + sm[5] * w
+            a2 = sm[6] * u + sm[7] * v + sm[8] * w
+            K += v * a2 - w * a1
+            M += w * a0 - u * a2
+            N += u * a1 - v * a0
         s = prep["svals"]
         K += s["K_pp"] * abs(p) * p
         M += s["M_qq"] * abs(q) * q
@@ -444,6 +510,8 @@ class ComponentBuildup(ForceTerm):
         for pc in prep["comps"]:
             f = self._batch_component(nu_r, pc, G)
             tau = f if tau is None else tau + f
+        if prep["munk"] is not None:  # munk_moment "table": cancel the copy in C_A(nu_r) nu_r
+            tau[:, 3:] += self.munk_couple(nu_r[:, :3], prep["munk"])
         vals = prep["vals"]
         p, q, r = nu_r[:, 3], nu_r[:, 4], nu_r[:, 5]
         tau[:, 3] += vals["K_pp"] * np.abs(p) * p

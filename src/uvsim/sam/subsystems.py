@@ -18,9 +18,12 @@ end stop); it is documented here and in docs/sam.md rather than silent.
 
       n > 0:  T = rho D^4 (K_T0 n|n| + (K_Tmax - K_T0)/J_max (V_a/D) |n|)
               Q = rho D^5 (K_Q0 n|n| + (K_Qmax - K_Q0)/J_max (V_a/D) |n|)
-      n < 0:  T = rho D^4 K_T0 n|n| / reverse_factor, Q likewise
+      n < 0:  T = r_rev rho D^4 K_T0 n|n|,  Q = r_rev rho D^5 K_Q0 n|n|
 
-  with ``n`` in rev/s and ``V_a = w_a u_r``.  The thrust acts along the nozzle direction
+  with ``n`` in rev/s, ``V_a = w_a u_r`` and ``r_rev`` the reverse/forward thrust ratio
+  at equal |rpm| (``reverse_thrust_ratio``).  The force on the hull is the thrust times
+  ``1 - t`` (thrust deduction ``t``, Fossen's remus100.py ``(1 - t_prop) X_prop``; the
+  torque is not reduced).  The thrust acts along the nozzle direction
   ``d = [cos dp cos dy, -sin dy, sin dp cos dy]`` at the propeller position (positive
   ``tv_pitch`` gives a nose-up moment, positive ``tv_yaw`` a positive yaw moment for
   forward thrust); propeller ``i`` spins with sense ``s_i`` (+1, -1) and its reaction
@@ -169,7 +172,9 @@ class Propulsion(ForceTerm):
     diameter : propeller diameter D, m.
     K_T0, K_Tmax, K_Q0, K_Qmax, J_max : open-water coefficients (-).
     wake_fraction_factor : ``w_a`` in ``V_a = w_a u_r`` (-).
-    reverse_factor : thrust and torque divisor for reversed rotation (-).
+    reverse_thrust_ratio : thrust (and torque) of reversed rotation relative to forward
+        rotation at the same |rpm| and zero advance, in (0, 1.5] (-).
+    thrust_deduction : thrust deduction number ``t`` in [0, 0.5): the hull feels ``(1 - t) T`` (-).
     rho : water density, kg/m^3.
     spin : [s_1, s_2] rotation senses (+1 / -1).
     rpm : servo spec {min, max, time_constant, rate} (rev/min, s, rev/min/s).
@@ -180,8 +185,13 @@ class Propulsion(ForceTerm):
 
     def __init__(self, inputs=(0, 1, 2, 3), position=(-0.72, 0.0, 0.0), diameter=0.14, K_T0=0.4566,
                  K_Tmax=0.1798, K_Q0=0.0700, K_Qmax=0.0312, J_max=0.6632, wake_fraction_factor=0.944,
-                 reverse_factor=5.0, rho=1025.0, spin=(1, -1), rpm=None, tv=None):
+                 reverse_thrust_ratio=1.0, thrust_deduction=0.0, rho=1025.0, spin=(1, -1), rpm=None, tv=None,
+                 reverse_factor=None):
         w = "effects (sam_propulsion)"
+        if reverse_factor is not None:
+            raise VehicleError(f"{w}.reverse_factor: replaced by reverse_thrust_ratio (reverse/forward thrust at "
+                               f"equal |rpm|, = 1 / reverse_factor) with its source; got reverse_factor = "
+                               f"{reverse_factor!r}")
         inputs = list(inputs)
         if len(inputs) != 4:
             raise VehicleError(f"{w}.inputs: expected 4 column indices (rpm_1, rpm_2, tv_pitch, tv_yaw)")
@@ -191,7 +201,15 @@ class Propulsion(ForceTerm):
             raise VehicleError(f"{w}.position: expected 3 finite numbers")
         self.coef = {k: _num({k: v}, k, w, positive=True) for k, v in
                      dict(diameter=diameter, K_T0=K_T0, K_Tmax=K_Tmax, K_Q0=K_Q0, K_Qmax=K_Qmax, J_max=J_max,
-                          wake_fraction_factor=wake_fraction_factor, reverse_factor=reverse_factor, rho=rho).items()}
+                          wake_fraction_factor=wake_fraction_factor, reverse_thrust_ratio=reverse_thrust_ratio,
+                          rho=rho).items()}
+        if self.coef["reverse_thrust_ratio"] > 1.5:
+            raise VehicleError(f"{w}.reverse_thrust_ratio: expected a ratio in (0, 1.5] (reverse/forward thrust at "
+                               f"equal |rpm|), got {reverse_thrust_ratio!r}")
+        self.coef["thrust_deduction"] = t = _num({"thrust_deduction": thrust_deduction}, "thrust_deduction", w)
+        if not 0.0 <= t < 0.5:
+            raise VehicleError(f"{w}.thrust_deduction: expected a number t in [0, 0.5) (the hull feels (1 - t) T), "
+                               f"got {thrust_deduction!r}")
         self.spin = [float(s) for s in spin]
         if len(self.spin) != 2 or any(abs(abs(s) - 1) > 1e-12 for s in self.spin):
             raise VehicleError(f"{w}.spin: expected two senses +1/-1")
@@ -243,8 +261,9 @@ class Propulsion(ForceTerm):
         r4, k0, k1 = prep["kt"]
         r5, q0, q1 = prep["kq"]
         fwd = n_rps > 0
-        T = np.where(fwd, r4 * (k0 * a * n_rps + k1 * va * a), r4 * k0 * a * n_rps / c["reverse_factor"])
-        Q = np.where(fwd, r5 * (q0 * a * n_rps + q1 * va * a), r5 * q0 * a * n_rps / c["reverse_factor"])
+        rr = c["reverse_thrust_ratio"]
+        T = np.where(fwd, r4 * (k0 * a * n_rps + k1 * va * a), rr * r4 * k0 * a * n_rps)
+        Q = np.where(fwd, r5 * (q0 * a * n_rps + q1 * va * a), rr * r5 * q0 * a * n_rps)
         return T, Q
 
     def _forces1(self, x, u_r, prep):
@@ -262,12 +281,12 @@ class Propulsion(ForceTerm):
                 T.append(r4 * (k0 * a * n + k1 * va * a))
                 Q.append(r5 * (q0 * a * n + q1 * va * a))
             else:
-                T.append(r4 * k0 * a * n / c["reverse_factor"])
-                Q.append(r5 * q0 * a * n / c["reverse_factor"])
+                T.append(c["reverse_thrust_ratio"] * r4 * k0 * a * n)
+                Q.append(c["reverse_thrust_ratio"] * r5 * q0 * a * n)
         dp, dy = x[2], x[3]
         cy = math.cos(dy)
         dx, dyy, dz = math.cos(dp) * cy, -math.sin(dy), math.sin(dp) * cy
-        Tt = T[0] + T[1]
+        Tt = (1.0 - c["thrust_deduction"]) * (T[0] + T[1])
         Fx, Fy, Fz = Tt * dx, Tt * dyy, Tt * dz
         px, py, pz = self.position.tolist()
         Mr = -(self.spin[0] * Q[0] + self.spin[1] * Q[1])
@@ -281,7 +300,7 @@ class Propulsion(ForceTerm):
         dp, dy = x[:, 2], x[:, 3]
         cy = np.cos(dy)
         d = np.stack([np.cos(dp) * cy, -np.sin(dy), np.sin(dp) * cy], -1)  # (n, 3)
-        Ttot = T[:, 0] + T[:, 1]
+        Ttot = (1.0 - self.coef["thrust_deduction"]) * (T[:, 0] + T[:, 1])
         F = Ttot[:, None] * d
         Mroll = -(self.spin[0] * Q[:, 0] + self.spin[1] * Q[:, 1])
         M = np.cross(self.position, F) + Mroll[:, None] * d
