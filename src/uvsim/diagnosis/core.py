@@ -1,93 +1,90 @@
-"""``diagnose``: residual -> signature -> candidate effects -> refit -> before/after.
+"""``diagnose``: residual -> candidate effects -> refit -> before/after, by forward selection.
 
-Procedure (issue 6):
+Procedure (issue 10; docs/diagnose.md):
 
-1. Simulate every run with the given model; output residuals (position,
-   attitude, ... errors over time) and the inverse-dynamics generalized-force
-   residual (:mod:`uvsim.diagnosis.residuals`).
-2. Signature evidence on the force residual of the training runs
-   (:mod:`uvsim.diagnosis.signatures`); it seeds the candidates.
-3. For every catalogue effect (:mod:`uvsim.diagnosis.candidates`), fit its
-   parameters on the training runs (least squares through the simulator,
-   optionally re-tuning named base coefficients) and score it on the validation
-   runs (:mod:`uvsim.diagnosis.fit`).
-4. Decision rule: a candidate is *accepted* when
-   (a) the baseline validation residual (the given model; with ``retune``, the
-       given model with those base coefficients re-tuned) is above the noise
-       level (normalized RMS > ``NOISE_LEVEL`` = 1.5 noise sigmas),
-   (b) its BIC on the validation runs beats the baseline's by more than 10
-       (``Delta BIC < -10``: "very strong" evidence on the Kass & Raftery 1995
-       scale), with the effective sample size of the autocorrelated residual, and
-   (c) it reduces the validation RMS by at least ``MIN_IMPROVEMENT`` = 20 %
-       and the part of the residual it explains, ``sqrt(RMS_before^2 -
-       RMS_after^2)``, is at least ``MIN_EXPLAINED`` = 2 noise sigmas (practical
-       significance: with thousands of nearly white residuals BIC alone accepts
-       tiny improvements, e.g. a 0.03 N "ballast" that only absorbs the error of
-       the initial state on clean data);
-   and its fitted values pass the effect's physical validation.  The accepted
-   candidate with the lowest BIC is the answer; otherwise ``none`` (with
-   ``retune``, the corrected vehicle then carries the re-tuned coefficients).
-5. Confidence: ``high`` when the chosen effect brings the validation residual to
-   within ``CONFIDENT`` = 2 noise sigmas (normalized RMS) or cuts its RMS at
-   least tenfold (``EXPLAINED`` = 0.1: 99 % of the squared residual explained;
-   long or unstable runs amplify the unavoidable error of the initial state, so
-   a correct model need not reach the noise level), else ``partial`` (the effect
-   explains part of the residual; something outside the catalogue, or a second
-   effect, remains).
+1. **Baseline.**  The given model, with the base coefficients named in ``retune``
+   re-fitted, on the training runs by the windowed prediction error of
+   :mod:`uvsim.fitting` (multiple shooting, node states and gyro biases as nuisance).
+2. **Screen** (:mod:`uvsim.fitting.equation_error`): every candidate variant
+   (:mod:`uvsim.diagnosis.candidates`) is fitted to the inverse-dynamics residual of the
+   current model, which takes a fraction of a second and needs no simulation; its
+   share of the residual it removes ranks the effects, picks each effect's variant
+   (the simplest whose reduction is within :data:`VARIANT_SHARE` of the best variant's)
+   and seeds the parameters.
+3. **Fit** the ``top`` effects through the simulator (windowed output error, started
+   from the screening estimate and from the catalogue's default start: a small
+   multi-start), with the current model's parameters fixed.
+4. **Judge on the validation runs**: for the current model and each fitted candidate
+   the node states of the validation windows are re-estimated with the parameters
+   fixed, and the per-window costs are compared by a block bootstrap over windows
+   (:mod:`uvsim.fitting.compare`).  A candidate is *accepted* when it is significantly
+   better at level :data:`LEVEL` (one-sided), removes at least :data:`MIN_RELATIVE` of
+   the validation cost, and its fitted values are physical (the effect's field ranges).
+   Among variants of one effect, the simplest that is not significantly worse than the
+   best wins; among effects, the largest significant improvement.
+5. **Forward selection.**  The accepted effect joins the model, everything chosen so far
+   (plus ``retune``) is re-fitted together, and steps 2-4 repeat with the remaining
+   effects until nothing significant is left or ``max_effects`` are in.
+6. **Report** every step (before/after costs, each candidate's numbers and why it was
+   or was not accepted), the open-loop validation RMSE of the given and the corrected
+   model, and the corrected vehicle.
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Mapping, Sequence
 
 import numpy as np
 
-from uvsim.calibration.batching import prepare_runs
-from uvsim.diagnosis import fit as fitmod
-from uvsim.diagnosis.candidates import Candidate, build_candidates
-from uvsim.diagnosis.residuals import force_residual, noise_levels, output_residuals, refine_initial_states
-from uvsim.diagnosis.signatures import base_coefficient_evidence
-from uvsim.diagnosis.signatures import evidence as signature_evidence
+from uvsim.diagnosis.candidates import EFFECTS, Candidate, catalogue, coupled_candidate, coupling_terms
 from uvsim.errors import CalibrationError, UvsimError, VehicleError
+from uvsim.fitting import fit
+from uvsim.fitting.compare import bootstrap_improvement
+from uvsim.fitting.equation_error import EquationError, measured_motion
+from uvsim.fitting.evaluate import open_loop, pooled
+from uvsim.fitting.parameters import FreeParameter, ParameterSpace, default_bounds
 from uvsim.forces import make_term
 from uvsim.logs import Dataset, read_dataset
+from uvsim.measurements import measurements_for
 from uvsim.vehicle import load_vehicle
 
-NOISE_LEVEL = 1.5
-DELTA_BIC = -10.0
-MIN_IMPROVEMENT = 0.2
-MIN_EXPLAINED = 2.0
-CONFIDENT = 2.0
-EXPLAINED = 0.1
-_GROUP_TO_NOISE = {"position": "position", "attitude": "attitude", "velocity": "velocity", "rates": "rates"}
+#: One-sided confidence level of "significantly better" (block bootstrap).
+LEVEL = 0.99
+#: Smallest share of the validation cost an accepted effect must remove (practical
+#: significance: with thousands of samples a 1 % improvement can be "significant").
+MIN_RELATIVE = 0.05
+#: A variant is as good as the best of its effect when it removes this share of what the
+#: best removes in the screening.
+VARIANT_SHARE = 0.9
+#: Validation cost per residual entry (in squared noise sigmas) below which the model
+#: is "at the noise level" (confidence "high").
+AT_NOISE = 1.5
+DEFAULT_HORIZON = 3.0
 
 
 @dataclass
 class Diagnosis:
-    """Result of :func:`diagnose`: the JSON report plus the objects behind it.
+    """Result of :func:`diagnose`.
 
     Attributes
     ----------
     report : JSON-serializable dict (keys in docs/diagnose.md).
     vehicle_before, vehicle_after : the given and the corrected vehicle.
-    effect_term : the chosen effect (ForceTerm) or None.
+    effects : accepted (Candidate, fitted values) in the order they were chosen.
     train, validation : the runs.
-    residuals_before, residuals_after : per validation run, output residuals over time
-        (:func:`uvsim.diagnosis.residuals.output_residuals`).
-    force_before, force_after : per validation run, inverse-dynamics force residuals.
+    open_loop_before, open_loop_after : per validation run, free-simulation results
+        (:func:`uvsim.fitting.evaluate.open_loop`) of the given and corrected model.
     """
 
     report: dict
     vehicle_before: object
     vehicle_after: object
-    effect_term: object
+    effects: list
     train: list
     validation: list
-    residuals_before: list = field(repr=False, default_factory=list)
-    residuals_after: list = field(repr=False, default_factory=list)
-    force_before: list = field(repr=False, default_factory=list)
-    force_after: list = field(repr=False, default_factory=list)
+    open_loop_before: list = field(repr=False, default_factory=list)
+    open_loop_after: list = field(repr=False, default_factory=list)
 
 
 def _split(dataset: Dataset) -> tuple[list, list, str]:
@@ -100,72 +97,217 @@ def _split(dataset: Dataset) -> tuple[list, list, str]:
                                f"got {len(runs)}")
     val = runs[2::3]
     train = [r for r in runs if r not in val]
-    return train, val, "manifest has no train/validation split: every third run is used for validation"
+    return train, val, ("the manifest has no training/validation split: every third run is used for validation "
+                        f"({', '.join(r.name for r in val)})")
 
 
-def _retune_spec(vehicle, names: Sequence[str] | None) -> dict:
-    if not names:
-        return {}
-    from uvsim.calibration.params import parameter_bounds
+class _Selector:
+    """State and steps of one diagnosis (module docstring)."""
 
-    p = vehicle.parameters()
-    unknown = [n for n in names if n not in p]
-    if unknown:
-        raise CalibrationError(f"retune: unknown base parameter(s) {unknown} of vehicle {vehicle.name}")
-    b = parameter_bounds(list(names), p, margin=0.5)
-    return {n: (float(p[n]), float(b[i, 0]), float(b[i, 1])) for i, n in enumerate(names)}
+    def __init__(self, vehicle, train, val, *, retune, noise, weights, horizon, max_iter, workers, say):
+        self.base_vehicle = vehicle
+        self.train, self.val = train, val
+        self.noise, self.weights = noise, weights
+        self.horizon, self.max_iter, self.workers, self.say = horizon, max_iter, workers, say
+        self.meas_tr = [measurements_for(r, vehicle, noise=noise, weights=weights, run_weight=1.0) for r in train]
+        self.meas_va = [measurements_for(r, vehicle, noise=noise, weights=weights, run_weight=1.0) for r in val]
+        self.motions = [measured_motion(r) for r in train]
+        self.retune = list(retune or [])
+        p = vehicle.parameters()
+        unknown = [n for n in self.retune if n not in p]
+        if unknown:
+            raise CalibrationError(f"retune: unknown base parameter(s) {unknown} of vehicle {vehicle.name}")
+        self.retune_bounds = {n: default_bounds(n, p[n], 0.5) for n in self.retune}
+        self.fits = 0
+
+    # ---------------------------------------------------------------- models
+    def vehicle_for(self, accepted: Sequence[Candidate], extra: Candidate | None = None):
+        specs = [c.spec for c in accepted if c.spec is not None]
+        if extra is not None and extra.spec is not None:
+            specs.append(extra.spec)
+        return self.base_vehicle.with_effects(specs) if specs else self.base_vehicle
+
+    def space(self, vehicle, free: Sequence[str], bounds: Mapping, start: Mapping, fixed: Mapping) -> ParameterSpace:
+        base = vehicle.parameters()
+        fp = []
+        for n in free:
+            lo, hi = bounds[n]
+            s0 = float(np.clip(start.get(n, base[n]), lo, hi))  # seeds may come from a screening at a bound
+            fp.append(FreeParameter(n, s0, lo, hi))
+        return ParameterSpace(fp, base, {k: v for k, v in fixed.items() if k not in free})
+
+    def fit_train(self, vehicle, space, label: str):
+        self.fits += 1
+        self.say(f"fitting {label} ({space.p} parameter(s)) on {len(self.train)} training run(s)")
+        return fit(vehicle, self.train, space, meas=self.meas_tr, horizons=(self.horizon,), max_iter=self.max_iter,
+                   workers=self.workers)
+
+    def val_cost(self, vehicle, values: Mapping) -> dict:
+        """Per-window validation costs of a model with fixed parameters (nodes re-estimated)."""
+        sp = ParameterSpace([], vehicle.parameters(), dict(values))
+        res = fit(vehicle, self.val, sp, meas=self.meas_va, horizons=(self.horizon,), max_iter=self.max_iter,
+                  workers=self.workers)
+        w = np.concatenate(res.window_costs)
+        return {"windows": w, "cost": float(w.sum()), "n": int(res.n_residuals),
+                "per_entry": float(w.sum() / max(res.n_residuals, 1))}
+
+    # ---------------------------------------------------------------- screening
+    def screen(self, vehicle_cur, values_cur: Mapping, cands: list) -> tuple[list, dict]:
+        """Equation-error reduction and seed of every candidate (and the coupled-damping
+        pick); returns (candidates with their screening numbers, info)."""
+        motions = [m for m in self.motions if m is not None]
+        info = {"available": bool(motions)}
+        if not motions:
+            return [(c, None) for c in cands], info
+        sp0 = ParameterSpace([], vehicle_cur.parameters(), dict(values_cur))
+        ee0 = EquationError(vehicle_cur, motions, sp0)
+        r0 = ee0.residuals(np.zeros((1, 0)))[0]
+        rss0 = float(r0 @ r0)
+        info.update(rss=rss0, n=int(r0.size), scale=ee0.scale.tolist())
+        out = []
+        # coupled damping: the two derivatives that each explain most, from one Jacobian
+        terms = coupling_terms()
+        veh_c = vehicle_cur.with_effects([{"type": "coupled_damping", **{t: 0.0 for t in terms}}])
+        sp_c = self.space(veh_c, terms, {t: (-1e4, 1e4) for t in terms}, {}, values_cur)
+        eec = EquationError(veh_c, motions, sp_c, scale=ee0.scale)
+        h = 1e-3
+        Z = np.vstack([np.zeros(len(terms)), np.eye(len(terms)) * h / sp_c.scale])
+        R = eec.residuals(Z)
+        J = (R[1:] - R[0]) / h
+        red = (J @ R[0]) ** 2 / np.maximum(np.einsum("ij,ij->i", J, J), 1e-300)
+        best, rows = [], set()
+        for j in np.argsort(-red):
+            if terms[j][0] in rows:
+                continue
+            best.append(terms[j])
+            rows.add(terms[j][0])
+            if len(best) == 2:
+                break
+        cands = cands + [coupled_candidate(best)]
+        for c in cands:
+            veh = vehicle_cur.with_effects([c.spec]) if c.spec is not None else vehicle_cur
+            try:
+                sp = self.space(veh, c.free, c.bounds, c.start, values_cur)
+                ee = EquationError(veh, motions, sp, scale=ee0.scale)
+                r = ee.fit(max_nfev=12)
+                out.append((c, {"reduction": max(0.0, 1.0 - r["rss"] / rss0), "values": r["values"]}))
+            except (UvsimError, np.linalg.LinAlgError, ValueError) as exc:
+                out.append((c, {"reduction": 0.0, "values": {}, "error": str(exc)}))
+        return out, info
+
+    # ---------------------------------------------------------------- one step
+    def step(self, accepted, values_cur, val_cur, *, exclude, only, top, k_step) -> dict:
+        vehicle_cur = self.vehicle_for(accepted)
+        run0 = self.train[0]
+        dt = float(np.median(np.concatenate([np.diff(r.t) for r in self.train])))
+        has_pos = any(r.has_position for r in self.train)
+        p_ref = np.nanmean(np.array([np.where(np.isfinite(r.position[0]), r.position[0], 0.0) for r in self.train]),
+                           axis=0)
+        depths = [r.position[:, 2] for r in self.train if r.has_position and np.isfinite(r.position[:, 2]).any()]
+        depths += [r.depth for r in self.train if r.has_depth]
+        z_max = float(max(np.nanmax(z) for z in depths)) if depths else None
+        cands = catalogue(input_kind=run0.input_kind, n_thrusters=run0.inputs.shape[1] if run0.input_kind != "force"
+                          else 0, dt=dt, p_ref=p_ref, has_position=has_pos, z_max=z_max, only=only,
+                          exclude=exclude)
+        self.say(f"step {k_step}: screening {len(cands) + 1} candidate variant(s) by equation error")
+        screened, ee_info = self.screen(vehicle_cur, values_cur, cands) if cands else ([], {"available": False})
+        # per effect: the simplest variant within VARIANT_SHARE of the best variant's reduction
+        by_effect: dict = {}
+        for c, s in screened:
+            by_effect.setdefault(c.effect, []).append((c, s))
+        choice = []
+        for eff, lst in by_effect.items():
+            if ee_info.get("available"):
+                bestred = max(s["reduction"] for _, s in lst)
+                ok = [(c, s) for c, s in lst if s["reduction"] >= VARIANT_SHARE * bestred]
+                c, s = min(ok, key=lambda cs: (cs[0].complexity, -cs[1]["reduction"]))
+                choice.append((c, s, bestred))
+            else:
+                c, s = min(lst, key=lambda cs: cs[0].complexity)
+                choice.append((c, s, 0.0))
+        choice.sort(key=lambda x: -x[2])
+        rows = []
+        for c, s, red in choice:
+            rows.append({"effect": c.effect, "variant": c.variant, "screening_reduction": s["reduction"] if s else None,
+                         "fitted": False})
+        fitted = []
+        for c, s, _ in choice[: max(top, 1) if ee_info.get("available") else len(choice)]:
+            fitted.append(self.fit_candidate(c, s, vehicle_cur, values_cur, val_cur))
+        # variants: the simplest variant of the winning effect that is not significantly worse
+        return {"screening": ee_info, "screened": rows, "fitted": fitted, "all_screened": screened}
+
+    def fit_candidate(self, c: Candidate, s, vehicle_cur, values_cur, val_cur) -> dict:
+        veh = vehicle_cur.with_effects([c.spec]) if c.spec is not None else vehicle_cur
+        starts = [c.start]
+        if s and s.get("values"):
+            starts.insert(0, {**c.start, **s["values"]})
+        best = None
+        for st in starts:
+            sp = self.space(veh, c.free, c.bounds, st, values_cur)
+            try:
+                res = self.fit_train(veh, sp, c.label)
+            except (UvsimError, np.linalg.LinAlgError) as exc:
+                continue
+            if best is None or res.cost < best.cost:
+                best = res
+        row = {"effect": c.effect, "variant": c.variant, "candidate": c, "free": c.free}
+        if best is None:
+            row.update(accepted=False, why="every fit failed")
+            return row
+        vals = {**values_cur, **best.values}
+        problem = None
+        if c.spec is not None:
+            try:
+                make_term(c.spec).with_parameters(best.values)
+            except VehicleError as exc:
+                problem = f"fitted values are not physical: {exc}"
+        vc = self.val_cost(veh, vals)
+        cmp = bootstrap_improvement(val_cur["windows"], vc["windows"], level=LEVEL)
+        row.update(result=best, values=dict(best.values), std=dict(best.std), train_cost=best.cost,
+                   val=vc, compare=cmp, problem=problem, at_bounds=best.at_bounds, vehicle=veh, all_values=vals)
+        return row
 
 
-def _unit(effect_spec: dict | None, name: str) -> str:
-    if effect_spec is None:
-        return ""
-    try:
-        term = make_term(effect_spec)
-        return term.units().get(name, "") if hasattr(term, "units") else ""
-    except UvsimError:
-        return ""
-
-
-def _effect_with(cand: Candidate, params: Mapping[str, float]):
-    """The effect term of ``cand`` with fitted ``params`` (validated: VehicleError if unphysical)."""
-    term = make_term(dict(cand.effect))
-    own = {k: v for k, v in params.items() if k in term.parameters()}
-    return term.with_parameters(own)
-
-
-def _group_rmse(d: dict) -> dict:
-    return {k: float(v) for k, v in d.items()}
-
-
-def _run_summary(m: dict) -> dict:
-    out = {k: v for k, v in m.items() if k.endswith(("_m", "_rad", "_mps", "_radps"))}
-    out["fit_percent"] = {g: d["fit_percent"] for g, d in m["groups"].items()}
-    return out
+def _judge(row, val_cur) -> tuple[bool, str]:
+    if "compare" not in row:
+        return False, row.get("why", "not fitted")
+    cmp = row["compare"]
+    if row["problem"]:
+        return False, row["problem"]
+    if not cmp["significant"]:
+        return False, (f"not significant: validation cost {100 * cmp['relative']:+.1f} % "
+                       f"(bootstrap P(better) = {cmp['p_better']:.3f}, needs the {100 * (1 - LEVEL):.0f} % "
+                       f"quantile above 0)")
+    if cmp["relative"] < MIN_RELATIVE:
+        return False, (f"too small: removes {100 * cmp['relative']:.1f} % of the validation cost "
+                       f"(needs >= {100 * MIN_RELATIVE:.0f} %) although significant")
+    return True, (f"significant: removes {100 * cmp['relative']:.1f} % of the validation cost "
+                  f"(P(better) = {cmp['p_better']:.3f})")
 
 
 def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: Sequence[str] | None = None,
              noise: Mapping[str, float] | None = None, weights: Mapping[str, float] | None = None,
-             max_nfev: int = 30, progress=None) -> Diagnosis:
-    """Diagnose which catalogue effect the model lacks (module docstring).
+             horizon: float = DEFAULT_HORIZON, max_effects: int = 2, top: int = 3, max_iter: int = 12,
+             workers: int = 1, progress=None) -> Diagnosis:
+    """Diagnose which catalogue effects the model lacks (module docstring).
 
     Parameters
     ----------
     data : dataset directory (LOG_FORMAT) or a :class:`uvsim.logs.Dataset`.
     vehicle : the model (name, file or Vehicle); default the manifest's vehicle.
-    retune : base coefficient names re-tuned together with every candidate
-        (e.g. ``["X_u", "X_uu"]``), within +-50 % of their values.
-    only : restrict the candidates to these catalogue names.
-    noise : 1-sigma noise per signal group (position m, attitude rad, velocity
-        m/s, rates rad/s); estimated from the data where not given.
-    weights : per signal group weight (position, attitude, velocity, rates; default 1)
-        multiplying its normalized residual's square in the fit and the score.
-    max_nfev : function-evaluation budget of each least-squares fit.
-    progress : optional callable ``progress(message)``.
-
-    Returns
-    -------
-    Diagnosis
+    retune : base coefficients re-fitted with every model (e.g. ``["X_uu", "N_rr"]``),
+        within +-50 % (``uvsim.fitting.parameters.default_bounds``).
+    only : restrict the candidate effects to these catalogue names.
+    noise : 1-sigma noise by signal group or channel; estimated where not given.
+    weights : weights by signal group or channel (0 leaves a channel out).
+    horizon : window length of the fits, s.
+    max_effects : largest number of effects added (forward selection steps).
+    top : candidates fitted through the simulator per step (by screening rank).
+    max_iter : Levenberg-Marquardt iterations per fit.
+    workers : processes for the simulations.
+    progress : callable(message).
     """
+    t_start = time.perf_counter()
     say = progress or (lambda msg: None)
     dataset = data if isinstance(data, Dataset) else read_dataset(data)
     if vehicle is None:
@@ -173,252 +315,179 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         if vehicle is None:
             raise CalibrationError(f"{dataset.path}: no vehicle given and the manifest names none")
     veh = load_vehicle(vehicle)
+    if only is not None:
+        unknown = sorted(set(only) - set(EFFECTS))
+        if unknown:
+            raise CalibrationError(f"unknown candidate effect(s) {unknown}; known: {', '.join(EFFECTS)}")
+    if not (isinstance(max_effects, int) and max_effects >= 1):
+        raise CalibrationError(f"max_effects must be a positive integer, got {max_effects!r}")
+    if not (horizon is None or (np.isfinite(horizon) and horizon > 0)):
+        raise CalibrationError(f"horizon must be a positive number of seconds, got {horizon!r}")
     train, val, split_note = _split(dataset)
+    kinds = {(r.input_kind, r.inputs.shape[1]) for r in train + val}
+    if len(kinds) > 1:
+        raise CalibrationError(f"{dataset.path}: runs mix input kinds {sorted(kinds)}; diagnose one kind at a time")
+    sel = _Selector(veh, train, val, retune=retune, noise=noise, weights=weights, horizon=horizon,
+                    max_iter=max_iter, workers=workers, say=say)
 
-    groups = ("position", "attitude", "velocity", "rates")
-    for what, d in (("noise", noise), ("weights", weights)):
-        for k, v in dict(d or {}).items():
-            if k not in groups:
-                raise CalibrationError(f"{what}: unknown signal group {k!r}; expected some of {', '.join(groups)}")
-            if not (np.isfinite(v) and v > 0):
-                raise CalibrationError(f"{what}.{k}: expected a positive number, got {v!r}")
-    # noise level per run and signal group (IMU and motion-capture runs differ), user values win
-    user_noise = dict(noise or {})
-    scales_tr = [{**noise_levels([r]), **user_noise} for r in train]
-    scales_va = [{**noise_levels([r]), **user_noise} for r in val]
-    est = noise_levels(train + val)
-    noise_used = {**est, **user_noise}
-    # initial position/attitude: quadratic fit over the first second (residuals.refine_initial_states)
-    batch_tr, batch_va = refine_initial_states(prepare_runs(train)), refine_initial_states(prepare_runs(val))
-    for runs, scs, b in ((train, scales_tr, batch_tr), (val, scales_va, batch_va)):
-        for r, sc, m in zip(runs, scs, b.measured):
-            missing = [g for g in ("position", "attitude", "velocity", "rates") if _has(m, g) and g not in sc]
-            if missing:
-                raise CalibrationError(f"run {r.name}: cannot estimate the noise level of {missing} (too few "
-                                       "samples); give it with noise={...} / --noise")
+    # 1. baseline ----------------------------------------------------------------------
+    values: dict = {}
+    if sel.retune:
+        sp = sel.space(veh, sel.retune, sel.retune_bounds, {}, {})
+        base_fit = sel.fit_train(veh, sp, "the baseline (re-tuned base coefficients)")
+        values = dict(base_fit.values)
+    say("validation cost of the baseline")
+    val_given = sel.val_cost(veh, {})
+    val_cur = sel.val_cost(veh, values) if values else val_given
+    accepted: list = []
+    accepted_values: list = []
+    steps = []
+    exclude: set = set()
+    for k in range(1, max_effects + 1):
+        st = sel.step(accepted, values, val_cur, exclude=exclude, only=only, top=top, k_step=k)
+        table = []
+        winners = []
+        for row in st["fitted"]:
+            ok, why = _judge(row, val_cur)
+            row["accepted"], row["why"] = ok, why
+            if ok:
+                winners.append(row)
+        best = max(winners, key=lambda r: r["compare"]["delta"]) if winners else None
+        if best is not None:
+            best = _simplest_sufficient(sel, best, st, accepted, values, val_cur) or best
+        for row in st["fitted"]:
+            table.append(_row_report(row, best))
+        step_rep = {"step": k, "before_cost_per_entry": val_cur["per_entry"], "screening": st["screening"],
+                    "screened": st["screened"], "candidates": table, "chosen": None}
+        if best is None:
+            steps.append(step_rep)
+            break
+        c = best["candidate"]
+        accepted.append(c)
+        exclude.add(c.effect)
+        # refit everything chosen so far (and the re-tuned coefficients) together
+        veh_k = sel.vehicle_for(accepted)
+        free = sel.retune + [n for a in accepted for n in a.free]
+        bnds = {**sel.retune_bounds, **{n: a.bounds[n] for a in accepted for n in a.free}}
+        start = {**values, **best["values"]}
+        joint = sel.fit_train(veh_k, sel.space(veh_k, free, bnds, start, {}), "all chosen effects together")
+        values = dict(joint.values)
+        val_new = sel.val_cost(veh_k, values)
+        step_rep.update(chosen=c.label, after_cost_per_entry=val_new["per_entry"],
+                        joint_fit={"values": joint.values, "std": joint.std, "cost": joint.cost,
+                                   "at_bounds": joint.at_bounds})
+        steps.append(step_rep)
+        accepted_values.append(joint)
+        val_cur = val_new
 
-    # 1. baseline residuals -------------------------------------------------------
-    say("simulating the given model")
-    base_cand = Candidate("none", [], np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0))
-    base_tr = fitmod.evaluate(veh, batch_tr, base_cand, np.zeros(0), scales_tr, weights)
-    base_va = fitmod.evaluate(veh, batch_va, base_cand, np.zeros(0), scales_va, weights)
-    fres_tr = [force_residual(veh, r, p["states"]) for r, p in zip(train, base_tr["predicted"])]
-    fres_va = [force_residual(veh, r, p["states"]) for r, p in zip(val, base_va["predicted"])]
-
-    # 2. signatures ---------------------------------------------------------------------
-    ev = signature_evidence(veh, train, fres_tr)
-    ev_base = base_coefficient_evidence(veh, train, fres_tr)
-
-    # 3. candidates ---------------------------------------------------------------------
-    dt = float(np.median(np.concatenate([np.diff(r.t) for r in train])))
-    p_ref = batch_tr.pos0.mean(axis=0)
-    depths = [r.position[:, 2] for r in train if r.has_position and np.isfinite(r.position[:, 2]).any()]
-    z_max = float(max(np.nanmax(z) for z in depths)) if depths else None
-    cands = build_candidates(ev, dt=dt, p_ref=p_ref, retune=_retune_spec(veh, retune), only=only, z_max=z_max)
-
-    rho0 = fitmod.lag1_autocorrelation(batch_va, base_va["predicted"], scales_va)
-    n_val = base_va["n"]
-    n_eff = fitmod.effective_n(n_val, rho0)
-    rms_given = float(np.sqrt(base_va["rss"] / n_val))
-
-    results = []
-    baseline = None
-    for cand in cands:
-        say(f"fitting {cand.name} ({cand.n_params} parameter(s))")
-        try:
-            fr = fitmod.fit(veh, batch_tr, cand, scales_tr, max_nfev=max_nfev, weights=weights)
-        except (UvsimError, np.linalg.LinAlgError) as exc:
-            results.append({"cand": cand, "error": str(exc)})
-            continue
-        problem = None
-        if cand.effect is not None:
-            try:
-                _effect_with(cand, fr.params)
-            except VehicleError as exc:
-                problem = f"fitted values are not physical: {exc}"
-        tr = fitmod.evaluate(veh, batch_tr, cand, fr.x, scales_tr, weights) if cand.n_params else base_tr
-        va = fitmod.evaluate(veh, batch_va, cand, fr.x, scales_va, weights) if cand.n_params else base_va
-        score = fitmod.bic(va["rss"], va["n"], cand.n_params, n_eff)
-        item = {"cand": cand, "fit": fr, "train": tr, "val": va, "bic": score, "problem": problem}
-        results.append(item)
-        if cand.name == "none":
-            baseline = item
-    if baseline is None:
-        raise CalibrationError("the baseline model could not be evaluated")
-
-    # 4. decision -------------------------------------------------------------------------
-    # reference: the baseline (the given model, or with --retune the re-tuned given model)
-    rss0 = baseline["val"]["rss"]
-    rms_ref = float(np.sqrt(rss0 / baseline["val"]["n"]))
-    at_noise = rms_ref <= NOISE_LEVEL
-    table = []
-    best = None
-    for item in results:
-        cand = item["cand"]
-        if "error" in item:
-            table.append({"name": cand.name, "accepted": False, "why": f"fit failed: {item['error']}"})
-            continue
-        fr, va, tr = item["fit"], item["val"], item["train"]
-        dbic = item["bic"] - baseline["bic"]
-        improvement = 1.0 - float(np.sqrt(va["rss"] / rss0)) if rss0 > 0 else 0.0
-        rms_c = float(np.sqrt(va["rss"] / va["n"]))
-        explained = float(np.sqrt(max(rms_ref ** 2 - rms_c ** 2, 0.0)))
-        accepted = False
-        if cand.name == "none":
-            why = "baseline (the model as given" + (", base coefficients re-tuned)" if cand.n_params else ")")
-        elif item["problem"]:
-            why = item["problem"]
-        elif at_noise:
-            why = (f"not needed: the baseline's validation residual is at the noise level "
-                   f"({rms_ref:.2f} noise sigmas <= {NOISE_LEVEL})")
-        elif dbic >= DELTA_BIC:
-            why = f"not significant: Delta BIC = {dbic:.1f} (needs < {DELTA_BIC:g})"
-        elif improvement < MIN_IMPROVEMENT:
-            why = (f"too small: validation RMS reduced by {100 * improvement:.1f} % "
-                   f"(needs >= {100 * MIN_IMPROVEMENT:.0f} %) although Delta BIC = {dbic:.1f}")
-        elif explained < MIN_EXPLAINED:
-            why = (f"too small: explains {explained:.2f} noise sigmas of the residual (needs >= {MIN_EXPLAINED:g}) "
-                   f"although Delta BIC = {dbic:.1f} and the RMS drops {100 * improvement:.1f} %")
-        else:
-            accepted = True
-            why = (f"significant: Delta BIC = {dbic:.1f} < {DELTA_BIC:g}, validation RMS reduced by "
-                   f"{100 * improvement:.1f} %, explains {explained:.1f} noise sigmas")
-        at_bound = [n for n, x, lo, hi in zip(cand.fit_names, fr.x, cand.lower, cand.upper)
-                    if min(x - lo, hi - x) <= 1e-3 * (hi - lo)]
-        if at_bound:
-            why += f"; at a bound: {', '.join(at_bound)}"
-        row = {
-            "name": cand.name,
-            "parameters": {k: {"value": v, "std": fr.std.get(k), "unit": _unit(cand.effect, k)}
-                           for k, v in fr.params.items()},
-            "fit_variables": dict(zip(cand.fit_names, map(float, fr.x))),
-            "n_parameters": cand.n_params,
-            "train_rmse": _group_rmse(tr["rmse"]),
-            "validation_rmse": _group_rmse(va["rmse"]),
-            "train_rms_noise_sigmas": float(np.sqrt(tr["rss"] / tr["n"])),
-            "validation_rms_noise_sigmas": float(np.sqrt(va["rss"] / va["n"])),
-            "score": {"criterion": "BIC", "bic": item["bic"], "delta_bic": float(dbic),
-                      "validation_improvement": improvement, "explained_noise_sigmas": explained},
-            "accepted": accepted,
-            "why": why,
-            "notes": cand.notes,
-            "function_evaluations": fr.nfev,
-        }
-        table.append(row)
-        item["row"] = row
-        if accepted and (best is None or item["bic"] < best["bic"]):
-            best = item
-
-    # 5. result -------------------------------------------------------------------------------
-    veh_after, term = veh, None
-    if best is not None:
-        cand, fr = best["cand"], best["fit"]
-        term = _effect_with(cand, fr.params)
-        veh_after = veh.with_effects([term])
-        base_vals = {k: fr.params[k] for k in fr.params if k in veh.parameters() and k not in term.parameters()}
-        if base_vals:
-            veh_after = veh_after.with_parameters(base_vals)
-        after_tr, after_va = best["train"], best["val"]
-        rms_after = float(np.sqrt(after_va["rss"] / after_va["n"]))
-        confidence = "high" if (rms_after <= CONFIDENT or rms_after <= EXPLAINED * rms_given) else "partial"
-        message = (f"{cand.name}: validation residual {rms_given:.2f} -> {rms_after:.2f} noise sigmas. "
-                   + (("The residual after the fit is at the noise level." if rms_after <= CONFIDENT else
-                       f"The fit explains {100 * (1 - (rms_after / rms_given) ** 2):.2f} % of the squared residual.")
-                      if confidence == "high" else
-                      f"The residual after the fit is still {rms_after:.1f} noise sigmas: {cand.name} explains part "
-                      "of it; another effect (outside the catalogue, or a second one) remains."))
+    # result ------------------------------------------------------------------------------
+    veh_after = sel.vehicle_for(accepted)
+    if values:
+        veh_after = veh_after.with_parameters(values)
+    say("open-loop validation before / after")
+    ol_before = open_loop(veh, val, meas=sel.meas_va)
+    ol_after = open_loop(veh_after, val, meas=sel.meas_va)
+    final = accepted_values[-1] if accepted_values else None
+    effects_rep = []
+    for c in accepted:
+        effects_rep.append({"effect": c.effect, "variant": c.variant, "notes": c.notes,
+                            "parameters": {n: {"value": values[n], "std": (final.std.get(n) if final else None),
+                                               "unit": _unit(c, n)} for n in c.free}})
+    at_noise = val_cur["per_entry"] <= AT_NOISE
+    names = [c.effect for c in accepted]
+    if accepted:
+        confidence = "high" if at_noise else "partial"
+        msg = (f"{' + '.join(c.label for c in accepted)}: validation cost {val_given['per_entry']:.2f} -> "
+               f"{val_cur['per_entry']:.2f} squared noise sigmas per residual. "
+               + ("The residual is now at the noise level." if at_noise else
+                  "Something the catalogue does not explain remains (the cost is above the noise level)."))
     else:
-        after_tr, after_va = baseline["train"], baseline["val"]
-        if baseline["cand"].n_params:  # --retune: keep the re-tuned base coefficients
-            veh_after = veh.with_parameters(baseline["fit"].params)
         confidence = "none"
-        if at_noise:
-            message = (f"none: the validation residual ({rms_ref:.2f} noise sigmas"
-                       + (", base coefficients re-tuned" if baseline["cand"].n_params else "")
-                       + ") is at the noise level; no effect is needed.")
-        else:
-            scored = [r for r in table if "score" in r and r["name"] != "none"]
-            top = max(scored, key=lambda r: r["score"]["explained_noise_sigmas"], default=None)
-            best_txt = (f"; the best candidate, {top['name']}, explains {top['score']['explained_noise_sigmas']:.2f}"
-                        if top else "")
-            message = (f"none: no catalogue effect explains a significant part of the validation residual "
-                       f"({rms_ref:.2f} noise sigmas{best_txt}). Well above 2 sigmas this points to an effect "
-                       "outside the catalogue (or one needing parameters the candidates hold fixed); near 2 it is "
-                       "the noise plus the error of the runs' initial states.")
-            own = ev_base if ev_base is not None and ev_base["present"] else None
-            if own is not None and not baseline["cand"].n_params:
-                message += (f" The force residual follows each DOF's own velocity and acceleration (R2 = "
-                            f"{own['strength']:.2f}): the base coefficients (damping, added mass, inertia) look off; "
-                            "calibrate them (uvsim calibrate) or re-tune them here (--retune).")
-
-    # force residuals after (validation runs), for plots and the evidence after
-    fres_va_after = [force_residual(veh_after, r, p["states"]) for r, p in zip(val, after_va["predicted"])]
-
-    per_run = {}
-    for split, runs, before, after in (("train", train, base_tr, after_tr), ("validation", val, base_va, after_va)):
-        for r in runs:
-            per_run[r.name] = {"split": split, "dof": r.dof, "before": _run_summary(before["per_run"][r.name]),
-                               "after": _run_summary(after["per_run"][r.name])}
-
-    chosen = best if best is not None else baseline
+        msg = ("none: no catalogue effect removes a significant part of the validation cost "
+               f"({val_cur['per_entry']:.2f} squared noise sigmas per residual). "
+               + ("The model is at the noise level." if at_noise else
+                  "The cost is above the noise level: an effect outside the catalogue, or base coefficients to "
+                  "calibrate (uvsim calibrate, or --retune)."))
     report = {
-        "effect": best["cand"].name if best is not None else "none",
-        "parameters": {k: {"value": v, "std": chosen["fit"].std.get(k), "unit": _unit(chosen["cand"].effect, k)}
-                       for k, v in chosen["fit"].params.items()},
+        "effects": effects_rep,
+        "effect": names[0] if len(names) == 1 else ("none" if not names else "+".join(names)),
         "confidence": confidence,
-        "message": message,
-        "rmse_before": _group_rmse(base_va["rmse"]),
-        "rmse_after": _group_rmse(after_va["rmse"]),
-        "candidates": table,
-        "per_run": per_run,
-        "evidence": ev,
-        "base_coefficients_evidence": ev_base,
-        "criterion": {
-            "name": "BIC on validation residuals",
-            "formula": "BIC = n_eff ln(RSS/n) + p ln(n_eff), n_eff = n (1 - rho) / (1 + rho)",
-            "n": int(n_val), "rho": rho0, "n_eff": n_eff,
-            "accept": (f"baseline above {NOISE_LEVEL} noise sigmas, Delta BIC < {DELTA_BIC:g}, validation RMS "
-                       f"reduced by >= {100 * MIN_IMPROVEMENT:.0f} %, explained part >= {MIN_EXPLAINED:g} noise sigmas, "
-                       "physical parameter values"),
-            "confidence_high": (f"validation RMS after <= {CONFIDENT} noise sigmas or <= {EXPLAINED} x the "
-                                "given model's"),
-            "residual_normalization": "each signal group divided by its noise level (per run)",
-            "weights": dict(weights or {}),
-        },
-        "noise": {"pooled": noise_used, "per_run": {r.name: sc for r, sc in zip(train + val, scales_tr + scales_va)},
-                  "estimated_from": "second differences of the raw signals (uvsim.diagnosis.residuals.noise_levels)"
-                                    + ("; user-given: " + ", ".join(user_noise) if user_noise else "")},
-        "baseline_validation_rms_noise_sigmas": rms_given,
-        "reference_validation_rms_noise_sigmas": rms_ref,
+        "message": msg,
+        "retuned": {n: {"value": values.get(n), "before": veh.parameters()[n]} for n in sel.retune},
+        "steps": steps,
+        "rmse_before": pooled(ol_before),
+        "rmse_after": pooled(ol_after),
+        "validation_cost_per_entry": {"given": val_given["per_entry"], "baseline": steps[0]["before_cost_per_entry"]
+                                      if steps else val_given["per_entry"], "final": val_cur["per_entry"]},
+        "criterion": {"method": "block bootstrap over validation windows (uvsim.fitting.compare)",
+                      "level": LEVEL, "min_relative": MIN_RELATIVE, "horizon_s": horizon,
+                      "variant_share": VARIANT_SHARE, "at_noise": AT_NOISE},
+        "noise": {r.name: m.describe() for r, m in zip(train + val, sel.meas_tr + sel.meas_va)},
+        "sampling_notes": [n for m in sel.meas_tr + sel.meas_va for n in m.notes],
         "vehicle": veh.name,
         "data": str(dataset.path),
         "runs": {"train": [r.name for r in train], "validation": [r.name for r in val], "split": split_note},
+        "fits": sel.fits,
+        "seconds": time.perf_counter() - t_start,
     }
-    return Diagnosis(report, veh, veh_after, term, train, val,
-                     output_residuals(val, base_va["predicted"]), output_residuals(val, after_va["predicted"]),
-                     fres_va, fres_va_after)
+    return Diagnosis(report, veh, veh_after, list(zip(accepted, [dict(values) for _ in accepted])), train, val,
+                     ol_before, ol_after)
 
 
-def _has(measured: dict, group: str) -> bool:
-    key = {"position": "position", "attitude": "quaternion", "velocity": "velocity", "rates": "rates"}[group]
-    return key in measured
+def _simplest_sufficient(sel, best, st, accepted, values, val_cur):
+    """Among the winning effect's variants simpler than the winner, the simplest that is
+    not significantly worse than it on validation (fitted here); None to keep the winner."""
+    c = best["candidate"]
+    simpler = [cc for cc, _ in st["all_screened"] if cc.effect == c.effect and cc.complexity < c.complexity]
+    simpler.sort(key=lambda cc: cc.complexity)
+    for cc in simpler:
+        s = next((s for x, s in st["all_screened"] if x is cc), None)
+        row = sel.fit_candidate(cc, s, sel.vehicle_for(accepted), values, val_cur)
+        if "compare" not in row:
+            continue
+        ok, why = _judge(row, val_cur)
+        if not ok:
+            continue
+        worse = bootstrap_improvement(row["val"]["windows"], best["val"]["windows"], level=LEVEL)
+        if not worse["significant"]:
+            row["accepted"], row["why"] = True, why + f"; simplest variant as good as {c.variant}"
+            st["fitted"].append(row)
+            return row
+    return None
 
 
-def save_fixed_vehicle(diag: Diagnosis, path) -> Path:
+def _unit(c: Candidate, name: str) -> str:
+    if c.spec is None:
+        return "m" if name.startswith("thruster_") and name.split("_")[1] in "xyz" else "-"
+    try:
+        term = make_term(dict(c.spec))
+        return term.units().get(name, "") if hasattr(term, "units") else ""
+    except UvsimError:
+        return ""
+
+
+def _row_report(row, best) -> dict:
+    out = {"effect": row["effect"], "variant": row["variant"], "free": list(row["free"]),
+           "accepted": bool(row.get("accepted")), "chosen": row is best, "why": row.get("why", "")}
+    if "compare" in row:
+        out.update(values=row["values"], std=row["std"], train_cost=row["train_cost"],
+                   validation_cost_per_entry=row["val"]["per_entry"], compare=row["compare"],
+                   at_bounds=row["at_bounds"])
+    return out
+
+
+def save_fixed_vehicle(diag: Diagnosis, path):
     """Write the corrected vehicle with provenance comments."""
     from uvsim.vehicle import save_vehicle
 
     rep = diag.report
     ann = {}
-    term = diag.effect_term
-    for k, d in rep["parameters"].items():
-        std = d.get("std")
-        key = k
-        if term is not None and k in term.parameters():
-            key = next((f.key for f in term.FIELDS if term.param_name(f.key) == k), k)
-        ann[key] = (f"diagnosed: {d['value']:.6g} +- {std:.2g} {d['unit']}".rstrip() if std is not None
-                    else "diagnosed")
+    for e in rep["effects"]:
+        for k, d in e["parameters"].items():
+            std = d.get("std")
+            key = k.split("_", 1)[1] if k.startswith(e["effect"] + "_") else k
+            ann[key] = f"diagnosed: {d['value']:.6g}" + (f" +- {std:.2g}" if std is not None else "") + f" {d['unit']}"
     header = (f"{diag.vehicle_after.name}: corrected by `uvsim diagnose` on {rep['data']}\n"
-              f"effect: {rep['effect']} ({rep['confidence']}); {rep['message']}\n"
+              f"effects: {rep['effect']} ({rep['confidence']}); {rep['message']}\n"
               f"validation RMSE before {rep['rmse_before']} after {rep['rmse_after']}")
     return save_vehicle(diag.vehicle_after, path, header=header, annotations=ann)

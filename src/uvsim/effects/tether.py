@@ -29,6 +29,10 @@ uniformly; all of it is carried by the vehicle (an upper bound)::
 
     F_drag = -1/2 rho C_d D (l / 3) |v_n| v_n                             (NED)
 
+Horizontal pull (``horizontal: true``): a cable lying on the tank floor or trailing
+at the surface pulls only horizontally: ``d`` and ``L`` use the horizontal (north,
+east) components only, so ``e`` is horizontal and ``anchor_d`` plays no part.
+
 Generalized force on the vehicle (body frame)::
 
     f = R^T (F_pull + F_drag),     tau = [f;  r_a x f]
@@ -67,6 +71,16 @@ class Tether(Effect):
         Field("rho", "kg/m^3", 900.0, 1100.0, 1000.0, "the water density"),
     )
 
+    OPTIONS = {"horizontal": False}
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        h = self.options["horizontal"]
+        if not isinstance(h, bool):
+            from uvsim.errors import VehicleError
+
+            raise VehicleError(f"effects (tether).horizontal: expected true or false, got {h!r}")
+
     def prepare(self, params, n):
         g = {f.key: self.p(params, f.key, n) for f in self.FIELDS}
         r_a = np.stack([g["attach_x"], g["attach_y"], g["attach_z"]], -1)
@@ -79,6 +93,8 @@ class Tether(Effect):
         R = ctx.R
         p_a = ctx.pos + np.einsum("nij,nj->ni", R, np.broadcast_to(r_a, ctx.pos.shape))
         d = p0 - p_a
+        if self.options["horizontal"]:
+            d = d * np.array([1.0, 1.0, 0.0])
         L = np.linalg.norm(d, axis=1)
         e = d / np.maximum(L, 1e-9)[:, None]
         pull = T0 + k * np.maximum(0.0, L - Ls)

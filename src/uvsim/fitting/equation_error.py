@@ -1,0 +1,251 @@
+"""Equation-error (inverse-dynamics) fits: fast, convex-ish, used to screen and seed.
+
+Along the *measured* motion (smoothed pose, Savitzky-Golay velocities ``nu`` and
+accelerations ``nu_dot``, :mod:`uvsim.estimation.derivatives`) the model predicts an
+acceleration ``f(eta, nu, u; theta)`` (:meth:`uvsim.model.Model.rhs`); the generalized
+force the model misses is
+
+    tau_res(theta) = M0 (nu_dot_meas - S f(eta, nu, u; theta))
+
+(``M0`` the given model's mass matrix, so the residual is in N and N m; ``S`` the same
+Savitzky-Golay smoothing applied twice, because the measured acceleration went through
+two filters, position -> nu -> nu_dot: input steps then leave no filter artefact).  No
+simulation is involved, so the cost of a parameter set is one vectorized ``rhs`` over
+all samples, and for effects whose force is linear in their parameters (current to
+first order, ballast, an elastic tether in stiffness and pull, gains) the fit is
+linear least squares in disguise: the classical "equation error" of system
+identification (Ljung 1999, sec. 7.3).  Its estimates are biased by the noise of the
+differentiated data and it needs the degrees of freedom the log can differentiate
+(``have``: all of u, v, w for forces, all of p, q, r for moments), so diagnosis uses it
+to rank candidate effects and to start their output-error fits
+(:func:`uvsim.fitting.fit`), never to decide.
+
+Term states (a thruster lag) are integrated along the measured motion for each
+parameter set (the vehicle state teacher-forced), exactly as in the windowed fits.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+from scipy.signal import savgol_filter
+from threadpoolctl import threadpool_limits
+
+from uvsim.errors import CalibrationError
+from uvsim.estimation.derivatives import body_acceleration, body_velocity
+from uvsim.kinematics import euler_to_quat, unwrap_angles
+from uvsim.model import Model
+
+#: Savitzky-Golay window (s) and order of the differentiation: the second derivative
+#: amplifies noise, so a longer window than for initial velocities (2-5 mm position
+#: noise at 20-100 Hz); still short against the 1-3 s time constants of an ROV.
+WINDOW_S = 1.0
+POLYORDER = 3
+
+
+@dataclass
+class Motion:
+    """Measured motion of one run for the equation error.
+
+    Attributes
+    ----------
+    name : run name.  t : (n,) times.  U : (n, k) inputs.  input_kind.
+    y : (n, 13) states along the measured motion (smoothed pose, velocities).
+    nud : (n, 6) measured accelerations.
+    have : (6,) bool, which DOFs can be differentiated from the log.
+    valid : (n,) bool, samples used (the filter's end segments are not).
+    win : Savitzky-Golay window in samples.
+    """
+
+    name: str
+    t: np.ndarray
+    U: np.ndarray
+    input_kind: str
+    y: np.ndarray
+    nud: np.ndarray
+    have: np.ndarray
+    valid: np.ndarray
+    win: int
+
+
+def _sg(x, win, deriv=0, dt=1.0, axis=-2):
+    return savgol_filter(x, win, POLYORDER, deriv=deriv, delta=dt, axis=axis, mode="interp")
+
+
+def measured_motion(run, *, window_s: float = WINDOW_S) -> Motion | None:
+    """The :class:`Motion` of ``run``, or None when the log allows no DOF (non-uniform
+    time, gaps, too short, or neither full velocities nor full rates)."""
+    try:
+        nu = body_velocity(run, window_s=window_s)
+        nud = body_acceleration(run, nu, window_s=window_s)
+    except CalibrationError:
+        return None
+    have = np.isfinite(nu).all(axis=0) & np.isfinite(nud).all(axis=0)
+    have = np.array([have[:3].all()] * 3 + [have[3:].all()] * 3)
+    if not have.any():
+        return None
+    t = run.t
+    n = t.size
+    dt = float(np.median(np.diff(t)))
+    win = int(round(window_s / dt)) | 1
+    win = max(win, POLYORDER + 2 + (POLYORDER + 1) % 2)
+    if win > n // 2:
+        return None
+    y = np.zeros((n, 13))
+    pos = run.position
+    for j in range(3):
+        col = pos[:, j]
+        if np.isfinite(col).all():
+            y[:, j] = _sg(col, win, axis=0)
+    e = unwrap_angles(run.euler)
+    e = np.where(np.isfinite(e), e, 0.0)
+    y[:, 3:7] = euler_to_quat(_sg(e, win, axis=0))
+    y[:, 7:13] = np.where(np.isfinite(nu), nu, 0.0)
+    valid = np.ones(n, bool)
+    half = win // 2
+    valid[:half] = False
+    valid[n - half:] = False
+    return Motion(run.name, t, run.inputs, run.input_kind, y, np.where(np.isfinite(nud), nud, 0.0), have, valid, win)
+
+
+class EquationError:
+    """Normalized inverse-dynamics residuals of ``motions`` for batches of parameter
+    sets of ``space`` (module docstring).
+
+    Parameters
+    ----------
+    vehicle : the model (effects added).
+    motions : :class:`Motion` list (one input kind per call of :meth:`forces`; runs of
+        several kinds are handled by grouping).
+    space : :class:`uvsim.fitting.parameters.ParameterSpace`.
+    M0 : (6, 6) mass matrix converting accelerations to forces (default the vehicle's).
+    scale : (6,) normalization per DOF (default: a robust standard deviation of the
+        residual at the start values).
+    """
+
+    def __init__(self, vehicle, motions, space, *, M0=None, scale=None):
+        self.vehicle, self.motions, self.space = vehicle, [m for m in motions if m is not None], space
+        if not self.motions:
+            raise CalibrationError("no run allows an equation-error fit (need uniformly sampled, complete "
+                                   "position + attitude, or velocities and rates)")
+        self.M0 = np.asarray(vehicle.M if M0 is None else M0, float)
+        self.scale = None
+        if scale is None:
+            r = self.forces(space.z0[None])
+            s = [1.4826 * np.nanmedian(np.abs(r[0][..., j] - np.nanmedian(r[0][..., j]))) for j in range(6)]
+            self.scale = np.where(np.isfinite(s) & (np.asarray(s) > 0), s, 1.0)
+        else:
+            self.scale = np.asarray(scale, float)
+
+    def _term_states(self, Z: np.ndarray, ms: list, kind: str) -> list:
+        """Term states along the measured motion (vehicle state teacher-forced, RK4), all
+        runs ``ms`` and parameter sets Z (P, p) at once; per run (P, n, n_term)."""
+        P, R = Z.shape[0], len(ms)
+        L = max(m.t.size for m in ms)
+        T = np.empty((R, L))
+        Y = np.empty((R, L, 13))
+        U = np.empty((R, L, ms[0].U.shape[1]))
+        for j, m in enumerate(ms):
+            n = m.t.size
+            T[j, :n], T[j, n:] = m.t, m.t[-1]  # padding: zero-length steps
+            Y[j, :n], Y[j, n:] = m.y, m.y[-1]
+            U[j, :n], U[j, n:] = m.U, m.U[-1]
+        model = Model(self.vehicle, self.space.overrides(Z, R), n=P * R, input_kind=kind)
+        nt = model.n_y - 13
+        Tt, Yt, Ut = np.tile(T, (P, 1)), np.tile(Y, (P, 1, 1)), np.tile(U, (P, 1, 1))
+        x = model.initial_state(u0=Ut[:, 0])[:, 13:]
+        xs = np.empty((P * R, L, nt))
+        xs[:, 0] = x
+
+        def f(yy, xx, u):
+            return model.rhs(0.0, np.concatenate([yy, xx], 1), u)[:, 13:]
+
+        for i in range(L - 1):
+            h = (Tt[:, i + 1] - Tt[:, i])[:, None]
+            ya, yb = Yt[:, i], Yt[:, i + 1]
+            ym = 0.5 * (ya + yb)
+            u = Ut[:, i]
+            k1 = f(ya, x, u)
+            k2 = f(ym, x + 0.5 * h * k1, u)
+            k3 = f(ym, x + 0.5 * h * k2, u)
+            k4 = f(yb, x + h * k3, u)
+            x = x + h / 6.0 * (k1 + 2 * (k2 + k3) + k4)
+            xs[:, i + 1] = x
+        xs = xs.reshape(P, R, L, nt)
+        return [xs[:, j, : m.t.size] for j, m in enumerate(ms)]
+
+    def forces(self, Z: np.ndarray) -> list:
+        """Per run, ``tau_res`` (P, n, 6) in N / N m, NaN for DOFs the log cannot give and
+        for the filter's end segments.  Runs of one input kind share one ``rhs`` call."""
+        Z = np.atleast_2d(Z)
+        P = Z.shape[0]
+        out: list = [None] * len(self.motions)
+        groups: dict = {}
+        for i, m in enumerate(self.motions):
+            groups.setdefault((m.input_kind, m.U.shape[1]), []).append(i)
+        with threadpool_limits(1, "blas"), np.errstate(all="ignore"):
+            for (kind, _), idx in groups.items():
+                ms = [self.motions[i] for i in idx]
+                N = sum(m.t.size for m in ms)
+                model = Model(self.vehicle, self.space.overrides(Z, N), n=P * N, input_kind=kind)
+                Y = np.concatenate([m.y for m in ms])
+                Yp = np.tile(Y, (P, 1))
+                if model.n_y > 13:  # term states per run and parameter set, stacked like Yp
+                    xs = self._term_states(Z, ms, kind)
+                    Yp = np.concatenate([Yp, np.concatenate(xs, axis=1).reshape(P * N, -1)], 1)
+                Up = np.tile(np.concatenate([m.U for m in ms]), (P, 1))
+                acc = model.rhs(0.0, Yp, Up)[:, 7:13].reshape(P, N, 6)
+                a = 0
+                for i, m in zip(idx, ms):
+                    n = m.t.size
+                    ac = acc[:, a:a + n]
+                    a += n
+                    dt = float(np.median(np.diff(m.t)))
+                    for _ in range(2):
+                        ac = _sg(ac, m.win, dt=dt)
+                    res = (m.nud[None] - ac) @ self.M0.T
+                    res[:, :, ~m.have] = np.nan
+                    res[:, ~m.valid] = np.nan
+                    out[i] = res
+        return out
+
+    def residuals(self, Z: np.ndarray) -> np.ndarray:
+        """Normalized residual vectors (P, m) over the valid entries."""
+        parts = []
+        for m, r in zip(self.motions, self.forces(Z)):
+            sel = m.valid[:, None] & m.have[None, :]
+            parts.append((r / self.scale)[:, sel])
+        v = np.concatenate(parts, axis=1)
+        return np.where(np.isfinite(v), v, 30.0)
+
+    def fit(self, z0=None, *, max_nfev: int = 30) -> dict:
+        """Least-squares fit (trust-region reflective within the space's bounds).  Returns
+        dict with ``z``, ``values``, ``rss``, ``rss0`` (at the start), ``n``."""
+        sp = self.space
+        z0 = sp.z0 if z0 is None else np.asarray(z0, float)
+        lo, hi = sp.z_lower, sp.z_upper
+        z0 = np.clip(z0, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
+        r0 = self.residuals(z0[None])[0]
+        if sp.p == 0:
+            return {"z": z0, "values": {}, "rss": float(r0 @ r0), "rss0": float(r0 @ r0), "n": r0.size}
+        cache = {}
+
+        def fun(z):
+            key = z.tobytes()
+            if key not in cache:
+                cache.clear()
+                cache[key] = self.residuals(z[None])[0]
+            return cache[key]
+
+        def jac(z):
+            h = 1e-6 * np.maximum(1.0, np.abs(z))
+            h = np.where(z + h > hi, -h, h)
+            Z = np.vstack([z, z + np.diag(h)])
+            R = self.residuals(Z)
+            return ((R[1:] - R[0]) / h[:, None]).T
+
+        res = least_squares(fun, z0, jac=jac, bounds=(lo, hi), method="trf", max_nfev=max_nfev, x_scale=1.0)
+        r = fun(res.x)
+        return {"z": res.x, "values": sp.as_dict(res.x), "rss": float(r @ r), "rss0": float(r0 @ r0),
+                "n": int(r.size), "nfev": int(res.nfev)}
