@@ -108,13 +108,31 @@ def _check_time(t: np.ndarray, where: str) -> None:
 
 
 def _rk4_loop(model: Model, T: np.ndarray, U: np.ndarray, y0: np.ndarray, substeps: int, on_blowup: str,
-              progress=None) -> np.ndarray:
-    """Core RK4 loop.  ``T`` (n, n_t) times, ``U`` (n, n_t, k) inputs, ``y0`` (n, n_y)."""
+              progress=None, V: np.ndarray | None = None) -> np.ndarray:
+    """Core RK4 loop.  ``T`` (n, n_t) times, ``U`` (n, n_t, k) inputs, ``y0`` (n, n_y),
+    ``V`` (n, n_t) battery voltages or None (held over each interval like ``U``)."""
     with np.errstate(all="ignore"):  # blow-ups are detected below and reported, not warned about
-        return _rk4_steps(model, T, U, y0, substeps, on_blowup, progress)
+        return _rk4_steps(model, T, U, y0, substeps, on_blowup, progress, V)
 
 
-def _rk4_steps(model, T, U, y0, substeps, on_blowup, progress):
+def _check_voltage(voltage, shape: tuple, where: str = "voltage") -> np.ndarray | None:
+    """Validated battery voltages (V) broadcast to ``shape``, or None.  NaN entries mean
+    "not logged" (voltage-dependent curves use their nominal voltage there)."""
+    if voltage is None:
+        return None
+    V = np.asarray(voltage, dtype=float)
+    try:
+        V = np.broadcast_to(V, shape)
+    except ValueError:
+        raise SimulationError(f"{where}: expected shape {shape} (one voltage per sample), got {V.shape}") from None
+    bad = np.isinf(V) | (V <= 0)
+    if bad.any():
+        idx = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise SimulationError(f"{where}: battery voltage {V[idx]!r} V at index {idx} is not a positive finite number")
+    return V
+
+
+def _rk4_steps(model, T, U, y0, substeps, on_blowup, progress, V=None):
     n, n_t = T.shape
     Y = np.empty((n, n_t, model.n_y))
     y = y0.copy()
@@ -124,6 +142,7 @@ def _rk4_steps(model, T, U, y0, substeps, on_blowup, progress):
     shared_t = bool(np.all(T == T[:1]))
     for i in range(n_t - 1):
         u = U[:, i]
+        v = None if V is None else V[:, i]
         # shared grid: scalar t and h; per-row grids: t (n,) and h (n,) per row, so every
         # row's stages are evaluated at its own times (time-varying currents, schedules)
         if shared_t:
@@ -135,10 +154,10 @@ def _rk4_steps(model, T, U, y0, substeps, on_blowup, progress):
             h = (T[:, i + 1] - t) / substeps
             hc = h[:, None]
         for _ in range(substeps):
-            k1 = rhs(t, y, u)
-            k2 = rhs(t + 0.5 * h, y + (0.5 * hc) * k1, u)
-            k3 = rhs(t + 0.5 * h, y + (0.5 * hc) * k2, u)
-            k4 = rhs(t + h, y + hc * k3, u)
+            k1 = rhs(t, y, u, v)
+            k2 = rhs(t + 0.5 * h, y + (0.5 * hc) * k1, u, v)
+            k3 = rhs(t + 0.5 * h, y + (0.5 * hc) * k2, u, v)
+            k4 = rhs(t + h, y + hc * k3, u, v)
             y = y + (hc / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
             q = y[:, 3:7]
             q /= np.sqrt((q * q).sum(axis=1))[:, None]
@@ -165,7 +184,7 @@ def _rk4_steps(model, T, U, y0, substeps, on_blowup, progress):
 def simulate(vehicle, t, inputs, *, input_kind: str = "force", pos0=None, q0=None, nu0=None,
              overrides: Mapping[str, Any] | None = None, current=None, method: str = "rk4",
              substeps: int = 1, rtol: float = 1e-8, atol: float = 1e-10, on_blowup: str = "raise",
-             model: Model | None = None) -> SimulationResult:
+             model: Model | None = None, voltage=None) -> SimulationResult:
     """Simulate one trajectory.
 
     Parameters
@@ -184,6 +203,10 @@ def simulate(vehicle, t, inputs, *, input_kind: str = "force", pos0=None, q0=Non
     method : "rk4" (fixed step, one step per sample interval times ``substeps``) or
         any :func:`scipy.integrate.solve_ivp` method name ("RK45", "DOP853", "LSODA", ...).
     on_blowup : "raise" (default) or "nan" (mark the trajectory NaN and continue).
+    voltage : array_like, shape (n_t,), optional
+        Battery voltage (V) at the sample times, held until the next sample like the
+        inputs; feeds voltage-dependent thrust curves (NaN: the curve's nominal
+        voltage).  None (default): every curve at its nominal voltage.
 
     Returns
     -------
@@ -202,13 +225,14 @@ def simulate(vehicle, t, inputs, *, input_kind: str = "force", pos0=None, q0=Non
     if model is None:
         model = _make_model(vehicle, overrides, input_kind, current, n=1)
     model.check_inputs(U.shape[1])
+    V = _check_voltage(voltage, t.shape)
     y0 = model.initial_state(pos0, q0, nu0, U[0][None, :])
     if method.lower() == "rk4":
         if substeps < 1:
             raise SimulationError(f"substeps must be >= 1, got {substeps}")
-        Y = _rk4_loop(model, t[None, :], U[None], y0, substeps, on_blowup)[0]
+        Y = _rk4_loop(model, t[None, :], U[None], y0, substeps, on_blowup, V=None if V is None else V[None])[0]
     else:
-        Y = _solve_ivp(model, t, U, y0[0], method, rtol, atol, on_blowup)
+        Y = _solve_ivp(model, t, U, y0[0], method, rtol, atol, on_blowup, V)
     return SimulationResult(t, Y, model.state_names, U, model.input_kind, input_names(model.input_kind, U.shape[1]),
                             model.vehicle.name, {"method": method})
 
@@ -227,12 +251,12 @@ def _make_model(vehicle, overrides, input_kind, current, n=None) -> Model:
     return Model(vehicle, ov, n=n, input_kind=input_kind, current=cur_fn)
 
 
-def _solve_ivp(model: Model, t, U, y0, method, rtol, atol, on_blowup):
+def _solve_ivp(model: Model, t, U, y0, method, rtol, atol, on_blowup, V=None):
     from scipy.integrate import solve_ivp
 
     def fun(tt, yy):
         i = min(max(int(np.searchsorted(t, tt, side="right")) - 1, 0), len(t) - 1)
-        return model.rhs(tt, yy[None, :], U[i][None, :])[0]
+        return model.rhs(tt, yy[None, :], U[i][None, :], None if V is None else V[i:i + 1])[0]
 
     try:
         sol = solve_ivp(fun, (t[0], t[-1]), y0, method=method, t_eval=t, rtol=rtol, atol=atol)
@@ -251,7 +275,8 @@ def _solve_ivp(model: Model, t, U, y0, method, rtol, atol, on_blowup):
 
 def simulate_batch(vehicle, t, inputs, *, input_kind: str = "force", y0=None, pos0=None, q0=None, nu0=None,
                    overrides: Mapping[str, Any] | None = None, current=None, substeps: int = 1,
-                   on_blowup: str = "nan", model: Model | None = None, progress: bool = False) -> SimulationResult:
+                   on_blowup: str = "nan", model: Model | None = None, progress: bool = False,
+                   voltage=None) -> SimulationResult:
     """Simulate ``n`` trajectories at once with RK4 (numpy-vectorized).
 
     Parameters
@@ -264,6 +289,8 @@ def simulate_batch(vehicle, t, inputs, *, input_kind: str = "force", y0=None, po
     y0 : (n, n_y) full initial states, or give ``pos0`` (n, 3), ``q0`` (n, 4), ``nu0`` (n, 6).
     on_blowup : "nan" (default; a diverging trajectory becomes NaN from then on and
         the others continue) or "raise".
+    voltage : (n, n_t) or (n_t,) battery voltages (V), held like the inputs, or None
+        (see :func:`simulate`).
 
     Returns
     -------
@@ -304,7 +331,8 @@ def simulate_batch(vehicle, t, inputs, *, input_kind: str = "force", y0=None, po
         from tqdm.auto import tqdm
 
         bar = tqdm(total=T.shape[1] - 1, desc="simulate", unit="step", leave=False)
-    Y = _rk4_loop(model, T, U, y0, substeps, on_blowup, bar)
+    V = _check_voltage(voltage, T.shape)
+    Y = _rk4_loop(model, T, U, y0, substeps, on_blowup, bar, V)
     if bar is not None:
         bar.close()
     return SimulationResult(T[0] if np.all(T == T[:1]) else T, Y, model.state_names, U, model.input_kind,
@@ -375,7 +403,9 @@ def initial_state_from_run(run, *, initial_velocity: str = "zero", window_s: flo
 def simulate_run(vehicle, run, *, current=None, overrides=None, method: str = "rk4", substeps: int = 1,
                  on_blowup: str = "raise", initial_window_s: float = 0.0) -> SimulationResult:
     """Simulate a logged :class:`uvsim.logs.Run`: start from its first measured state
-    (velocities zero where not logged) and apply its inputs."""
+    (velocities zero where not logged) and apply its inputs (and its battery voltage,
+    :attr:`uvsim.logs.Run.voltage`, when it logged one)."""
     pos0, q0, nu0, _ = initial_state_from_run(run, window_s=initial_window_s)
     return simulate(vehicle, run.t, run.inputs, input_kind=run.input_kind, pos0=pos0, q0=q0, nu0=nu0,
-                    overrides=overrides, current=current, method=method, substeps=substeps, on_blowup=on_blowup)
+                    overrides=overrides, current=current, method=method, substeps=substeps, on_blowup=on_blowup,
+                    voltage=run.voltage)

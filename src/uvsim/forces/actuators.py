@@ -54,9 +54,16 @@ class Actuators(ForceTerm):
             groups = [(c, np.array(idx)) for c, idx in seen.values()]
         # inputs are held over a sample interval, so the four RK4 stages see the same
         # array object: map PWM -> thrust once per interval (cache keyed on identity)
-        return {"groups": groups, "u": None, "f": None}
+        return {"groups": groups, "u": None, "v": None, "f": None}
 
-    def thrusts(self, u, kind, groups):
+    @property
+    def voltage_dependent(self) -> bool:
+        """True when some thruster curve depends on the supply voltage."""
+        return bool(self.curves) and any(getattr(c, "voltage_dependent", False) for c in self.curves)
+
+    def thrusts(self, u, kind, groups, voltage=None):
+        """Thrusts (n, k) for inputs ``u`` (n, k); ``voltage`` (n,) V or None feeds
+        voltage-dependent curves (fixed-voltage curves do not use it)."""
         if kind == "thrust":
             return u
         if kind == "pwm":
@@ -64,7 +71,10 @@ class Actuators(ForceTerm):
                 raise SimulationError("inputs are PWM but the vehicle's thrusters have no thrust curves")
             f = np.empty_like(u)
             for curve, idx in groups:
-                f[:, idx] = curve.thrust(u[:, idx])
+                if voltage is not None and getattr(curve, "voltage_dependent", False):
+                    f[:, idx] = curve.thrust(u[:, idx], voltage=np.asarray(voltage, float)[:, None])
+                else:
+                    f[:, idx] = curve.thrust(u[:, idx])
             return f
         raise SimulationError(f"unknown input kind {kind!r}")
 
@@ -75,10 +85,10 @@ class Actuators(ForceTerm):
             return u
         if self.matrix is None:
             raise SimulationError(f"inputs are per-thruster {kind} but the vehicle defines no thrusters")
-        if prep["u"] is u:
+        if prep["u"] is u and prep["v"] is ctx.voltage:
             return prep["f"]
-        tau = self.thrusts(u, kind, prep["groups"]) @ self.matrix.T
-        prep["u"], prep["f"] = u, tau
+        tau = self.thrusts(u, kind, prep["groups"], ctx.voltage) @ self.matrix.T
+        prep["u"], prep["v"], prep["f"] = u, ctx.voltage, tau
         return tau
 
     def check_inputs(self, kind: str, k: int, where: str = "inputs") -> None:
