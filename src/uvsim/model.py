@@ -243,7 +243,7 @@ class Model:
         mass, weight, r_g = self.mass, self.weight, self.r_g
         MRB_mv, Minv_mv = self._MRB_mv, self._Minv_mv
         if self.changes_mass:
-            mass, r_g, M_RB, Minv = self._mass_update(t, y, pos, R, nu, nu_r, u, voltage)
+            mass, r_g, M_RB, Minv = self._mass_update(t, y, pos, R, nu, nu_r, u)
             weight = mass * self.g
             MRB_mv, Minv_mv = (lambda x: _matvec(M_RB, x)), (lambda x: _matvec(Minv, x))
         states = {i: y[:, s] for i, s in self.state_slices.items()} if self.state_slices else {}
@@ -284,14 +284,14 @@ class Model:
         return (np.array([np.asarray(a, float).reshape(3) for a, _ in pairs]),
                 np.array([np.asarray(b, float).reshape(3) for _, b in pairs]))
 
-    def _mass_update(self, t, y, pos, R, nu, nu_r, u, voltage=None):
+    def _mass_update(self, t, y, pos, R, nu, nu_r, u):
         """Rebuild M_RB with the mass changes of mass-changing terms (VBS, moving masses)."""
         n = y.shape[0]
         mass = self.mass.copy()
         first = self.mass[:, None] * self.r_g
         I = inertia_tensor(*(np.broadcast_to(np.asarray(self.params[k], float), (n,)) for k in INERTIA_NAMES)).copy()
         ctx = Context(t, pos, y[:, 3:7], R, nu, nu_r, u, self.input_kind, self.weight, self.mass, self.r_g,
-                      {i: y[:, s] for i, s in self.state_slices.items()}, self.params, False, voltage)
+                      {i: y[:, s] for i, s in self.state_slices.items()}, self.params, False)
         for i, term in enumerate(self.terms):
             if term.changes_mass:
                 s = self.state_slices.get(i)
