@@ -19,6 +19,8 @@ COMMAND_MODULES = [
     "uvsim.commands.demo",
     "uvsim.commands.vehicle",
     "uvsim.commands.simulate",
+    "uvsim.commands.import_",
+    "uvsim.commands.export",
     "uvsim.commands.bench",
     "uvsim.commands.hydro",
     "uvsim.commands.maneuver",

@@ -201,6 +201,8 @@ def _validate(df: pd.DataFrame, source: str) -> tuple[pd.DataFrame, list[str], s
             "attitude (qw..qz or any of roll, pitch, yaw), velocity (u, v, w), rates (p, q, r) or "
             "acceleration (acc_x, acc_y, acc_z)"
         )
+    if VOLTAGE_COLUMN in cols:
+        _check_voltage_column(df[VOLTAGE_COLUMN].to_numpy(), source)
     kind, in_cols = _actuator_columns(cols, source)
     for c in in_cols:
         v = df[c].to_numpy()
@@ -241,6 +243,22 @@ def _validate(df: pd.DataFrame, source: str) -> tuple[pd.DataFrame, list[str], s
                     f"{_row(i, source)}; expected the same attitude (within {ATTITUDE_CONSISTENCY_TOL:g} rad)"
                 )
     return df, empty, kind, in_cols
+
+
+def _check_voltage_column(v: np.ndarray, source: str) -> None:
+    """``voltage``: positive where logged; NaN = no new sample (held, see :attr:`Run.voltage`),
+    so the first row must carry a value."""
+    if np.isnan(v[0]):
+        raise LogFormatError(
+            f"{source}: column 'voltage', {_row(0, source)} is empty; the battery voltage is held from one "
+            "sample to the next (empty cells = no new sample), so the first row must have a value"
+        )
+    bad = np.flatnonzero(~np.isnan(v) & ~(v > 0))
+    if bad.size:
+        i = int(bad[0])
+        raise LogFormatError(
+            f"{source}: column 'voltage', {_row(i, source)}: {float(v[i])!r} V is not a positive battery voltage"
+        )
 
 
 @dataclass
@@ -383,6 +401,18 @@ class Run:
         if self.has_quaternion:
             return quat_to_euler(self.quaternion)
         return np.full((len(self.data), 3), np.nan)
+
+    @property
+    def has_voltage(self) -> bool:
+        return VOLTAGE_COLUMN in self.data.columns
+
+    @property
+    def voltage(self) -> np.ndarray | None:
+        """Battery voltage (V) per row, shape (n,), or None when not logged.  Empty cells
+        (no new sample) hold the previous sample (zero-order hold, as inputs are held)."""
+        if not self.has_voltage:
+            return None
+        return self.data[VOLTAGE_COLUMN].ffill().to_numpy()
 
     @property
     def has_velocity(self) -> bool:

@@ -210,8 +210,9 @@ class Model:
         return y
 
     # ------------------------------------------------------------------ dynamics
-    def rhs(self, t: float, y: np.ndarray, u: np.ndarray) -> np.ndarray:
-        """State derivative ``(n, n_y)`` for states ``y`` (n, n_y) and inputs ``u`` (n, k)."""
+    def rhs(self, t: float, y: np.ndarray, u: np.ndarray, voltage: np.ndarray | None = None) -> np.ndarray:
+        """State derivative ``(n, n_y)`` for states ``y`` (n, n_y), inputs ``u`` (n, k) and
+        the battery voltage ``voltage`` (n,) V or None (see :class:`uvsim.forces.Context`)."""
         n = y.shape[0]
         pos = y[:, 0:3]
         q = y[:, 3:7]
@@ -247,7 +248,7 @@ class Model:
             MRB_mv, Minv_mv = (lambda x: _matvec(M_RB, x)), (lambda x: _matvec(Minv, x))
         states = {i: y[:, s] for i, s in self.state_slices.items()} if self.state_slices else {}
         ctx = Context(t, pos, q, R, nu, nu_r, u, self.input_kind, weight, mass, r_g, states, self.params,
-                      self.changes_mass)
+                      self.changes_mass, voltage)
 
         tau = None
         for term, prep in zip(self.terms, self.preps):

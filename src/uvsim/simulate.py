@@ -110,16 +110,34 @@ def _check_time(t: np.ndarray, where: str) -> None:
 
 
 def _rk4_loop(model: Model, T: np.ndarray, U: np.ndarray, y0: np.ndarray, substeps: int, on_blowup: str,
-              progress=None, accel: np.ndarray | None = None) -> np.ndarray:
-    """Core RK4 loop.  ``T`` (n, n_t) times, ``U`` (n, n_t, k) inputs, ``y0`` (n, n_y).
+              progress=None, accel: np.ndarray | None = None, V: np.ndarray | None = None) -> np.ndarray:
+    """Core RK4 loop.  ``T`` (n, n_t) times, ``U`` (n, n_t, k) inputs, ``y0`` (n, n_y),
+    ``V`` (n, n_t) battery voltages or None (held over each interval like ``U``).
     ``accel`` (n, n_t, 6), if given, receives ``nu_dot`` at every sample: the model's
     acceleration at the sample's state with that sample's (held) input, i.e. the first
     RK4 stage of the step that starts there (what an accelerometer at that time sees)."""
     with np.errstate(all="ignore"):  # blow-ups are detected below and reported, not warned about
-        return _rk4_steps(model, T, U, y0, substeps, on_blowup, progress, accel)
+        return _rk4_steps(model, T, U, y0, substeps, on_blowup, progress, V, accel)
 
 
-def _rk4_steps(model, T, U, y0, substeps, on_blowup, progress, accel=None):
+def _check_voltage(voltage, shape: tuple, where: str = "voltage") -> np.ndarray | None:
+    """Validated battery voltages (V) broadcast to ``shape``, or None.  NaN entries mean
+    "not logged" (voltage-dependent curves use their nominal voltage there)."""
+    if voltage is None:
+        return None
+    V = np.asarray(voltage, dtype=float)
+    try:
+        V = np.broadcast_to(V, shape)
+    except ValueError:
+        raise SimulationError(f"{where}: expected shape {shape} (one voltage per sample), got {V.shape}") from None
+    bad = np.isinf(V) | (V <= 0)
+    if bad.any():
+        idx = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise SimulationError(f"{where}: battery voltage {V[idx]!r} V at index {idx} is not a positive finite number")
+    return V
+
+
+def _rk4_steps(model, T, U, y0, substeps, on_blowup, progress, V=None, accel=None):
     n, n_t = T.shape
     Y = np.empty((n, n_t, model.n_y))
     y = y0.copy()
@@ -129,6 +147,7 @@ def _rk4_steps(model, T, U, y0, substeps, on_blowup, progress, accel=None):
     shared_t = bool(np.all(T == T[:1]))
     for i in range(n_t - 1):
         u = U[:, i]
+        v = None if V is None else V[:, i]
         # shared grid: scalar t and h; per-row grids: t (n,) and h (n,) per row, so every
         # row's stages are evaluated at its own times (time-varying currents, schedules)
         if shared_t:
@@ -140,12 +159,12 @@ def _rk4_steps(model, T, U, y0, substeps, on_blowup, progress, accel=None):
             h = (T[:, i + 1] - t) / substeps
             hc = h[:, None]
         for sub in range(substeps):
-            k1 = rhs(t, y, u)
+            k1 = rhs(t, y, u, v)
             if accel is not None and sub == 0:
                 accel[:, i] = k1[:, 7:13]
-            k2 = rhs(t + 0.5 * h, y + (0.5 * hc) * k1, u)
-            k3 = rhs(t + 0.5 * h, y + (0.5 * hc) * k2, u)
-            k4 = rhs(t + h, y + hc * k3, u)
+            k2 = rhs(t + 0.5 * h, y + (0.5 * hc) * k1, u, v)
+            k3 = rhs(t + 0.5 * h, y + (0.5 * hc) * k2, u, v)
+            k4 = rhs(t + h, y + hc * k3, u, v)
             y = y + (hc / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
             q = y[:, 3:7]
             q /= np.sqrt((q * q).sum(axis=1))[:, None]
@@ -168,14 +187,14 @@ def _rk4_steps(model, T, U, y0, substeps, on_blowup, progress, accel=None):
             progress.update(1)
     if accel is not None:
         t_end = T[0, -1] if shared_t else T[:, -1]
-        accel[:, -1] = rhs(t_end, y, U[:, -1])[:, 7:13]
+        accel[:, -1] = rhs(t_end, y, U[:, -1], None if V is None else V[:, -1])[:, 7:13]
     return Y
 
 
 def simulate(vehicle, t, inputs, *, input_kind: str = "force", pos0=None, q0=None, nu0=None,
              overrides: Mapping[str, Any] | None = None, current=None, method: str = "rk4",
              substeps: int = 1, rtol: float = 1e-8, atol: float = 1e-10, on_blowup: str = "raise",
-             model: Model | None = None) -> SimulationResult:
+             model: Model | None = None, voltage=None) -> SimulationResult:
     """Simulate one trajectory.
 
     Parameters
@@ -194,6 +213,10 @@ def simulate(vehicle, t, inputs, *, input_kind: str = "force", pos0=None, q0=Non
     method : "rk4" (fixed step, one step per sample interval times ``substeps``) or
         any :func:`scipy.integrate.solve_ivp` method name ("RK45", "DOP853", "LSODA", ...).
     on_blowup : "raise" (default) or "nan" (mark the trajectory NaN and continue).
+    voltage : array_like, shape (n_t,), optional
+        Battery voltage (V) at the sample times, held until the next sample like the
+        inputs; feeds voltage-dependent thrust curves (NaN: the curve's nominal
+        voltage).  None (default): every curve at its nominal voltage.
 
     Returns
     -------
@@ -212,13 +235,14 @@ def simulate(vehicle, t, inputs, *, input_kind: str = "force", pos0=None, q0=Non
     if model is None:
         model = _make_model(vehicle, overrides, input_kind, current, n=1)
     model.check_inputs(U.shape[1])
+    V = _check_voltage(voltage, t.shape)
     y0 = model.initial_state(pos0, q0, nu0, U[0][None, :])
     if method.lower() == "rk4":
         if substeps < 1:
             raise SimulationError(f"substeps must be >= 1, got {substeps}")
-        Y = _rk4_loop(model, t[None, :], U[None], y0, substeps, on_blowup)[0]
+        Y = _rk4_loop(model, t[None, :], U[None], y0, substeps, on_blowup, V=None if V is None else V[None])[0]
     else:
-        Y = _solve_ivp(model, t, U, y0[0], method, rtol, atol, on_blowup)
+        Y = _solve_ivp(model, t, U, y0[0], method, rtol, atol, on_blowup, V)
     return SimulationResult(t, Y, model.state_names, U, model.input_kind, input_names(model.input_kind, U.shape[1]),
                             model.vehicle.name, {"method": method})
 
@@ -237,12 +261,12 @@ def _make_model(vehicle, overrides, input_kind, current, n=None) -> Model:
     return Model(vehicle, ov, n=n, input_kind=input_kind, current=cur_fn)
 
 
-def _solve_ivp(model: Model, t, U, y0, method, rtol, atol, on_blowup):
+def _solve_ivp(model: Model, t, U, y0, method, rtol, atol, on_blowup, V=None):
     from scipy.integrate import solve_ivp
 
     def fun(tt, yy):
         i = min(max(int(np.searchsorted(t, tt, side="right")) - 1, 0), len(t) - 1)
-        return model.rhs(tt, yy[None, :], U[i][None, :])[0]
+        return model.rhs(tt, yy[None, :], U[i][None, :], None if V is None else V[i:i + 1])[0]
 
     try:
         sol = solve_ivp(fun, (t[0], t[-1]), y0, method=method, t_eval=t, rtol=rtol, atol=atol)
@@ -262,7 +286,7 @@ def _solve_ivp(model: Model, t, U, y0, method, rtol, atol, on_blowup):
 def simulate_batch(vehicle, t, inputs, *, input_kind: str = "force", y0=None, pos0=None, q0=None, nu0=None,
                    overrides: Mapping[str, Any] | None = None, current=None, substeps: int = 1,
                    on_blowup: str = "nan", model: Model | None = None, progress: bool = False,
-                   return_acceleration: bool = False) -> SimulationResult:
+                   return_acceleration: bool = False, voltage=None) -> SimulationResult:
     """Simulate ``n`` trajectories at once with RK4 (numpy-vectorized).
 
     Parameters
@@ -278,6 +302,8 @@ def simulate_batch(vehicle, t, inputs, *, input_kind: str = "force", y0=None, po
     return_acceleration : also return ``nu_dot`` (n, n_t, 6) at every sample in
         ``result.nu_dot`` (the model's acceleration with that sample's input; used by
         accelerometer measurement models).
+    voltage : (n, n_t) or (n_t,) battery voltages (V), held like the inputs, or None
+        (see :func:`simulate`).
 
     Returns
     -------
@@ -319,7 +345,8 @@ def simulate_batch(vehicle, t, inputs, *, input_kind: str = "force", y0=None, po
 
         bar = tqdm(total=T.shape[1] - 1, desc="simulate", unit="step", leave=False)
     acc = np.empty((n, T.shape[1], 6)) if return_acceleration else None
-    Y = _rk4_loop(model, T, U, y0, substeps, on_blowup, bar, acc)
+    V = _check_voltage(voltage, T.shape)
+    Y = _rk4_loop(model, T, U, y0, substeps, on_blowup, bar, acc, V)
     if bar is not None:
         bar.close()
     res = SimulationResult(T[0] if np.all(T == T[:1]) else T, Y, model.state_names, U, model.input_kind,
@@ -398,7 +425,9 @@ def initial_state_from_run(run, *, initial_velocity: str = "zero", window_s: flo
 def simulate_run(vehicle, run, *, current=None, overrides=None, method: str = "rk4", substeps: int = 1,
                  on_blowup: str = "raise", initial_window_s: float = 0.0) -> SimulationResult:
     """Simulate a logged :class:`uvsim.logs.Run`: start from its first measured state
-    (velocities zero where not logged) and apply its inputs."""
+    (velocities zero where not logged) and apply its inputs (and its battery voltage,
+    :attr:`uvsim.logs.Run.voltage`, when it logged one)."""
     pos0, q0, nu0, _ = initial_state_from_run(run, window_s=initial_window_s)
     return simulate(vehicle, run.t, run.inputs, input_kind=run.input_kind, pos0=pos0, q0=q0, nu0=nu0,
-                    overrides=overrides, current=current, method=method, substeps=substeps, on_blowup=on_blowup)
+                    overrides=overrides, current=current, method=method, substeps=substeps, on_blowup=on_blowup,
+                    voltage=run.voltage)

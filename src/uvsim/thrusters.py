@@ -62,6 +62,9 @@ class ThrustCurve:
     deadband: tuple[float, float]
     neutral: float
     name: str
+    #: True for curves whose thrust depends on the supply voltage
+    #: (:class:`uvsim.voltage_curves.VoltageThrustCurve`); fixed curves ignore it.
+    voltage_dependent: bool = False
 
     # -- public API ------------------------------------------------------------------
     def thrust(self, pwm: np.ndarray) -> np.ndarray:
@@ -555,8 +558,9 @@ def load_thrust_curve(spec, *, field: str = "curve", base_dir=None) -> ThrustCur
         ``"t200_16v"`` (a shipped table); ``{"table": "t200_16v"}``;
         ``{"csv": "my_curve.csv"}`` (columns pwm_us, thrust_N; relative to ``base_dir``);
         ``{"pwm": [...], "thrust": [...], "deadband": [lo, hi]}`` (inline table, us and N);
-        ``{"type": "linear", "forward_gain": .., "reverse_gain": .., ...}``.
-        Table mappings may add ``deadband`` and ``neutral``.  A ThrustCurve is returned as is.
+        ``{"type": "linear", "forward_gain": .., "reverse_gain": .., ...}``;
+        ``{"voltage_table": "t200", "nominal_voltage": 16.0}`` (battery-aware,
+        :mod:`uvsim.voltage_curves`).  Table mappings may add ``deadband`` and ``neutral``.  A ThrustCurve is returned as is.
     field : str
         YAML location named in error messages, e.g. ``"thrusters[3].curve"``.
     base_dir : path, optional
@@ -572,6 +576,10 @@ def load_thrust_curve(spec, *, field: str = "curve", base_dir=None) -> ThrustCur
     if isinstance(spec, str):
         return shipped_curve(spec, field=field)
     if isinstance(spec, Mapping):
+        if "voltage_table" in spec:
+            from uvsim.voltage_curves import load_voltage_curve
+
+            return load_voltage_curve(spec, field=field)
         kind = spec.get("type", "table")
         if kind == "linear":
             return LinearThrustCurve.from_mapping(spec, field=field)

@@ -50,6 +50,8 @@ class RunBatch:
     pos0, q0, nu0 : (R, 3), (R, 4), (R, 6) initial states.
     nu0_known : (R, 6) bool, which initial velocity components were logged.
     measured : per run, its measured signals (:func:`uvsim.metrics.signals_from_run`).
+    voltage : (R, L) battery voltages (V, held; padded like the inputs; NaN for runs
+        that logged none, i.e. nominal voltage), or None when no run logged one.
     """
 
     runs: list
@@ -62,6 +64,7 @@ class RunBatch:
     nu0: np.ndarray
     nu0_known: np.ndarray
     measured: list = field(repr=False)
+    voltage: np.ndarray | None = None
 
     @property
     def n_runs(self) -> int:
@@ -76,7 +79,7 @@ class RunBatch:
         idx = np.asarray(index, int)
         return RunBatch([self.runs[i] for i in idx], self.t[idx], self.inputs[idx], self.lengths[idx],
                         self.input_kind, self.pos0[idx], self.q0[idx], self.nu0[idx], self.nu0_known[idx],
-                        [self.measured[i] for i in idx])
+                        [self.measured[i] for i in idx], None if self.voltage is None else self.voltage[idx])
 
 
 def initial_state(run, *, initial_velocity: str = "zero", window_s: float = INITIAL_WINDOW_S):
@@ -106,6 +109,7 @@ def prepare_runs(runs: Sequence, *, initial_velocity: str = "zero") -> RunBatch:
     k = runs[0].inputs.shape[1]
     T = np.empty((len(runs), L))
     U = np.empty((len(runs), L, k))
+    V = np.full((len(runs), L), np.nan) if any(r.voltage is not None for r in runs) else None
     P0, Q0, N0, K0 = [], [], [], []
     for i, r in enumerate(runs):
         n = lengths[i]
@@ -113,10 +117,13 @@ def prepare_runs(runs: Sequence, *, initial_velocity: str = "zero") -> RunBatch:
         T[i, n:] = r.t[-1]
         U[i, :n] = r.inputs
         U[i, n:] = r.inputs[-1]
+        if V is not None and r.voltage is not None:
+            V[i, :n] = r.voltage
+            V[i, n:] = r.voltage[-1]
         p, q, nu, kn = initial_state(r, initial_velocity=initial_velocity)
         P0.append(p), Q0.append(q), N0.append(nu), K0.append(kn)
     return RunBatch(runs, T, U, lengths, kind, np.array(P0), np.array(Q0), np.array(N0), np.array(K0),
-                    [signals_from_run(r) for r in runs])
+                    [signals_from_run(r) for r in runs], V)
 
 
 def simulate_rows(vehicle, batch: RunBatch, run_index: np.ndarray, overrides: Mapping[str, np.ndarray] | None = None,
@@ -141,7 +148,8 @@ def simulate_rows(vehicle, batch: RunBatch, run_index: np.ndarray, overrides: Ma
     res = simulate_batch(vehicle, batch.t[idx], batch.inputs[idx], input_kind=batch.input_kind,
                          pos0=batch.pos0[idx], q0=batch.q0[idx],
                          nu0=batch.nu0[idx] if nu0 is None else nu0,
-                         overrides=overrides, on_blowup="nan", model=model)
+                         overrides=overrides, on_blowup="nan", model=model,
+                         voltage=None if batch.voltage is None else batch.voltage[idx])
     return res.y
 
 

@@ -1,7 +1,20 @@
-"""``uvsim simulate --vehicle V --run RUN.csv --out OUT.csv [--current N,E,D]``."""
+"""``uvsim simulate --vehicle V --run RUN.csv --out OUT.csv [--current N,E,D] [--compare [--plot P]]``.
+
+``--compare`` prints RMSE, NRMSE and Fit % of every channel the run logged (position,
+depth at the pressure sensor, Euler angles, velocities, rates, accelerometer specific
+force at the IMU) against the simulation and writes a measured-vs-simulated figure with
+a 3-D trajectory view.  Without ``--vehicle`` the vehicle of the dataset the run belongs
+to (``manifest.yaml`` beside it) is used.
+"""
 from __future__ import annotations
 
+from pathlib import Path
+
+import numpy as np
+
 from uvsim.errors import UvsimError
+
+ANGLES = ("roll", "pitch", "yaw")
 
 
 def _triple(text: str):
@@ -16,16 +29,34 @@ def _triple(text: str):
 
 def register(sub) -> None:
     p = sub.add_parser("simulate", help="simulate a logged run's inputs from its first measured state")
-    p.add_argument("--vehicle", required=True, help="built-in name or vehicle YAML file")
+    p.add_argument("--vehicle", default=None,
+                   help="built-in name or vehicle YAML (default: the vehicle of the manifest beside the run)")
     p.add_argument("--run", required=True, help="run file (.csv or .parquet, LOG_FORMAT columns)")
-    p.add_argument("--out", required=True, help="output CSV (t, x, y, z, qw..qz, roll, pitch, yaw, u..r)")
+    p.add_argument("--out", default=None,
+                   help="output CSV (t, x, y, z, qw..qz, roll, pitch, yaw, u..r); required without --compare")
     p.add_argument("--current", default=None, help="constant NED current N,E,D in m/s")
     p.add_argument("--method", default="rk4", help="rk4 (default) or a scipy solve_ivp method (RK45, DOP853, ...)")
     p.add_argument("--substeps", type=int, default=1, help="RK4 steps per sample interval (default 1)")
     p.add_argument("--initial-window", type=float, default=0.0, metavar="S",
                    help="estimate the initial position/attitude by a quadratic fit over the first S seconds "
                         "(default 0: the first measured sample)")
+    p.add_argument("--compare", action="store_true",
+                   help="print RMSE / NRMSE / Fit %% per logged channel and write a measured-vs-simulated plot")
+    p.add_argument("--plot", default=None, help="figure for --compare (default: <out or run>_compare.png)")
     p.set_defaults(func=_run)
+
+
+def _vehicle_for(args):
+    from uvsim.logs import MANIFEST, read_dataset
+
+    if args.vehicle:
+        return args.vehicle
+    manifest = Path(args.run).parent / MANIFEST
+    if manifest.is_file():
+        ds = read_dataset(manifest)
+        if ds.vehicle:
+            return ds.vehicle_file or ds.vehicle
+    raise UvsimError("--vehicle: not given and no manifest.yaml with a vehicle beside the run")
 
 
 def _run(args) -> int:
@@ -33,15 +64,124 @@ def _run(args) -> int:
     from uvsim.simulate import simulate_run
     from uvsim.vehicle import load_vehicle
 
-    veh = load_vehicle(args.vehicle)
+    if args.out is None and not args.compare:
+        raise UvsimError("--out: required unless --compare is given")
+    veh = load_vehicle(_vehicle_for(args))
     run = read_run(args.run)
     current = _triple(args.current) if args.current else None
     res = simulate_run(veh, run, current=current, method=args.method, substeps=args.substeps,
                        initial_window_s=args.initial_window)
-    df = res.to_pandas()
-    cols = ["t", "x", "y", "z", "qw", "qx", "qy", "qz", "roll", "pitch", "yaw", "u", "v", "w", "p", "q", "r"]
-    extra = [c for c in df.columns if c not in cols]
-    df = df[cols + extra]
-    write_run(args.out, df)
-    print(f"simulated {run.name}: {len(df)} samples, {df.t.iloc[-1] - df.t.iloc[0]:.2f} s -> {args.out}")
+    if args.out:
+        df = res.to_pandas()
+        cols = ["t", "x", "y", "z", "qw", "qx", "qy", "qz", "roll", "pitch", "yaw", "u", "v", "w", "p", "q", "r"]
+        extra = [c for c in df.columns if c not in cols]
+        df = df[cols + extra]
+        write_run(args.out, df)
+        print(f"simulated {run.name}: {len(df)} samples, {df.t.iloc[-1] - df.t.iloc[0]:.2f} s -> {args.out}")
+    if args.compare:
+        _compare(args, veh, run, res, current)
     return 0
+
+
+# ---------------------------------------------------------------------------- --compare
+def _specific_force(veh, run, y, current) -> np.ndarray:
+    """Accelerometer specific force at the IMU, body axes (m/s^2), along the simulation:
+    ``f = v_dot + w x v + w_dot x r + w x (w x r) - g R^T e_3`` with ``nu_dot`` from the
+    model's equations of motion at each sample (log format: level at rest reads (0, 0, -g))."""
+    from uvsim.kinematics import quat_to_rotation
+    from uvsim.model import Model
+    from uvsim.rigid_body import cross
+
+    n = len(run.t)
+    ov = {} if current is None else dict(zip(("current_n", "current_e", "current_d"), current))
+    model = Model(veh, ov, n=n, input_kind=run.input_kind)
+    with np.errstate(all="ignore"):
+        nud = model.rhs(float(run.t[0]), y, run.inputs, run.voltage)[:, 7:13]
+    v, w = y[:, 7:10], y[:, 10:13]
+    r = np.broadcast_to(np.asarray(veh.sensors.get("imu", np.zeros(3)), float), v.shape)
+    a = nud[:, :3] + cross(w, v) + cross(nud[:, 3:], r) + cross(w, cross(w, r))
+    return a - veh.g * quat_to_rotation(y[:, 3:7])[:, 2, :]
+
+
+def compare_channels(veh, run, res, current=None) -> list[dict]:
+    """Measured and simulated series of every channel the run logged.
+
+    Returns ``[{"name", "unit", "measured" (n,), "simulated" (n,)}]``; angles in
+    degrees, the simulated angle on the measured angle's branch (no 2 pi jumps)."""
+    from uvsim.kinematics import quat_to_euler, quat_to_rotation
+
+    y = res.y
+    d = run.data
+    out = []
+
+    def add(name, unit, meas, sim):
+        out.append({"name": name, "unit": unit, "measured": np.asarray(meas, float), "simulated": np.asarray(sim, float)})
+
+    for j, c in enumerate("xyz"):
+        if c in d:
+            add(c, "m", d[c], y[:, j])
+    if run.has_depth:
+        r_p = np.asarray(veh.sensors.get("pressure", np.zeros(3)), float)
+        add("depth", "m", run.depth, y[:, 2] + quat_to_rotation(y[:, 3:7])[:, 2, :] @ r_p)
+    if run.has_attitude:
+        em, es = run.euler, quat_to_euler(y[:, 3:7])
+        for j, name in enumerate(ANGLES):
+            ok = np.isfinite(em[:, j])
+            if not run.euler_mask[j] or not ok.any():
+                continue
+            m = np.full(len(run.t), np.nan)
+            m[ok] = np.unwrap(em[ok, j])
+            # the simulated angle, unwrapped on its own and put on the measured angle's branch
+            # at the first logged sample (a continuous curve; errors are the wrapped differences)
+            s = np.unwrap(es[:, j])
+            i0 = int(np.flatnonzero(ok)[0])
+            s = s + 2 * np.pi * np.round((m[i0] - s[i0]) / (2 * np.pi))
+            add(name, "deg", np.degrees(m), np.degrees(s))
+    for j, c in enumerate(("u", "v", "w", "p", "q", "r")):
+        if c in d:
+            add(c, "m/s" if j < 3 else "rad/s", d[c], y[:, 7 + j])
+    if run.has_acceleration:
+        f = _specific_force(veh, run, y, current)
+        for j, c in enumerate(("acc_x", "acc_y", "acc_z")):
+            add(c, "m/s^2", run.acceleration[:, j], f[:, j])
+    return out
+
+
+def channel_metrics(channels: list[dict]) -> list[dict]:
+    """RMSE, NRMSE (RMSE / measured range) and Fit % per channel (:mod:`uvsim.metrics`)."""
+    from uvsim.metrics import fit_percent, nrmse, rmse
+
+    rows = []
+    for ch in channels:
+        m, s = ch["measured"], ch["simulated"]
+        if ch["unit"] == "deg":  # compare angles by their wrapped difference
+            s = m - (m - s + 180.0) % 360.0 + 180.0
+        ok = np.isfinite(m) & np.isfinite(s)
+        rows.append({"name": ch["name"], "unit": ch["unit"], "n": int(ok.sum()),
+                     "rmse": float(rmse(m[ok] - s[ok])) if ok.any() else float("nan"),
+                     "nrmse_percent": 100.0 * nrmse(m, s), "fit_percent": fit_percent(m, s)})
+    return rows
+
+
+def _compare(args, veh, run, res, current) -> None:
+    from uvsim.plotting.compare import compare_run
+
+    chans = compare_channels(veh, run, res, current)
+    rows = channel_metrics(chans)
+    print(f"{run.name} vs {veh.name}: {len(run.t)} samples, {run.t[-1] - run.t[0]:.2f} s")
+    print(f"{'channel':>8} {'unit':>6} {'n':>6} {'RMSE':>11} {'NRMSE %':>9} {'Fit %':>9}")
+    for r in rows:
+        print(f"{r['name']:>8} {r['unit']:>6} {r['n']:>6d} {r['rmse']:>11.4g} {r['nrmse_percent']:>9.2f} "
+              f"{r['fit_percent']:>9.2f}")
+    import pandas as pd
+
+    meas = run.position.copy()
+    if run.has_depth and np.isnan(meas[:, 2]).all():
+        meas[:, 2] = run.depth
+    # display only: hold each measured axis between its samples so that x, y and depth
+    # logged by different sensors at different times form one 3-D track
+    meas = pd.DataFrame(meas).ffill().to_numpy()
+    base = Path(args.out) if args.out else Path(args.run)
+    plot = Path(args.plot) if args.plot else base.with_name(base.stem + "_compare.png")
+    compare_run(run.t, chans, res.y[:, 0:3], meas, plot, title=f"{run.name}: measured vs {veh.name}")
+    print(f"plot -> {plot}")

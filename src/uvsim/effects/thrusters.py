@@ -70,13 +70,13 @@ class _ActuatorEffect(Effect):
 
     def commanded(self, ctx, cache):
         """Commanded thrusts ``f_c`` (n, n_thr) or forces ``tau_c`` (n, 6); cached per input array."""
-        if cache["u"] is ctx.u:
+        if cache["u"] is ctx.u and cache.get("v") is ctx.voltage:
             return cache["fc"]
         if ctx.input_kind == "force":
             fc = ctx.u
         else:
-            fc = self._act.thrusts(ctx.u, ctx.input_kind, cache["groups"])
-        cache["u"], cache["fc"] = ctx.u, fc
+            fc = self._act.thrusts(ctx.u, ctx.input_kind, cache["groups"], ctx.voltage)
+        cache["u"], cache["v"], cache["fc"] = ctx.u, ctx.voltage, fc
         return fc
 
     def to_tau(self, ctx, f):

@@ -51,6 +51,7 @@ class Motion:
     Attributes
     ----------
     name : run name.  t : (n,) times.  U : (n, k) inputs.  input_kind.
+    V : (n,) battery voltage (NaN: nominal) or None.
     y : (n, 13) states along the measured motion (smoothed pose, velocities).
     nud : (n, 6) measured accelerations.
     have : (6,) bool, which DOFs can be differentiated from the log.
@@ -67,6 +68,7 @@ class Motion:
     have: np.ndarray
     valid: np.ndarray
     win: int
+    V: np.ndarray | None = None
 
 
 def _sg(x, win, deriv=0, dt=1.0, axis=-2):
@@ -106,7 +108,8 @@ def measured_motion(run, *, window_s: float = WINDOW_S) -> Motion | None:
     half = win // 2
     valid[:half] = False
     valid[n - half:] = False
-    return Motion(run.name, t, run.inputs, run.input_kind, y, np.where(np.isfinite(nud), nud, 0.0), have, valid, win)
+    return Motion(run.name, t, run.inputs, run.input_kind, y, np.where(np.isfinite(nud), nud, 0.0), have, valid, win,
+                  run.voltage)
 
 
 class EquationError:
@@ -195,7 +198,10 @@ class EquationError:
                     xs = self._term_states(Z, ms, kind)
                     Yp = np.concatenate([Yp, np.concatenate(xs, axis=1).reshape(P * N, -1)], 1)
                 Up = np.tile(np.concatenate([m.U for m in ms]), (P, 1))
-                acc = model.rhs(0.0, Yp, Up)[:, 7:13].reshape(P, N, 6)
+                Vp = None
+                if any(m.V is not None for m in ms):
+                    Vp = np.tile(np.concatenate([m.V if m.V is not None else np.full(m.t.size, np.nan) for m in ms]), P)
+                acc = model.rhs(0.0, Yp, Up, Vp)[:, 7:13].reshape(P, N, 6)
                 a = 0
                 for i, m in zip(idx, ms):
                     n = m.t.size

@@ -39,12 +39,15 @@ def open_loop(vehicle, runs, *, overrides=None, meas=None, initial_velocity: str
         n = max(runs[i].t.size for i in idx)
         k = runs[idx[0]].inputs.shape[1]
         T, U = np.empty((R, n)), np.empty((R, n, k))
+        V = np.full((R, n), np.nan) if any(runs[i].voltage is not None for i in idx) else None
         P0, Q0, N0 = [], [], []
         for j, i in enumerate(idx):
             run = runs[i]
             m = run.t.size
             T[j, :m], T[j, m:] = run.t, run.t[-1]
             U[j, :m], U[j, m:] = run.inputs, run.inputs[-1]
+            if V is not None and run.voltage is not None:
+                V[j, :m], V[j, m:] = run.voltage, run.voltage[-1]
             p, q, v, _ = initial_state_from_run(run, initial_velocity=initial_velocity, window_s=INITIAL_WINDOW_S,
                                                 sensors=meas[i].sensors)
             P0.append(p), Q0.append(q), N0.append(v)
@@ -55,7 +58,7 @@ def open_loop(vehicle, runs, *, overrides=None, meas=None, initial_velocity: str
         need_acc = any(meas[i].needs_acceleration for i in idx)
         acc = np.empty((R, n, 6)) if need_acc else None
         with threadpool_limits(1, "blas"):
-            Y = _rk4_loop(model, T, U, y0, 1, "nan", accel=acc)
+            Y = _rk4_loop(model, T, U, y0, 1, "nan", accel=acc, V=V)
         for j, i in enumerate(idx):
             m = runs[i].t.size
             b = None if not gyro_bias or runs[i].name not in gyro_bias else np.asarray(gyro_bias[runs[i].name])

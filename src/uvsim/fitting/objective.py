@@ -93,6 +93,7 @@ class Layout:
     U: np.ndarray
     own_win: list
     own_pos: list
+    V: np.ndarray | None = None   # (W, L) battery voltage (NaN: nominal), None when no run logs one
 
     @property
     def W(self) -> int:
@@ -125,23 +126,26 @@ def layout(runs, horizon: float | None) -> Layout:
     k = runs[0].inputs.shape[1]
     T = np.empty((win_run.size, L))
     U = np.empty((win_run.size, L, k))
+    V = np.full((win_run.size, L), np.nan) if any(r.voltage is not None for r in runs) else None
     own_win, own_pos = [], []
     w = 0
     for r, run in enumerate(runs):
-        t, u = run.t, run.inputs
+        t, u, v = run.t, run.inputs, run.voltage
         ow = np.empty(t.size, int)
         op = np.empty(t.size, int)
         for j, (s, e) in enumerate(bounds[r]):
             m = e - s + 1
             T[w, :m], T[w, m:] = t[s:e + 1], t[e]
             U[w, :m], U[w, m:] = u[s:e + 1], u[e]
+            if V is not None and v is not None:
+                V[w, :m], V[w, m:] = v[s:e + 1], v[e]
             last = j == len(bounds[r]) - 1
             rows = np.arange(s, e + 1 if last else e)
             ow[rows], op[rows] = w, rows - s
             w += 1
         own_win.append(ow)
         own_pos.append(op)
-    return Layout(bounds, win_run, np.array(first, int), length, T, U, own_win, own_pos)
+    return Layout(bounds, win_run, np.array(first, int), length, T, U, own_win, own_pos, V)
 
 
 class WindowedProblem:
@@ -182,25 +186,36 @@ class WindowedProblem:
         return Model(self.vehicle, self.space.overrides(Z, rows_per_set), n=Z.shape[0] * rows_per_set,
                      input_kind=self.input_kind)
 
+    def _padded_runs(self):
+        """Whole runs padded to one length: T (R, n), U (R, n, k), V (R, n) or None."""
+        R = len(self.runs)
+        n = max(r.t.size for r in self.runs)
+        T = np.empty((R, n))
+        U = np.empty((R, n, self.runs[0].inputs.shape[1]))
+        V = np.full((R, n), np.nan) if self.lay.V is not None else None
+        for i, run in enumerate(self.runs):
+            m = run.t.size
+            T[i, :m], T[i, m:] = run.t, run.t[-1]
+            U[i, :m], U[i, m:] = run.inputs, run.inputs[-1]
+            if V is not None and run.voltage is not None:
+                V[i, :m], V[i, m:] = run.voltage, run.voltage[-1]
+        return T, U, V
+
     def full_runs(self, z: np.ndarray, nu0: np.ndarray | None = None):
         """States (R, n_max, n_y) of whole-run simulations from the runs' estimated initial
         states with parameters z (the reference trajectory; also the open-loop prediction)."""
         R = len(self.runs)
         n = max(r.t.size for r in self.runs)
-        T = np.empty((R, n))
-        U = np.empty((R, n, self.runs[0].inputs.shape[1]))
+        T, U, V = self._padded_runs()
         P0, Q0, N0 = [], [], []
         for i, run in enumerate(self.runs):
-            m = run.t.size
-            T[i, :m], T[i, m:] = run.t, run.t[-1]
-            U[i, :m], U[i, m:] = run.inputs, run.inputs[-1]
             p, q, v, _ = initial_state_from_run(run, initial_velocity=self.initial_velocity, window_s=INITIAL_WINDOW_S,
                                                 sensors=self.meas[i].sensors)
             P0.append(p), Q0.append(q), N0.append(v)
         model = self.model(np.asarray(z)[None], R)
         y0 = model.initial_state(np.array(P0), np.array(Q0), np.array(N0) if nu0 is None else nu0, U[:, 0])
         acc = np.empty((R, n, 6)) if self.accel else None
-        Y = _rk4_loop(model, T, U, y0, 1, "nan", accel=acc)
+        Y = _rk4_loop(model, T, U, y0, 1, "nan", accel=acc, V=V)
         return Y, acc, model
 
     def _prepare_nodes(self, z_ref):
@@ -245,12 +260,8 @@ class WindowedProblem:
         P = Z.shape[0]
         R = len(self.runs)
         n = self._yref.shape[1]
-        T = np.empty((R, n))
-        U = np.empty((R, n, self.runs[0].inputs.shape[1]))
-        for i, run in enumerate(self.runs):
-            m = run.t.size
-            T[i, :m], T[i, m:] = run.t, run.t[-1]
-            U[i, :m], U[i, m:] = run.inputs, run.inputs[-1]
+        T, U, V = self._padded_runs()
+        Vt = None if V is None else np.tile(V, (P, 1))
         m_run = self.model(Z, R)
         y = np.repeat(self._yref[None, :, 0], P, 0).reshape(P * R, -1).copy()
         y[:, 13:] = m_run.initial_state(u0=np.tile(U[:, 0], (P, 1)))[:, 13:]
@@ -265,9 +276,10 @@ class WindowedProblem:
                 ym = 0.5 * (ya + yb)
                 x = y[:, 13:]
                 u = Ut[:, i]
+                v = None if Vt is None else Vt[:, i]
 
                 def f(yy, xx, tt):
-                    return m_run.rhs(tt, np.concatenate([yy, xx], 1), u)[:, 13:]
+                    return m_run.rhs(tt, np.concatenate([yy, xx], 1), u, v)[:, 13:]
 
                 k1 = f(ya, x, Tt[:, i])
                 k2 = f(ym, x + 0.5 * h * k1, Tt[:, i] + 0.5 * h[:, 0])
@@ -302,7 +314,7 @@ class WindowedProblem:
             # them is several times slower on a 2-core machine (docs/performance.md)
             with threadpool_limits(1, "blas"):
                 Y = _rk4_loop(model, np.tile(self.lay.T, (pc, 1)), np.tile(self.lay.U, (pc, 1, 1)), y0, 1, "nan",
-                              accel=acc)
+                              accel=acc, V=None if self.lay.V is None else np.tile(self.lay.V, (pc, 1)))
             Ys.append(Y.reshape(pc, W, L, -1))
             if acc is not None:
                 As.append(acc.reshape(pc, W, L, 6))

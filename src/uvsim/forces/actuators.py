@@ -157,7 +157,7 @@ class Actuators(ForceTerm):
             groups = [(c, np.array(idx)) for c, idx in seen.values()]
         # inputs are held over a sample interval, so the four RK4 stages see the same
         # array object: map PWM -> thrust once per interval (cache keyed on identity)
-        prep = {"groups": groups, "u": None, "f": None, "gain": None, "rev": None, "B": self.matrix,
+        prep = {"groups": groups, "u": None, "v": None, "f": None, "gain": None, "rev": None, "B": self.matrix,
                 "fgain": None, "frev": None}
         k = self.n_thrusters
 
@@ -188,7 +188,14 @@ class Actuators(ForceTerm):
             prep["frev"] = fr
         return prep
 
-    def thrusts(self, u, kind, groups):
+    @property
+    def voltage_dependent(self) -> bool:
+        """True when some thruster curve depends on the supply voltage."""
+        return bool(self.curves) and any(getattr(c, "voltage_dependent", False) for c in self.curves)
+
+    def thrusts(self, u, kind, groups, voltage=None):
+        """Thrusts (n, k) for inputs ``u`` (n, k); ``voltage`` (n,) V or None feeds
+        voltage-dependent curves (fixed-voltage curves do not use it)."""
         if kind == "thrust":
             return u
         if kind == "pwm":
@@ -196,7 +203,10 @@ class Actuators(ForceTerm):
                 raise SimulationError("inputs are PWM but the vehicle's thrusters have no thrust curves")
             f = np.empty_like(u)
             for curve, idx in groups:
-                f[:, idx] = curve.thrust(u[:, idx])
+                if voltage is not None and getattr(curve, "voltage_dependent", False):
+                    f[:, idx] = curve.thrust(u[:, idx], voltage=np.asarray(voltage, float)[:, None])
+                else:
+                    f[:, idx] = curve.thrust(u[:, idx])
             return f
         raise SimulationError(f"unknown input kind {kind!r}")
 
@@ -209,12 +219,12 @@ class Actuators(ForceTerm):
             return _scaled(u, prep["fgain"], prep["frev"])
         if self.matrix is None:
             raise SimulationError(f"inputs are per-thruster {kind} but the vehicle defines no thrusters")
-        if prep["u"] is u:
+        if prep["u"] is u and prep["v"] is ctx.voltage:
             return prep["f"]
-        f = _scaled(self.thrusts(u, kind, prep["groups"]), prep["gain"], prep["rev"])
+        f = _scaled(self.thrusts(u, kind, prep["groups"], ctx.voltage), prep["gain"], prep["rev"])
         B = prep["B"]
         tau = f @ B.T if B.ndim == 2 else np.einsum("nij,nj->ni", B, f)
-        prep["u"], prep["f"] = u, tau
+        prep["u"], prep["v"], prep["f"] = u, ctx.voltage, tau
         return tau
 
     def check_inputs(self, kind: str, k: int, where: str = "inputs") -> None:

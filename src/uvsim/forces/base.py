@@ -48,6 +48,9 @@ class Context:
     states : dict term index -> (n, k_i) internal states of that term.
     params : the model's named parameters (floats or (n,) arrays).
     mass_changed : True when a mass-changing term altered weight / CG at this stage.
+    voltage : (n,) battery voltage (V) held over the current sample interval, or None
+        when the run logged none (voltage-dependent thrust curves then use their
+        nominal voltage; NaN entries mean the same for that row).
     """
 
     t: Any
@@ -64,6 +67,7 @@ class Context:
     states: dict
     params: Mapping[str, Any]
     mass_changed: bool = False
+    voltage: Any = None
 
 
 class ForceTerm:

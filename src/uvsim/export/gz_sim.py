@@ -1,0 +1,202 @@
+"""gz-sim (Gazebo) model export: SDF with the Hydrodynamics and Thruster systems.
+
+What is written (frames and signs: :mod:`uvsim.export.frames`):
+
+* ``<link name="base_link">`` with ``<inertial>``: mass, centre of gravity (``<pose>``,
+  FLU) and the inertia tensor about it (``S J S``; SDF ``ixy`` etc. are tensor entries);
+* a ``buoyancy_volume`` collision sphere at the centre of buoyancy whose volume is
+  ``B / (rho g)``, for the gz-sim Buoyancy system (world plugin, ``uniform_fluid_density``
+  = rho), so that ``rho g V = B``;
+* the ``gz::sim::systems::Hydrodynamics`` plugin: added mass ``<xDotU>`` .. ``<nDotR>``
+  (SNAME sign: the negative of uvsim's positive added-mass matrix, which the plugin
+  requires since gz-sim's behaviour change), linear damping ``<xU>`` .. ``<nR>`` and
+  quadratic damping ``<xUabsU>`` .. ``<nRabsR>`` (paper sign, negative), each term of
+  the FLU matrices ``S6 A S6`` that is non-zero, diagonal always; the plugin's force is
+  ``sum_j (L_ij + Q_ij |nu_j|) nu_j + Ma nu_dot`` (Hydrodynamics.cc);
+* or, with ``added_mass="fluid"``, the added mass as SDF ``<fluid_added_mass>`` (positive,
+  FLU, 21 upper-triangle entries ``xx`` .. ``rr``) and no ``Dot`` terms in the plugin, never
+  both;
+* one thruster link + revolute joint per thruster (joint axis = thrust direction, FLU)
+  and a ``gz::sim::systems::Thruster`` plugin taking thrust commands in newtons, clamped
+  to the curve's range at its nominal voltage.  The PWM -> thrust map stays in uvsim
+  (``uvsim export --to json`` writes it).
+
+gz-sim integrates the plugin's added mass explicitly from the previous step's
+acceleration; with added mass comparable to the rigid mass this diverges (gz-sim issue
+#1923: stable only while ``M_A < M_RB`` element-wise).  :func:`added_mass_warnings`
+says when a model is in that regime; ``fluid_added_mass`` (DART physics) avoids it.
+"""
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+
+import numpy as np
+
+from uvsim.errors import VehicleError
+from uvsim.export.frames import (FORCE, S3, VEL, damping_matrices, frd_to_flu_matrix, frd_to_flu_vector,
+                                 inertia_about_cg, ned_to_enu)
+
+HYDRO_PLUGIN = ("gz-sim-hydrodynamics-system", "gz::sim::systems::Hydrodynamics")
+THRUSTER_PLUGIN = ("gz-sim-thruster-system", "gz::sim::systems::Thruster")
+FLUID_KEYS = [a + b for i, a in enumerate("xyzpqr") for b in "xyzpqr"[i:]]
+_DOF = ("surge", "sway", "heave", "roll", "pitch", "yaw")
+
+
+def _num(x) -> str:
+    return repr(float(x))
+
+
+def _sub(parent, tag, text=None, **attrib):
+    e = ET.SubElement(parent, tag, attrib)
+    if text is not None:
+        e.text = text
+    return e
+
+
+def added_mass_warnings(vehicle) -> list[str]:
+    """DOFs whose added mass is not below the rigid-body mass/inertia (gz-sim #1923)."""
+    MA, MRB = np.diag(vehicle.added_mass_matrix), np.diag(vehicle.M_RB)
+    return [f"{_DOF[i]}: added mass {MA[i]:.4g} >= rigid {MRB[i]:.4g}" for i in range(6) if MA[i] >= MRB[i]]
+
+
+def gz_sdf(vehicle, *, added_mass: str = "plugin", link: str = "base_link") -> tuple[str, list[str]]:
+    """SDF text of ``vehicle`` for gz-sim and the warnings to print before writing it.
+
+    ``added_mass``: "plugin" (Hydrodynamics ``xDotU``.. terms) or "fluid" (SDF
+    ``<fluid_added_mass>``, needs the DART physics engine)."""
+    if added_mass not in ("plugin", "fluid"):
+        raise VehicleError(f"added_mass {added_mass!r}: expected 'plugin' or 'fluid'")
+    warnings = []
+    heavy = added_mass_warnings(vehicle)
+    if heavy and added_mass == "plugin":
+        warnings.append(
+            "gz-sim integrates the Hydrodynamics plugin's added mass explicitly and is known to diverge when the "
+            "added mass is not below the rigid-body mass (gz-sim issue #1923): " + "; ".join(heavy)
+            + ". Export with --added-mass fluid (SDF <fluid_added_mass>, DART physics) to avoid it.")
+    if vehicle.effects:
+        warnings.append(f"effects {[e.kind for e in vehicle.effects]} have no gz-sim counterpart and are not exported")
+    DL, DQ = damping_matrices(vehicle)
+    MA_f, DL_f, DQ_f = (frd_to_flu_matrix(A) for A in (vehicle.added_mass_matrix, DL, DQ))
+    rho, g = vehicle.rho, vehicle.g
+
+    sdf = ET.Element("sdf", version="1.11")
+    model = _sub(sdf, "model", name=vehicle.name)
+    model.append(ET.Comment(
+        " exported by uvsim export: link frame FLU (x fwd, y left, z up), world ENU; uvsim's FRD/NED "
+        "coefficients A became S A S with S = diag(1,-1,-1,1,-1,-1) (docs/import_export.md) "))
+    base = _sub(model, "link", name=link)
+    inertial = _sub(base, "inertial")
+    _sub(inertial, "pose", " ".join(_num(x) for x in frd_to_flu_vector(vehicle.r_g)) + " 0 0 0")
+    _sub(inertial, "mass", _num(vehicle.mass))
+    J = S3 @ inertia_about_cg(vehicle) @ S3
+    iner = _sub(inertial, "inertia")
+    for tag, (i, j) in zip(("ixx", "ixy", "ixz", "iyy", "iyz", "izz"), ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))):
+        _sub(iner, tag, _num(J[i, j]))
+    if added_mass == "fluid":
+        fam = _sub(inertial, "fluid_added_mass")
+        idx = "xyzpqr"
+        for key in FLUID_KEYS:
+            _sub(fam, key, _num(MA_f[idx.index(key[0]), idx.index(key[1])]))
+    V = vehicle.buoyancy / (rho * g)
+    col = _sub(base, "collision", name="buoyancy_volume")
+    col.append(ET.Comment(f" sphere of volume B/(rho g) = {V:.6g} m^3 at the centre of buoyancy, for the Buoyancy "
+                          f"system with uniform_fluid_density {rho:g} "))
+    _sub(col, "pose", " ".join(_num(x) for x in frd_to_flu_vector(vehicle.r_b)) + " 0 0 0")
+    _sub(_sub(_sub(col, "geometry"), "sphere"), "radius", _num((3.0 * V / (4.0 * np.pi)) ** (1.0 / 3.0)))
+
+    hyd = _sub(model, "plugin", filename=HYDRO_PLUGIN[0], name=HYDRO_PLUGIN[1])
+    _sub(hyd, "link_name", link)
+    _sub(hyd, "water_density", _num(rho))
+    if np.any(vehicle.current_ned != 0):
+        _sub(hyd, "default_current", " ".join(_num(x) for x in ned_to_enu(vehicle.current_ned)))
+    for i in range(6):
+        for j in range(6):
+            name = FORCE[i] + VEL[j]
+            if added_mass == "plugin" and (i == j or MA_f[i, j] != 0):
+                _sub(hyd, name[0] + "Dot" + name[1], _num(-MA_f[i, j]))
+            if i == j or DL_f[i, j] != 0:
+                _sub(hyd, name, _num(DL_f[i, j]))
+            if i == j or DQ_f[i, j] != 0:
+                _sub(hyd, f"{name}abs{VEL[j]}", _num(DQ_f[i, j]))
+    _thrusters(model, vehicle, link, rho, warnings)
+    ET.indent(sdf, "  ")
+    return '<?xml version="1.0"?>\n' + ET.tostring(sdf, encoding="unicode") + "\n", warnings
+
+
+def _thrusters(model, vehicle, link, rho, warnings) -> None:
+    act = vehicle.actuators
+    spec = (vehicle.raw.get("thrusters") or {}).get("units")
+    if act.matrix is None or not spec:
+        if act.matrix is not None:
+            warnings.append("thrusters given as a configuration matrix: no positions to export, thrusters omitted")
+        return
+    for i, unit in enumerate(spec):
+        name = f"thruster_{i + 1}"
+        d = np.asarray(unit["direction"], float)
+        d = frd_to_flu_vector(d / np.linalg.norm(d))
+        p = frd_to_flu_vector(unit["position"])
+        lk = _sub(model, "link", name=name)
+        lk.append(ET.Comment(f" {act.names[i]} "))
+        _sub(lk, "pose", " ".join(_num(x) for x in p) + " 0 0 0")
+        li = _sub(lk, "inertial")
+        _sub(li, "mass", "0.001")  # nominal: the thruster's mass is part of base_link
+        ii = _sub(li, "inertia")
+        for tag in ("ixx", "iyy", "izz"):
+            _sub(ii, tag, "1e-06")
+        jt = _sub(model, "joint", name=f"{name}_joint", type="revolute")
+        _sub(jt, "parent", link)
+        _sub(jt, "child", name)
+        _sub(_sub(jt, "axis"), "xyz", " ".join(_num(x) for x in d))
+        pl = _sub(model, "plugin", filename=THRUSTER_PLUGIN[0], name=THRUSTER_PLUGIN[1])
+        _sub(pl, "namespace", vehicle.name)
+        _sub(pl, "joint_name", f"{name}_joint")
+        _sub(pl, "fluid_density", _num(rho))
+        curve = act.curves[i] if act.curves else None
+        if curve is not None:
+            _sub(pl, "max_thrust_cmd", _num(curve.max_forward))
+            _sub(pl, "min_thrust_cmd", _num(curve.max_reverse))
+        pl.append(ET.Comment(" thrust commands in N along the joint axis; the ESC PWM -> thrust curve is in the "
+                             "JSON export of uvsim (target json) "))
+
+
+def parse_gz_sdf(text: str) -> dict:
+    """Numbers of an SDF written by :func:`gz_sdf`, in the file's own frame (FLU) and signs."""
+    root = ET.fromstring(text)
+    model = root.find("model")
+    base = model.find("link")
+    inertial = base.find("inertial")
+    J = np.zeros((3, 3))
+    for tag, (i, j) in zip(("ixx", "ixy", "ixz", "iyy", "iyz", "izz"), ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))):
+        J[i, j] = J[j, i] = float(inertial.find(f"inertia/{tag}").text)
+    out = {"mass": float(inertial.find("mass").text), "inertia_cg": J,
+           "cg": np.array([float(x) for x in inertial.find("pose").text.split()[:3]])}
+    fam = inertial.find("fluid_added_mass")
+    hyd = next(p for p in model.findall("plugin") if p.get("name") == HYDRO_PLUGIN[1])
+    MA, DL, DQ = np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((6, 6))
+    for i in range(6):
+        for j in range(6):
+            name = FORCE[i] + VEL[j]
+            for tag, A, sign in ((name[0] + "Dot" + name[1], MA, -1.0), (name, DL, 1.0), (f"{name}abs{VEL[j]}", DQ, 1.0)):
+                e = hyd.find(tag)
+                if e is not None:
+                    A[i, j] = sign * float(e.text)
+    if fam is not None:
+        if np.any(MA):
+            raise VehicleError("SDF has both <fluid_added_mass> and Hydrodynamics xDotU terms")
+        idx = "xyzpqr"
+        for key in FLUID_KEYS:
+            i, j = idx.index(key[0]), idx.index(key[1])
+            MA[i, j] = MA[j, i] = float(fam.find(key).text)
+    out.update(added_mass=MA, linear=DL, quadratic=DQ, fluid_added_mass=fam is not None,
+               water_density=float(hyd.find("water_density").text))
+    col = base.find("collision")
+    r = float(col.find("geometry/sphere/radius").text)
+    out["buoyancy_volume"] = 4.0 / 3.0 * np.pi * r ** 3
+    out["cb"] = np.array([float(x) for x in col.find("pose").text.split()[:3]])
+    thr = []
+    for jt in model.findall("joint"):
+        child = model.find(f"link[@name='{jt.find('child').text}']")
+        thr.append({"position": np.array([float(x) for x in child.find("pose").text.split()[:3]]),
+                    "axis": np.array([float(x) for x in jt.find("axis/xyz").text.split()])})
+    out["thrusters"] = thr
+    return out
