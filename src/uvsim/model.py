@@ -148,26 +148,37 @@ class Model:
             raise VehicleError("parameter m: mass must be positive")
         self.r_g = np.stack([arr("x_g"), arr("y_g"), arr("z_g")], -1)
         varying = set(overrides)
-        I = inertia_tensor(*(arr(k) for k in INERTIA_NAMES))
-        shared_rb = not (varying & {"m", "x_g", "y_g", "z_g", *INERTIA_NAMES})
+        rb_names = ["m", "x_g", "y_g", "z_g", *INERTIA_NAMES]
+        shared_rb = not (varying & set(rb_names))
         shared_am = not (varying & set(ADDED_MASS_NAMES))
-        MA = np.broadcast_to(vehicle.added_mass_matrix, (n, 6, 6)).copy()
+        # mass matrices, eigenvalues and inverses for the distinct parameter sets only (a
+        # batch of P sets x W windows has P distinct ones), then indexed back per row
+        cols = [arr(k) for k in rb_names + list(ADDED_MASS_NAMES) if k in varying]
+        if cols:
+            uniq, inv_idx = np.unique(np.stack(cols, -1), axis=0, return_inverse=True)
+            first = np.array([np.flatnonzero(inv_idx.ravel() == j)[0] for j in range(len(uniq))])
+        else:
+            inv_idx, first = np.zeros(n, int), np.zeros(1, int)
+        inv_idx = np.asarray(inv_idx).ravel()
+        I = inertia_tensor(*(arr(k)[first] for k in INERTIA_NAMES))
+        MA = np.broadcast_to(vehicle.added_mass_matrix, (first.size, 6, 6)).copy()
         for i, k in enumerate(ADDED_MASS_NAMES):
-            MA[:, i, i] = arr(k)
-        M_RB = rigid_body_mass_matrix(self.mass, I, self.r_g)
-        self.M_RB = M_RB[0] if shared_rb else M_RB
-        self.M_A = MA[0] if shared_am else MA
+            MA[:, i, i] = arr(k)[first]
+        M_RB = rigid_body_mass_matrix(self.mass[first], I, self.r_g[first])
         M = M_RB + MA
         ev = np.linalg.eigvalsh(M)
         bad = np.nonzero(ev[:, 0] <= 0)[0]
         if bad.size:
+            rows = [int(np.flatnonzero(inv_idx == b)[0]) for b in bad[:5]]
             raise VehicleError(
-                f"M = M_RB + M_A is not positive definite for parameter set(s) {bad[:5].tolist()} "
+                f"M = M_RB + M_A is not positive definite for parameter set(s) {rows} "
                 f"(smallest eigenvalue {ev[bad[0], 0]:.3g}); check inertia and added-mass values"
             )
         Minv = np.linalg.inv(M)
-        self.M = M[0] if (shared_rb and shared_am) else M
-        self.Minv = Minv[0] if (shared_rb and shared_am) else Minv
+        self.M_RB = M_RB[0] if shared_rb else M_RB[inv_idx]
+        self.M_A = MA[0] if shared_am else MA[inv_idx]
+        self.M = M[0] if (shared_rb and shared_am) else M[inv_idx]
+        self.Minv = Minv[0] if (shared_rb and shared_am) else Minv[inv_idx]
         self._M_mv, self._Minv_mv = _MatVec(self.M), _MatVec(self.Minv)
         self._MRB_mv, self._MA_mv = _MatVec(self.M_RB), _MatVec(self.M_A)
         self.weight = self.mass * self.g
@@ -210,9 +221,13 @@ class Model:
         return y
 
     # ------------------------------------------------------------------ dynamics
-    def rhs(self, t: float, y: np.ndarray, u: np.ndarray, voltage: np.ndarray | None = None) -> np.ndarray:
+    def rhs(self, t: float, y: np.ndarray, u: np.ndarray, voltage: np.ndarray | None = None, *,
+            states_only: bool = False) -> np.ndarray:
         """State derivative ``(n, n_y)`` for states ``y`` (n, n_y), inputs ``u`` (n, k) and
-        the battery voltage ``voltage`` (n,) V or None (see :class:`uvsim.forces.Context`)."""
+        the battery voltage ``voltage`` (n,) V or None (see :class:`uvsim.forces.Context`).
+        With ``states_only`` only the derivatives of the terms' own states (n, n_y - 13)
+        are computed (no forces, no accelerations): used to carry term states along a
+        given vehicle trajectory (:mod:`uvsim.fitting`)."""
         n = y.shape[0]
         pos = y[:, 0:3]
         q = y[:, 3:7]
@@ -249,6 +264,9 @@ class Model:
         states = {i: y[:, s] for i, s in self.state_slices.items()} if self.state_slices else {}
         ctx = Context(t, pos, q, R, nu, nu_r, u, self.input_kind, weight, mass, r_g, states, self.params,
                       self.changes_mass, voltage)
+        if states_only:
+            return np.concatenate([self.terms[i].state_derivative(ctx, self.preps[i], y[:, s])
+                                   for i, s in self.state_slices.items()] or [np.zeros((n, 0))], axis=1)
 
         tau = None
         for term, prep in zip(self.terms, self.preps):
@@ -271,6 +289,19 @@ class Model:
         for i, s in self.state_slices.items():
             parts.append(self.terms[i].state_derivative(ctx, self.preps[i], y[:, s]))
         return np.concatenate(parts, axis=1)
+
+    def term_states_along(self, T: np.ndarray, U: np.ndarray, V=None) -> np.ndarray | None:
+        """States (n, L, n_y - 13) of the stateful terms along input histories ``T`` (n, L),
+        ``U`` (n, L, k) from :meth:`initial_state`, when every stateful term has a closed
+        form (:meth:`uvsim.forces.ForceTerm.states_along`); None otherwise."""
+        x0 = self.initial_state(u0=U[:, 0])[:, 13:]
+        parts = []
+        for i, s in self.state_slices.items():
+            xi = self.terms[i].states_along(self.preps[i], T, U, self.input_kind, V, x0[:, s.start - 13:s.stop - 13])
+            if xi is None:
+                return None
+            parts.append(xi)
+        return np.concatenate(parts, axis=2) if parts else np.zeros(T.shape + (0,))
 
     def _current_at(self, t, n: int):
         """``(v_c (n, 3), v_c_dot (n, 3))`` of the time-varying current at ``t``: a float

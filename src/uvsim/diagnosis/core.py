@@ -60,6 +60,10 @@ VARIANT_SHARE = 0.9
 #: Validation cost per residual entry (in squared noise sigmas) below which the model
 #: is "at the noise level" (confidence "high").
 AT_NOISE = 1.5
+#: Candidates fitted through the simulator: at most ``top`` effects whose screening
+#: reduction is at least this share of the best one's (and above SCREEN_FLOOR).
+SCREEN_SHARE = 0.25
+SCREEN_FLOOR = 0.002
 DEFAULT_HORIZON = 3.0
 
 
@@ -186,13 +190,18 @@ class _Selector:
         cands = cands + [coupled_candidate(best)]
         for c in cands:
             veh = vehicle_cur.with_effects([c.spec]) if c.spec is not None else vehicle_cur
-            try:
-                sp = self.space(veh, c.free, c.bounds, c.start, values_cur)
-                ee = EquationError(veh, motions, sp, scale=ee0.scale)
-                r = ee.fit(max_nfev=12)
-                out.append((c, {"reduction": max(0.0, 1.0 - r["rss"] / rss0), "values": r["values"]}))
-            except (UvsimError, np.linalg.LinAlgError, ValueError) as exc:
-                out.append((c, {"reduction": 0.0, "values": {}, "error": str(exc)}))
+            best = None
+            for st in _starts(c):  # a small multi-start on the cheap equation error (the global stage)
+                try:
+                    sp = self.space(veh, c.free, c.bounds, st, values_cur)
+                    r = EquationError(veh, motions, sp, scale=ee0.scale).gauss_newton(iterations=3)
+                except (UvsimError, np.linalg.LinAlgError, ValueError) as exc:
+                    r = {"rss": np.inf, "values": {}, "error": str(exc)}
+                if best is None or r["rss"] < best["rss"]:
+                    best = r
+            red = max(0.0, 1.0 - best["rss"] / rss0) if np.isfinite(best["rss"]) else 0.0
+            out.append((c, {"reduction": red, "values": best["values"], **({"error": best["error"]}
+                                                                            if "error" in best else {})}))
         return out, info
 
     # ---------------------------------------------------------------- one step
@@ -231,16 +240,21 @@ class _Selector:
             rows.append({"effect": c.effect, "variant": c.variant, "screening_reduction": s["reduction"] if s else None,
                          "fitted": False})
         fitted = []
-        for c, s, _ in choice[: max(top, 1) if ee_info.get("available") else len(choice)]:
+        if ee_info.get("available"):
+            lead = choice[0][2] if choice else 0.0
+            picked = [x for x in choice if x[2] >= max(SCREEN_SHARE * lead, SCREEN_FLOOR)][: max(top, 1)]
+        else:
+            picked = choice
+        for c, s, _ in picked:
             fitted.append(self.fit_candidate(c, s, vehicle_cur, values_cur, val_cur))
         # variants: the simplest variant of the winning effect that is not significantly worse
         return {"screening": ee_info, "screened": rows, "fitted": fitted, "all_screened": screened}
 
     def fit_candidate(self, c: Candidate, s, vehicle_cur, values_cur, val_cur) -> dict:
         veh = vehicle_cur.with_effects([c.spec]) if c.spec is not None else vehicle_cur
-        starts = [c.start]
-        if s and s.get("values"):
-            starts.insert(0, {**c.start, **s["values"]})
+        # start from the screening estimate (the best of its multi-start); without one, from
+        # the catalogue's starts
+        starts = [{**c.start, **s["values"]}] if s and s.get("values") else _starts(c)
         best = None
         for st in starts:
             sp = self.space(veh, c.free, c.bounds, st, values_cur)
@@ -266,6 +280,18 @@ class _Selector:
         row.update(result=best, values=dict(best.values), std=dict(best.std), train_cost=best.cost,
                    val=vc, compare=cmp, problem=problem, at_bounds=best.at_bounds, vehicle=veh, all_values=vals)
         return row
+
+
+def _starts(c: Candidate) -> list[dict]:
+    """Start values of a candidate's multi-start: the catalogue start, plus for a tether
+    anchors in four directions (the pull direction is what the data decide)."""
+    if c.effect != "tether":
+        return [dict(c.start)]
+    out = []
+    n0, e0 = c.start["tether_anchor_n"] + 5.0, c.start["tether_anchor_e"]  # the reference position
+    for dn, de in ((-5.0, 0.0), (5.0, 0.0), (0.0, -5.0), (0.0, 5.0)):
+        out.append({**c.start, "tether_anchor_n": n0 + dn, "tether_anchor_e": e0 + de})
+    return out
 
 
 def _judge(row, val_cur) -> tuple[bool, str]:

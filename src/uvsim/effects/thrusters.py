@@ -129,6 +129,26 @@ class ThrusterLag(_ActuatorEffect):
         out[:, :k] = (fc - x[:, :k]) / prep["T"]
         return out
 
+    def states_along(self, prep, T, U, input_kind, V=None, x0=None):
+        """Exact lag states for zero-order-held commands: ``f_{i+1} = a f_i + (1 - a) f_c,i``
+        with ``a = exp(-(t_{i+1} - t_i) / T)`` (the lag depends on the inputs only)."""
+        n, L = T.shape
+        k = U.shape[2]
+        if input_kind == "force":
+            fc = U
+        else:
+            flat_v = None if V is None else V.reshape(-1)
+            fc = self._act.thrusts(U.reshape(n * L, k), input_kind, prep["groups"], flat_v).reshape(n, L, -1)
+        width = fc.shape[2]
+        out = np.zeros((n, L, self.n_states))
+        x = np.array(x0[:, :width], float, copy=True)
+        out[:, 0, :width] = x
+        a = np.exp(-np.diff(T, axis=1) / prep["T"])  # (n, L - 1)
+        for i in range(L - 1):
+            x = a[:, i:i + 1] * x + (1.0 - a[:, i:i + 1]) * fc[:, i]
+            out[:, i + 1, :width] = x
+        return out
+
     def initial_state(self, prep, n, u0, input_kind):
         x = np.zeros((n, self.n_states))
         if self.options["start"] == "steady" and u0 is not None and np.shape(u0)[-1]:

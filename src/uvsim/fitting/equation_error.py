@@ -42,6 +42,11 @@ from uvsim.model import Model
 #: noise at 20-100 Hz); still short against the 1-3 s time constants of an ROV.
 WINDOW_S = 1.0
 POLYORDER = 3
+#: The residual is evaluated on the samples of a grid of about this rate (Hz): the
+#: smoothed accelerations hold nothing faster than ~1 / WINDOW_S, so a faster log only
+#: costs time (the model's acceleration is smoothed on the coarser grid with the same
+#: window in seconds; term states are carried at the log's full rate).
+EVAL_RATE_HZ = 12.5
 
 
 @dataclass
@@ -69,10 +74,19 @@ class Motion:
     valid: np.ndarray
     win: int
     V: np.ndarray | None = None
+    sub: np.ndarray | None = None   # rows of the evaluation grid
+    win_sub: int = 0                # Savitzky-Golay window on that grid, samples
+
+    def __post_init__(self):
+        dt = float(np.median(np.diff(self.t)))
+        k = max(1, int(np.floor(1.0 / (EVAL_RATE_HZ * dt))))
+        self.sub = np.arange(0, self.t.size, k)
+        w = int(round(WINDOW_S / (k * dt))) | 1
+        self.win_sub = max(w, POLYORDER + 2 + (POLYORDER + 1) % 2)
 
 
-def _sg(x, win, deriv=0, dt=1.0, axis=-2):
-    return savgol_filter(x, win, POLYORDER, deriv=deriv, delta=dt, axis=axis, mode="interp")
+def _sg(x, win, deriv=0, dt=1.0, axis=-2, mode="interp"):
+    return savgol_filter(x, win, POLYORDER, deriv=deriv, delta=dt, axis=axis, mode=mode)
 
 
 def measured_motion(run, *, window_s: float = WINDOW_S) -> Motion | None:
@@ -149,38 +163,48 @@ class EquationError:
         T = np.empty((R, L))
         Y = np.empty((R, L, 13))
         U = np.empty((R, L, ms[0].U.shape[1]))
+        V = np.full((R, L), np.nan) if any(m.V is not None for m in ms) else None
         for j, m in enumerate(ms):
             n = m.t.size
             T[j, :n], T[j, n:] = m.t, m.t[-1]  # padding: zero-length steps
             Y[j, :n], Y[j, n:] = m.y, m.y[-1]
             U[j, :n], U[j, n:] = m.U, m.U[-1]
+            if V is not None and m.V is not None:
+                V[j, :n], V[j, n:] = m.V, m.V[-1]
         model = Model(self.vehicle, self.space.overrides(Z, R), n=P * R, input_kind=kind)
         nt = model.n_y - 13
         Tt, Yt, Ut = np.tile(T, (P, 1)), np.tile(Y, (P, 1, 1)), np.tile(U, (P, 1, 1))
+        Vt = None if V is None else np.tile(V, (P, 1))
+        closed = model.term_states_along(Tt, Ut, Vt)
+        if closed is not None:  # input-only states (a lag): exact, no integration along the motion
+            closed = closed.reshape(P, R, L, nt)
+            return [closed[:, j, : m.t.size] for j, m in enumerate(ms)]
         x = model.initial_state(u0=Ut[:, 0])[:, 13:]
         xs = np.empty((P * R, L, nt))
         xs[:, 0] = x
 
-        def f(yy, xx, u):
-            return model.rhs(0.0, np.concatenate([yy, xx], 1), u)[:, 13:]
+        def f(yy, xx, u, v):
+            return model.rhs(0.0, np.concatenate([yy, xx], 1), u, v, states_only=True)
 
         for i in range(L - 1):
             h = (Tt[:, i + 1] - Tt[:, i])[:, None]
             ya, yb = Yt[:, i], Yt[:, i + 1]
             ym = 0.5 * (ya + yb)
             u = Ut[:, i]
-            k1 = f(ya, x, u)
-            k2 = f(ym, x + 0.5 * h * k1, u)
-            k3 = f(ym, x + 0.5 * h * k2, u)
-            k4 = f(yb, x + h * k3, u)
+            v = None if Vt is None else Vt[:, i]
+            k1 = f(ya, x, u, v)
+            k2 = f(ym, x + 0.5 * h * k1, u, v)
+            k3 = f(ym, x + 0.5 * h * k2, u, v)
+            k4 = f(yb, x + h * k3, u, v)
             x = x + h / 6.0 * (k1 + 2 * (k2 + k3) + k4)
             xs[:, i + 1] = x
         xs = xs.reshape(P, R, L, nt)
         return [xs[:, j, : m.t.size] for j, m in enumerate(ms)]
 
     def forces(self, Z: np.ndarray) -> list:
-        """Per run, ``tau_res`` (P, n, 6) in N / N m, NaN for DOFs the log cannot give and
-        for the filter's end segments.  Runs of one input kind share one ``rhs`` call."""
+        """Per run, ``tau_res`` (P, n_eval, 6) in N / N m on the run's evaluation grid
+        (:data:`EVAL_RATE_HZ`), NaN for DOFs the log cannot give and for the filter's end
+        segments.  Runs of one input kind share one ``rhs`` call."""
         Z = np.atleast_2d(Z)
         P = Z.shape[0]
         out: list = [None] * len(self.motions)
@@ -190,29 +214,30 @@ class EquationError:
         with threadpool_limits(1, "blas"), np.errstate(all="ignore"):
             for (kind, _), idx in groups.items():
                 ms = [self.motions[i] for i in idx]
-                N = sum(m.t.size for m in ms)
+                N = sum(m.sub.size for m in ms)
                 model = Model(self.vehicle, self.space.overrides(Z, N), n=P * N, input_kind=kind)
-                Y = np.concatenate([m.y for m in ms])
-                Yp = np.tile(Y, (P, 1))
+                Yp = np.tile(np.concatenate([m.y[m.sub] for m in ms]), (P, 1))
                 if model.n_y > 13:  # term states per run and parameter set, stacked like Yp
                     xs = self._term_states(Z, ms, kind)
-                    Yp = np.concatenate([Yp, np.concatenate(xs, axis=1).reshape(P * N, -1)], 1)
-                Up = np.tile(np.concatenate([m.U for m in ms]), (P, 1))
+                    xs = np.concatenate([x[:, m.sub] for x, m in zip(xs, ms)], axis=1)
+                    Yp = np.concatenate([Yp, xs.reshape(P * N, -1)], 1)
+                Up = np.tile(np.concatenate([m.U[m.sub] for m in ms]), (P, 1))
                 Vp = None
                 if any(m.V is not None for m in ms):
-                    Vp = np.tile(np.concatenate([m.V if m.V is not None else np.full(m.t.size, np.nan) for m in ms]), P)
+                    Vp = np.tile(np.concatenate([m.V[m.sub] if m.V is not None else np.full(m.sub.size, np.nan)
+                                                 for m in ms]), P)
                 acc = model.rhs(0.0, Yp, Up, Vp)[:, 7:13].reshape(P, N, 6)
                 a = 0
                 for i, m in zip(idx, ms):
-                    n = m.t.size
+                    n = m.sub.size
                     ac = acc[:, a:a + n]
                     a += n
-                    dt = float(np.median(np.diff(m.t)))
-                    for _ in range(2):
-                        ac = _sg(ac, m.win, dt=dt)
-                    res = (m.nud[None] - ac) @ self.M0.T
+                    dt = float(np.median(np.diff(m.t[m.sub])))
+                    for _ in range(2):  # the ends are not used, so no polynomial fit there ("nearest")
+                        ac = _sg(ac, m.win_sub, dt=dt, mode="nearest")
+                    res = (m.nud[m.sub][None] - ac) @ self.M0.T
                     res[:, :, ~m.have] = np.nan
-                    res[:, ~m.valid] = np.nan
+                    res[:, ~m.valid[m.sub]] = np.nan
                     out[i] = res
         return out
 
@@ -220,10 +245,38 @@ class EquationError:
         """Normalized residual vectors (P, m) over the valid entries."""
         parts = []
         for m, r in zip(self.motions, self.forces(Z)):
-            sel = m.valid[:, None] & m.have[None, :]
+            sel = m.valid[m.sub][:, None] & m.have[None, :]
             parts.append((r / self.scale)[:, sel])
         v = np.concatenate(parts, axis=1)
         return np.where(np.isfinite(v), v, 30.0)
+
+    def gauss_newton(self, z0=None, *, iterations: int = 3) -> dict:
+        """A few bounded Gauss-Newton steps from ``z0`` (exact in one step for parameters
+        that enter the force linearly); each step costs one batched evaluation of
+        ``1 + p`` parameter sets.  Returns like :meth:`fit`."""
+        sp = self.space
+        lo, hi = sp.z_lower, sp.z_upper
+        z = np.clip(sp.z0 if z0 is None else np.asarray(z0, float), lo, hi)
+        r0 = None
+        best = None
+        for _ in range(max(iterations, 1)):
+            h = 1e-6 * np.maximum(1.0, np.abs(z))
+            h = np.where(z + h > hi, -h, h)
+            R = self.residuals(np.vstack([z, z + np.diag(h)]))
+            r = R[0]
+            if r0 is None:
+                r0 = r
+            if best is None or r @ r < best[1]:
+                best = (z.copy(), float(r @ r))
+            if sp.p == 0:
+                break
+            J = ((R[1:] - r) / h[:, None]).T
+            dz = np.linalg.lstsq(J, -r, rcond=None)[0]
+            z = np.clip(z + dz, lo, hi)
+        r = self.residuals(z[None])[0]
+        if r @ r < best[1]:
+            best = (z, float(r @ r))
+        return {"z": best[0], "values": sp.as_dict(best[0]), "rss": best[1], "rss0": float(r0 @ r0), "n": int(r.size)}
 
     def fit(self, z0=None, *, max_nfev: int = 30) -> dict:
         """Least-squares fit (trust-region reflective within the space's bounds).  Returns

@@ -263,6 +263,22 @@ class WindowedProblem:
         T, U, V = self._padded_runs()
         Vt = None if V is None else np.tile(V, (P, 1))
         m_run = self.model(Z, R)
+        closed = m_run.term_states_along(np.tile(T, (P, 1)), np.tile(U, (P, 1, 1)), Vt)
+        if closed is not None:  # input-only states (a lag): exact, no reference trajectory needed
+            xs = closed
+        else:
+            xs = self._term_states_rk4(m_run, P, T, U, Vt)
+        out = np.empty((P, self.lay.W, self.n_term))
+        xs = xs.reshape(P, R, n, self.n_term)
+        for r in range(R):
+            for j, (s, _) in enumerate(self.lay.bounds[r]):
+                out[:, self.lay.first[r] + j] = xs[:, r, s]
+        return out.reshape(P * self.lay.W, self.n_term)
+
+    def _term_states_rk4(self, m_run, P, T, U, Vt):
+        """Term states (P * R, n, n_term) by RK4 along the reference trajectory."""
+        R = len(self.runs)
+        n = self._yref.shape[1]
         y = np.repeat(self._yref[None, :, 0], P, 0).reshape(P * R, -1).copy()
         y[:, 13:] = m_run.initial_state(u0=np.tile(U[:, 0], (P, 1)))[:, 13:]
         Tt, Ut = np.tile(T, (P, 1)), np.tile(U, (P, 1, 1))
@@ -279,7 +295,7 @@ class WindowedProblem:
                 v = None if Vt is None else Vt[:, i]
 
                 def f(yy, xx, tt):
-                    return m_run.rhs(tt, np.concatenate([yy, xx], 1), u, v)[:, 13:]
+                    return m_run.rhs(tt, np.concatenate([yy, xx], 1), u, v, states_only=True)
 
                 k1 = f(ya, x, Tt[:, i])
                 k2 = f(ym, x + 0.5 * h * k1, Tt[:, i] + 0.5 * h[:, 0])
@@ -287,12 +303,7 @@ class WindowedProblem:
                 k4 = f(yb, x + h * k3, Tt[:, i + 1])
                 y[:, 13:] = x + h / 6.0 * (k1 + 2 * (k2 + k3) + k4)
                 xs[:, i + 1] = y[:, 13:]
-        out = np.empty((P, self.lay.W, self.n_term))
-        xs = xs.reshape(P, R, n, self.n_term)
-        for r in range(R):
-            for j, (s, _) in enumerate(self.lay.bounds[r]):
-                out[:, self.lay.first[r] + j] = xs[:, r, s]
-        return out.reshape(P * self.lay.W, self.n_term)
+        return xs
 
     def simulate(self, Z: np.ndarray, D: np.ndarray):
         """Simulate every window for parameter sets Z (P, p) and node perturbations

@@ -161,31 +161,37 @@ class Actuators(ForceTerm):
                 "fgain": None, "frev": None}
         k = self.n_thrusters
 
-        def vec(name, default):
-            v = params.get(name, default)
-            return np.broadcast_to(np.asarray(v, float), (n,))
+        def family(names, defaults):
+            """(k,) when no row overrides them (or all rows agree), else (n, k)."""
+            if not any(nm in params for nm in names):
+                return np.asarray(defaults, float)
+            a = np.stack([np.broadcast_to(np.asarray(params.get(nm, d), float), (n,)) for nm, d in zip(names, defaults)],
+                         -1)
+            return a[0] if np.all(a == a[:1]) else a
 
         if k:
-            g = np.stack([vec(f"thruster_gain_{i + 1}", self.gains[i]) for i in range(k)], -1)
-            r = np.stack([vec(f"thruster_reverse_{i + 1}", self.reverse[i]) for i in range(k)], -1)
-            if np.any(g != 1.0):
-                prep["gain"] = g[0] if np.all(g == g[:1]) else g
-            if np.any(r != 1.0):
-                prep["rev"] = r[0] if np.all(r == r[:1]) else r
+            g = family([f"thruster_gain_{i + 1}" for i in range(k)], self.gains)
+            r = family([f"thruster_reverse_{i + 1}" for i in range(k)], self.reverse)
+            prep["gain"] = g if np.any(g != 1.0) else None
+            prep["rev"] = r if np.any(r != 1.0) else None
             if self.positions is not None:
-                P = np.stack([np.stack([vec(f"thruster_{c}_{i + 1}", self.positions[i, a]) for a, c in enumerate("xyz")],
-                                       -1) for i in range(k)], 1)  # (n, k, 3)
-                if np.any(P != self.positions[None]):
-                    Bn = np.broadcast_to(self.matrix, (n, 6, k)).copy()
+                rows = [family([f"thruster_{c}_{i + 1}" for c in "xyz"], self.positions[i]) for i in range(k)]
+                if any(r.ndim == 2 for r in rows):
+                    rows = [np.broadcast_to(r, (n, 3)) for r in rows]
+                P = np.stack(rows, -2)  # (k, 3) or (n, k, 3)
+                if np.any(P != self.positions):
                     d = self.matrix[:3].T  # unit directions (k, 3)
-                    Bn[:, 3:, :] = np.swapaxes(np.cross(P, d[None]), 1, 2)
-                    prep["B"] = Bn[0] if np.all(Bn == Bn[:1]) else Bn
-        fg = np.stack([vec(f"force_gain_{c}", self.force_gain[j]) for j, c in enumerate(DOF_LETTERS)], -1)
-        fr = np.stack([vec(f"force_reverse_{c}", self.force_reverse[j]) for j, c in enumerate(DOF_LETTERS)], -1)
-        if np.any(fg != 1.0):
-            prep["fgain"] = fg
-        if np.any(fr != 1.0):
-            prep["frev"] = fr
+                    if P.ndim == 2:
+                        Bn = self.matrix.copy()
+                        Bn[3:, :] = np.cross(P, d).T
+                    else:
+                        Bn = np.broadcast_to(self.matrix, (n, 6, k)).copy()
+                        Bn[:, 3:, :] = np.swapaxes(np.cross(P, d[None]), 1, 2)
+                    prep["B"] = Bn
+        fg = family([f"force_gain_{c}" for c in DOF_LETTERS], self.force_gain)
+        fr = family([f"force_reverse_{c}" for c in DOF_LETTERS], self.force_reverse)
+        prep["fgain"] = fg if np.any(fg != 1.0) else None
+        prep["frev"] = fr if np.any(fr != 1.0) else None
         return prep
 
     @property

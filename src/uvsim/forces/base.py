@@ -102,6 +102,14 @@ class ForceTerm:
     def initial_state(self, prep: Any, n: int, u0: np.ndarray, input_kind: str) -> np.ndarray:
         return np.zeros((n, self.n_states))
 
+    def states_along(self, prep: Any, T: np.ndarray, U: np.ndarray, input_kind: str, V=None, x0=None):
+        """The term's states (n, L, n_states) along whole input histories ``T`` (n, L),
+        ``U`` (n, L, k) (voltage ``V`` (n, L) or None), from ``x0`` (n, n_states), when
+        they depend on the inputs only and have a closed form (e.g. a first-order lag
+        of zero-order-held commands); None otherwise (the caller integrates
+        :meth:`state_derivative` along a vehicle trajectory instead)."""
+        return None
+
     def state_names(self) -> list[str]:
         return [f"{self.kind}_{i}" for i in range(self.n_states)]
 
