@@ -24,6 +24,7 @@ COMMAND_MODULES = [
     "uvsim.commands.maneuver",
     "uvsim.commands.calibrate",
     "uvsim.commands.diagnose",
+    "uvsim.commands.scenario",
 ]
 
 

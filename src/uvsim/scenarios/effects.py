@@ -30,17 +30,31 @@ class ScenarioError(UvsimError, ValueError):
     """A scenario specification or override is malformed or out of range."""
 
 
-#: (low, high) of each effect's magnitude and its meaning.  Lower ends chosen so the effect is
-#: detectable on the validation runs (docs/scenarios.md, "Detectability").
+#: Meaning and unit of each effect's magnitude.
+MAGNITUDE_MEANING = {
+    "current": "current speed |v_c|, m/s",
+    "tether": "tension T_0 (N) and/or stiffness k (N/m), by law",
+    "ballast": "net weight |w| of the point load, N",
+    "thruster_lag": "time constant T, s",
+    "thrust_asymmetry": "reverse-thrust loss 1 - ratio",
+    "weak_thruster": "thrust loss 1 - gain of the weak thruster",
+    "coupled_damping": "offset of the translational drag centre from the origin, m",
+    "periodic_force": "force amplitude, N",
+}
+#: (low, high) of each effect's magnitude per sensor suite: ``mocap`` (position and attitude;
+#: profiles diagnose, issue10_timing) and ``imu`` (gyro, accelerometer, lagged roll/pitch,
+#: depth; profile realsensor).  Each low end is a round value at which at least 90 % of drawn
+#: scenarios give ``effect_snr >= 2`` on their validation runs (docs/scenarios.md,
+#: "Detectability", measured with ``uvsim scenario snr``), except ``imu`` ``current``: without a
+#: position sensor or a DVL a current is barely visible (83 % at 0.1 m/s), so the realsensor profile
+#: draws it only when its runs log a DVL.  The weak thruster's range holds the gains 0.3-0.93.
 MAGNITUDE_RANGES = {
-    "current": ((0.02, 0.2), "current speed |v_c|, m/s"),
-    "tether": ((0.4, 4.0), "tension T_0 (N) or stiffness k (N/m), by law"),
-    "ballast": ((0.3, 3.0), "net weight |w| of the point load, N"),
-    "thruster_lag": ((0.03, 0.3), "time constant T, s"),
-    "thrust_asymmetry": ((0.05, 0.5), "reverse-thrust loss 1 - ratio"),
-    "weak_thruster": ((0.3, 0.8), "gain of the weak thruster (brief's range)"),
-    "coupled_damping": ((0.01, 0.1), "offset of the translational drag centre from the origin, m"),
-    "periodic_force": ((0.2, 2.0), "force amplitude, N"),
+    "mocap": {"current": (0.01, 0.1), "tether": (0.1, 1.0), "ballast": (0.1, 1.0), "thruster_lag": (0.03, 0.3),
+              "thrust_asymmetry": (0.05, 0.5), "weak_thruster": (0.07, 0.7), "coupled_damping": (0.012, 0.12),
+              "periodic_force": (0.3, 3.0)},
+    "imu": {"current": (0.1, 1.0), "tether": (0.1, 1.0), "ballast": (0.3, 3.0), "thruster_lag": (0.03, 0.3),
+            "thrust_asymmetry": (0.05, 0.5), "weak_thruster": (0.07, 0.7), "coupled_damping": (0.012, 0.12),
+            "periodic_force": (0.3, 3.0)},
 }
 #: Effects a diagnosis catalogue is expected to know; ``periodic_force`` is not one of them.
 CATALOGUED = ("current", "tether", "ballast", "thruster_lag", "thrust_asymmetry", "weak_thruster",
@@ -65,7 +79,7 @@ def frame_point(rng: np.random.Generator) -> list[float]:
 
 @dataclass
 class Effect:
-    """Base: ``type`` name, ``variant``, ``magnitude`` (see :data:`MAGNITUDE_RANGES`)."""
+    """Base: ``type`` name, ``variant``, ``magnitude`` (see :data:`MAGNITUDE_MEANING`)."""
 
     type: ClassVar[str] = ""
     variants: ClassVar[tuple] = ()
@@ -299,7 +313,7 @@ class ThrustAsymmetry(Effect):
 
 @dataclass
 class WeakThruster(Effect):
-    """One thruster delivers ``gain`` times its thrust (fouled or damaged propeller).
+    """One thruster delivers ``gain = 1 - magnitude`` times its thrust (fouled or damaged propeller).
     With force inputs the controller's allocation ``A^+`` splits the command among the
     thrusters and ``A diag(gains) A^+ tau`` is delivered.  Variants: which group the
     thruster belongs to (``horizontal`` or ``vertical``, by its direction)."""
@@ -313,7 +327,7 @@ class WeakThruster(Effect):
     def sample(cls, rng, variant, magnitude, directions=None, **_):
         vertical = np.abs(np.asarray(directions)[:, 2]) > 0.7
         group = np.flatnonzero(vertical if variant == "vertical" else ~vertical)
-        return cls(variant=variant, magnitude=magnitude, thruster=int(rng.choice(group)) + 1, gain=magnitude)
+        return cls(variant=variant, magnitude=magnitude, thruster=int(rng.choice(group)) + 1, gain=1.0 - magnitude)
 
     def map_commands(self, f, kind, A, rows):
         gains = np.ones(A.shape[1])
@@ -370,7 +384,7 @@ class CoupledDamping(Effect):
 class PeriodicForce(Effect):
     """Uncatalogued disturbance (for robustness studies): a periodic body-frame force, e.g.
     a wake or a strumming cable, ``F(t) = a sin(2 pi f t + phi) e`` (N) at ``r`` (m, body),
-    ``tau = [F; r x F]``, f = 0.3-1.5 Hz.  ``t`` is the run's own clock."""
+    ``tau = [F; r x F]``, f = 0.1-0.5 Hz.  ``t`` is the run's own clock."""
 
     type: ClassVar[str] = "periodic_force"
     variants: ClassVar[tuple] = ("body_force",)
@@ -383,7 +397,7 @@ class PeriodicForce(Effect):
     @classmethod
     def sample(cls, rng, variant, magnitude, **_):
         e = rng.normal(size=3)
-        return cls(variant=variant, magnitude=magnitude, amplitude=magnitude, frequency=float(rng.uniform(0.3, 1.5)),
+        return cls(variant=variant, magnitude=magnitude, amplitude=magnitude, frequency=float(rng.uniform(0.1, 0.5)),
                    phase=float(rng.uniform(0, 2 * np.pi)), direction=(e / np.linalg.norm(e)).tolist(),
                    point=frame_point(rng))
 
@@ -416,9 +430,10 @@ def effect_from_dict(d: dict) -> Effect:
     return cls(**kw)
 
 
-def sample_effect(rng: np.random.Generator, type_: str, *, kind: str, variant: str | None = None,
-                  magnitude: float | None = None, **context) -> Effect:
-    """Draw one effect: a variant allowed for the input kind, a log-uniform magnitude."""
+def sample_effect(rng: np.random.Generator, type_: str, *, kind: str, suite: str = "mocap",
+                  variant: str | None = None, magnitude: float | None = None, **context) -> Effect:
+    """Draw one effect: a variant allowed for the input kind, a magnitude log-uniform over
+    the suite's range (:data:`MAGNITUDE_RANGES`) unless given."""
     if type_ not in EFFECTS:
         raise ScenarioError(f"effect {type_!r}: expected one of {sorted(EFFECTS)}")
     cls = EFFECTS[type_]
@@ -429,7 +444,7 @@ def sample_effect(rng: np.random.Generator, type_: str, *, kind: str, variant: s
         variant = str(rng.choice(allowed))
     elif variant not in allowed:
         raise ScenarioError(f"effect {type_}: variant {variant!r} with {kind} inputs; expected one of {allowed}")
-    (lo, hi), _ = MAGNITUDE_RANGES[type_]
+    lo, hi = MAGNITUDE_RANGES[suite][type_]
     if magnitude is None:
         magnitude = log_uniform(rng, lo, hi)
     return cls.sample(rng, variant, float(magnitude), **context)

@@ -23,12 +23,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import yaml
+from scipy.spatial.transform import Rotation
 
 from uvsim.logs import Run, write_dataset
-from uvsim.scenarios.effects import CATALOGUED, MAGNITUDE_RANGES, CoupledDamping, ScenarioError, effect_from_dict
+from uvsim.scenarios.effects import CATALOGUED, MAGNITUDE_MEANING, MAGNITUDE_RANGES, CoupledDamping, ScenarioError, effect_from_dict
 from uvsim.scenarios.inputs import actuator_inputs, force_profile, initial_velocity
 from uvsim.scenarios.sensors import GROUPS, columns, deviation_snr, measure
-from uvsim.scenarios.spec import ScenarioSpec
+from uvsim.scenarios.spec import ScenarioSpec, sensor_suite
 from uvsim.scenarios.truth import base_parts, equilibrium_attitude, simulate_truth
 from uvsim.scenarios.vehicle_data import (ADDED_MASS_NAMES, INERTIA_NAMES, LINEAR_NAMES, PACKAGE_DIR,
                                           QUADRATIC_NAMES, load_vehicle_data)
@@ -53,6 +54,22 @@ def _plain(x):
     if isinstance(x, np.floating):
         return float(x)
     return x
+
+
+class _Dumper(yaml.SafeDumper):
+    """Short lists of numbers in flow style ([x, y, z]), everything else in block style."""
+
+
+def _represent_list(dumper, data):
+    flow = len(data) <= 8 and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in data)
+    return dumper.represent_sequence("tag:yaml.org,2002:seq", data, flow_style=flow)
+
+
+_Dumper.add_representer(list, _represent_list)
+
+
+def dump_yaml(doc) -> str:
+    return yaml.dump(doc, Dumper=_Dumper, sort_keys=False)
 
 
 def vehicles(spec: ScenarioSpec):
@@ -134,7 +151,6 @@ def simulate_spec(spec: ScenarioSpec, with_snr: bool = True) -> dict:
     active = np.array(active, dtype=bool).reshape(len(effects), len(row_run))
     # initial states: each row at rest at its own static attitude (ballast tilts it), yaw as drawn
     pos0, quat0, nu0, att0 = [], [], [], []
-    from scipy.spatial.transform import Rotation
     for row, i in enumerate(row_run):
         parts = base_parts(veh, 1, 1)
         for e, on in zip(effects, active[:, row]):
@@ -188,8 +204,8 @@ def _truth_record(spec, res, snr, run_records) -> dict:
     effects = []
     for eff, s in zip(res["effects"], snr):
         d = eff.to_dict()
-        (lo, hi), meaning = MAGNITUDE_RANGES[eff.type]
-        d.update(magnitude_range=[lo, hi], magnitude_meaning=meaning, catalogued=eff.type in CATALOGUED, **s)
+        lo, hi = MAGNITUDE_RANGES[sensor_suite(spec)][eff.type]
+        d.update(magnitude_range=[lo, hi], magnitude_meaning=MAGNITUDE_MEANING[eff.type], catalogued=eff.type in CATALOGUED, **s)
         effects.append(d)
     return _plain({
         "generator": "uvsim.scenarios",
@@ -258,9 +274,9 @@ def generate(spec, out_dir) -> Path:
               "# Coefficients: nominal BlueROV2 Heavy, src/uvsim/vehicles/bluerov2_heavy.yaml (seed 000 Table 2 and\n"
               "# Table 5, thrusters von Benzon et al. 2022); mass and buoyancy as measured for this vehicle;\n"
               "# sensors: positions of the instruments that logged the runs (m, body frame).\n")
-    (out / f"{model}.yaml").write_text(header + yaml.safe_dump(doc, sort_keys=False))
+    (out / f"{model}.yaml").write_text(header + dump_yaml(doc))
     truth = _truth_record(spec, res, effect_snr(spec, res), records)
-    (out / TRUTH_FILE).write_text(yaml.safe_dump(truth, sort_keys=False))
+    (out / TRUTH_FILE).write_text(dump_yaml(truth))
     return out
 
 

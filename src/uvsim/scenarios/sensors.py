@@ -22,6 +22,7 @@ Written independently of ``uvsim.synthetic``/``uvsim.metrics``; attitude convers
 from __future__ import annotations
 
 import numpy as np
+from scipy.signal import lfilter
 from scipy.spatial.transform import Rotation
 
 from uvsim.scenarios.effects import ScenarioError
@@ -58,12 +59,9 @@ def depth_sample_index(n_t: int, rate_hz: float, sensor_hz: float) -> np.ndarray
 
 
 def _lag(x: np.ndarray, dt: float, tau: float) -> np.ndarray:
+    """``y_k = a y_(k-1) + (1 - a) x_k``, ``a = exp(-dt / tau)``, ``y_0 = x_0``, along axis 0."""
     a = np.exp(-dt / tau)
-    y = np.empty_like(x)
-    y[0] = x[0]
-    for k in range(1, x.shape[0]):
-        y[k] = a * y[k - 1] + (1.0 - a) * x[k]
-    return y
+    return lfilter([1.0 - a], [1.0, -a], x, axis=0, zi=a * x[:1])[0]
 
 
 def measure(truth: dict, sensors: dict, run_params: dict, rng: np.random.Generator | None) -> dict:

@@ -33,6 +33,8 @@ from uvsim.scenarios.sensors import DEPTH_MODES
 from uvsim.scenarios.vehicle_data import DEFAULT_VEHICLE_FILE, PERTURBABLE, load_vehicle_data
 
 PROFILES = ("diagnose", "issue10_timing", "realsensor")
+#: Sensor suite of each profile; it selects the effects' magnitude ranges (effects.MAGNITUDE_RANGES).
+PROFILE_SUITE = {"diagnose": "mocap", "issue10_timing": "mocap", "realsensor": "imu"}
 INPUT_KINDS = ("force", "thrust", "pwm")
 SPEC_VERSION = 1
 #: Log rates, Hz: motion-capture profiles and IMU profiles (multiples of the 10 Hz depth sensor).
@@ -104,6 +106,11 @@ class ScenarioSpec:
         return cls(**{"description": "", "effects": [], **d})
 
 
+def sensor_suite(spec: "ScenarioSpec") -> str:
+    """``mocap`` when the runs log position (motion capture), else ``imu``."""
+    return "mocap" if "mocap" in spec.sensors else "imu"
+
+
 def _r(x, nd=6):
     return round(float(x), nd)
 
@@ -157,7 +164,7 @@ def _vehicle(rng, over, *, buoyancy, net=None, perturb_z_b=False) -> dict:
             "net_buoyancy": _r(net), "z_b": z_b, "model_name": "myrov"}
 
 
-def _effects(rng, over, kind, default_n, pool, context, forced=()) -> list:
+def _effects(rng, over, kind, default_n, pool, context, forced=(), suite="mocap") -> list:
     spec = over.get("effects")
     if spec is None:
         n = int(over.get("n_effects", default_n if default_n is not None else rng.integers(0, 3)))
@@ -175,7 +182,7 @@ def _effects(rng, over, kind, default_n, pool, context, forced=()) -> list:
         if bad:
             raise ScenarioError(f"sample_scenario: effect {d['type']}: unknown key(s) {bad}; "
                                 "expected type, variant, magnitude")
-        out.append(sample_effect(rng, d["type"], kind=kind, variant=d.get("variant"),
+        out.append(sample_effect(rng, d["type"], kind=kind, suite=suite, variant=d.get("variant"),
                                  magnitude=d.get("magnitude"), **context).to_dict())
     types = [e["type"] for e in out]
     if len(set(types)) != len(types):
@@ -284,7 +291,10 @@ def _realsensor(seed, rng, over) -> ScenarioSpec:
     ctx = {"start_region": {"centre": list(START_CENTRE)}, "directions": veh.thruster_directions, "g": veh.g,
            "rho": veh.rho}
     n_eff = None if "n_effects" in over or "effects" in over else len(forced) + int(rng.integers(0, 2))
-    effects = _effects(rng, over, kind, n_eff, CATALOGUED, ctx, forced=forced)
+    # Without position or DVL a current is nearly invisible (effect_snr ~1 at 0.1 m/s, docs/scenarios.md):
+    # it is drawn only when the runs log a DVL.
+    pool = [e for e in CATALOGUED if e != "current" or over.get("dvl")]
+    effects = _effects(rng, over, kind, n_eff, pool, ctx, forced=forced, suite="imu")
     sensors = {
         "imu": {"position": [_u(rng, -0.05, 0.10), _u(rng, -0.03, 0.03), _u(rng, -0.08, 0.0)],
                 "gyro_sigma": _u(rng, 0.001, 0.005), "acc_sigma": _u(rng, 0.01, 0.05)},
