@@ -18,7 +18,7 @@ from scipy.spatial.transform import Rotation
 
 from uvsim.errors import UvsimError
 from uvsim.logs import read_dataset
-from uvsim.scenarios import ScenarioError, generate, load_truth, sample_scenario, simulate_truth
+from uvsim.scenarios import ScenarioError, ScenarioSpec, generate, load_truth, sample_scenario, simulate_truth
 from uvsim.scenarios.dynamics import Context, Plant, integrate, rotation
 from uvsim.scenarios.effects import (Ballast, CoupledDamping, Current, PeriodicForce, Tether, ThrustAsymmetry,
                                      ThrusterLag, WeakThruster)
@@ -178,13 +178,13 @@ def test_energy_with_restoring_is_kinetic_plus_potential():
 
 
 def test_quaternion_stays_unit():
-    """Without renormalization RK4 keeps |q| = 1 to ~1e-10 over 10 s of tumbling; with it (the
+    """Without renormalization RK4 keeps |q| = 1 to ~1e-10 over 5 s of tumbling; with it (the
     default) to round-off."""
     plant = _general_plant()
     y0 = np.zeros((19, 1))
     y0[3] = 1.0
     y0[7:13, 0] = [0.4, -0.3, 0.2, 1.5, -2.0, 1.0]
-    t = np.arange(0, 10.0 + 1e-9, 0.05)
+    t = np.arange(0, 5.0 + 1e-9, 0.05)
     for renorm, tol in ((False, 1e-9), (True, 1e-14)):
         Y, _ = integrate(plant, t, np.zeros((t.size, 6, 1)), y0, max_step=0.002, renormalize=renorm)
         assert np.abs(np.linalg.norm(Y[:, 3:7, 0], axis=1) - 1).max() < tol
@@ -215,7 +215,7 @@ def _cross_inputs(t):
 
 @pytest.mark.parametrize("case", ["force", "current", "pwm"])
 def test_truth_agrees_with_the_project_simulator(veh, case):
-    """No effects, no perturbation: the truth model and uvsim.simulate (RK4, 20 sub-steps) give
+    """No effects, no perturbation: the truth model and uvsim.simulate (both RK4 at 5 ms) give
     the same 10-s trajectory of the BlueROV2 Heavy (Table 5, B > W) to far below 1 mm
     (measured ~1e-10 m): two implementations written apart, same equations."""
     import uvsim
@@ -232,8 +232,8 @@ def test_truth_agrees_with_the_project_simulator(veh, case):
         U = np.full((t.size, 8), 1500.0)
         U[:, 0], U[:, 1], U[:, 6] = 1600, 1580, 1650
         U[:, 4] = 1400 + 100 * (t > 3)
-    mine = simulate_truth(veh, t, U, kind, effects=effects, pos0=[[0, 0, 1]])
-    theirs = uvsim.simulate(uvsim.load_vehicle("bluerov2_heavy"), t, U, input_kind=kind, substeps=20,
+    mine = simulate_truth(veh, t, U, kind, effects=effects, pos0=[[0, 0, 1]], max_step=0.005)
+    theirs = uvsim.simulate(uvsim.load_vehicle("bluerov2_heavy"), t, U, input_kind=kind, substeps=4,
                             pos0=[0, 0, 1], current=current)
     assert np.ptp(mine["pos"][0], axis=0).max() > 0.5
     assert np.abs(theirs.position - mine["pos"][0]).max() < 1e-6
@@ -525,6 +525,14 @@ def test_bad_requests_are_named():
         sample_scenario(0, "diagnose", effects=["rope"])
     with pytest.raises(UvsimError, match="duration"):
         sample_scenario(0, "diagnose", duration=-1)
+    d = sample_scenario(0, "realsensor").to_dict()
+    d["sensors"]["imu"].pop("gyro_sigma")
+    with pytest.raises(ScenarioError, match="sensors.imu.gyro_sigma"):
+        ScenarioSpec.from_dict(d)
+    d = sample_scenario(0, "diagnose").to_dict()
+    del d["runs"][2]["shape"]
+    with pytest.raises(ScenarioError, match=r"runs\[2\]: missing \['shape'\]"):
+        ScenarioSpec.from_dict(d)
 
 
 def test_cli_generate(tmp_path, capsys):

@@ -60,8 +60,14 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def matvec(M: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """``(r, c, n) @ (c, n) -> (r, n)`` per trajectory."""
-    return np.einsum("ijn,jn->in", M, x)
+    """``(r, c, n) @ (c, n) -> (r, n)`` per trajectory, or ``(r, c) @ (c, n)`` for a matrix
+    shared by all trajectories."""
+    return M @ x if M.ndim == 2 else np.einsum("ijn,jn->in", M, x)
+
+
+def _shared(M: np.ndarray) -> np.ndarray:
+    """``M[..., 0]`` when every trajectory has the same matrix, else ``M``."""
+    return M[..., 0].copy() if np.all(M == M[..., :1]) else M
 
 
 def rotation(q: np.ndarray) -> np.ndarray:
@@ -144,7 +150,11 @@ class Plant:
             M[:, :, i] = rigid_body_mass_matrix(self.mass[i], self.r_g[:, i], self.inertia[:, :, i])
         M += self.added_mass
         self.M = M
-        self.M_inv = np.linalg.inv(M.transpose(2, 0, 1)).transpose(1, 2, 0)
+        self.M_inv = _shared(np.linalg.inv(M.transpose(2, 0, 1)).transpose(1, 2, 0))
+        # matrices common to all trajectories (the usual case) are applied as one matrix product
+        self.inertia_op = _shared(self.inertia)
+        self.added_mass_op = _shared(self.added_mass)
+        self.allocation_op = _shared(self.allocation)
         self.has_current = bool(np.any(self.current != 0.0))
         self.has_cg_offset = bool(np.any(self.r_g != 0.0))
         self.lagged = self.lag_time > 0.0
@@ -170,14 +180,14 @@ class Plant:
         else:
             v_r, nu_r = v, nu
         # omega x (...) for several vectors at once: v, a1, a2, I_o omega, eps (and R^T v_c)
-        a = matvec(self.added_mass, nu_r)            # [a1; a2] = M_A nu_r
+        a = matvec(self.added_mass_op, nu_r)         # [a1; a2] = M_A nu_r
         eps = q[1:]
-        stack = [v, a[:3], a[3:], matvec(self.inertia, w), eps] + ([vc_b] if self.has_current else [])
+        stack = [v, a[:3], a[3:], matvec(self.inertia_op, w), eps] + ([vc_b] if self.has_current else [])
         wx = cross(w[:, None], np.stack(stack, axis=1))
         wxv, wxa1, wxa2, wxIw, wxeps = (wx[:, i] for i in range(5))
         k = R[2]                                     # R^T e_3: third row of R
-        vxa, mxk = (c for c in np.moveaxis(cross(np.stack((v_r, self.load_moment), axis=1),
-                                                 np.stack((a[:3], k), axis=1)), 1, 0))
+        c2 = cross(np.stack((v_r, self.load_moment), axis=1), np.stack((a[:3], k), axis=1))
+        vxa, mxk = c2[:, 0], c2[:, 1]
         # rigid-body Coriolis/centripetal (Newton-Euler about the origin) and added-mass
         # Coriolis/centripetal (Kirchhoff) forces, damping, restoring
         tau = self.linear * nu_r + self.quadratic * np.abs(nu_r) * nu_r
@@ -188,14 +198,14 @@ class Plant:
             tau[3:] -= self.mass * cross(self.r_g, wxv)
         lag = y[N_BASE:]
         delivered = np.where(self.lagged, lag, f_e)
-        tau += matvec(self.allocation, delivered)
+        tau += matvec(self.allocation_op, delivered)
         if self.wrenches:
             ctx = Context(t, y[POS], R, nu, nu_r)
             for wr in self.wrenches:
                 tau += wr(ctx)
         if self.has_current:
             # + M_A nu_c_dot, nu_c_dot = [-omega x R^T v_c; 0]
-            tau -= matvec(self.added_mass[:, :3], wx[:, 5])
+            tau -= matvec(self.added_mass_op[:, :3], wx[:, 5])
         dy = np.empty_like(y)
         dy[POS] = matvec(R, v)
         dy[3] = -0.5 * (eps * w).sum(axis=0)

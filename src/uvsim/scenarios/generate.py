@@ -26,7 +26,8 @@ import yaml
 from scipy.spatial.transform import Rotation
 
 from uvsim.logs import Run, write_dataset
-from uvsim.scenarios.effects import CATALOGUED, MAGNITUDE_MEANING, MAGNITUDE_RANGES, CoupledDamping, ScenarioError, effect_from_dict
+from uvsim.scenarios.effects import (CATALOGUED, MAGNITUDE_MEANING, MAGNITUDE_RANGES, CoupledDamping, ScenarioError,
+                                     effect_from_dict)
 from uvsim.scenarios.inputs import actuator_inputs, force_profile, initial_velocity
 from uvsim.scenarios.sensors import GROUPS, columns, deviation_snr, measure
 from uvsim.scenarios.spec import ScenarioSpec, sensor_suite
@@ -76,7 +77,8 @@ def vehicles(spec: ScenarioSpec):
     """The nominal vehicle and the truth vehicle of a spec (:class:`VehicleData`)."""
     path = PACKAGE_DIR / "vehicles" / f"{spec.vehicle['file']}.yaml"
     if not path.exists():
-        raise ScenarioError(f"scenario spec: vehicle.file {spec.vehicle['file']!r}: no built-in vehicle file {path.name}")
+        raise ScenarioError(f"scenario spec: vehicle.file {spec.vehicle['file']!r}: no built-in vehicle file "
+                            f"{path.name}")
     nominal = load_vehicle_data(path)
     factors = spec.vehicle.get("factors", {})
     truth = nominal.with_coefficients({k: nominal.coefficients[k] * float(f) for k, f in factors.items()})
@@ -205,7 +207,8 @@ def _truth_record(spec, res, snr, run_records) -> dict:
     for eff, s in zip(res["effects"], snr):
         d = eff.to_dict()
         lo, hi = MAGNITUDE_RANGES[sensor_suite(spec)][eff.type]
-        d.update(magnitude_range=[lo, hi], magnitude_meaning=MAGNITUDE_MEANING[eff.type], catalogued=eff.type in CATALOGUED, **s)
+        d.update(magnitude_range=[lo, hi], magnitude_meaning=MAGNITUDE_MEANING[eff.type],
+                 catalogued=eff.type in CATALOGUED, **s)
         effects.append(d)
     return _plain({
         "generator": "uvsim.scenarios",
@@ -240,6 +243,7 @@ def generate(spec, out_dir) -> Path:
     Returns the dataset directory (``uvsim.logs.read_dataset`` reads it)."""
     if isinstance(spec, dict):
         spec = ScenarioSpec.from_dict(spec)
+    spec.validate()
     out = Path(out_dir)
     res = simulate_spec(spec)
     veh, sim = res["truth"], res["sim"]

@@ -40,6 +40,35 @@ GROUPS = {
 DEPTH_MODES = ("native", "held", "interpolated")
 
 
+#: Required settings of each sensor section (numbers unless noted).
+SECTION_KEYS = {"mocap": ("sigma_position", "sigma_attitude"), "imu": ("position", "gyro_sigma", "acc_sigma"),
+                "euler": ("time_constant", "sigma"), "depth": ("position", "sigma"), "dvl": ("position", "sigma")}
+
+
+def validate_sensors(sensors) -> None:
+    """Raise :class:`ScenarioError` naming the section and key of a malformed sensor setting."""
+    if not isinstance(sensors, dict) or not sensors:
+        raise ScenarioError(f"scenario spec: sensors: expected a mapping with some of {sorted(SECTION_KEYS)}")
+    for name, sec in sensors.items():
+        if name not in SECTION_KEYS:
+            raise ScenarioError(f"scenario spec: sensors.{name}: unknown sensor; "
+                                f"expected one of {sorted(SECTION_KEYS)}")
+        for key in SECTION_KEYS[name]:
+            val = np.asarray(sec.get(key) if isinstance(sec, dict) else None, dtype=object)
+            shape = (3,) if key == "position" else ()
+            try:
+                ok = val.shape == shape and np.all(np.isfinite(val.astype(float)))
+            except (TypeError, ValueError):
+                ok = False
+            if not ok or (key != "position" and float(val) <= 0):
+                want = "[x, y, z] in m (body)" if key == "position" else "a positive number"
+                got = sec.get(key) if isinstance(sec, dict) else None
+                raise ScenarioError(f"scenario spec: sensors.{name}.{key} = {got!r}; expected {want}")
+    if "depth" in sensors and sensors["depth"].get("mode", "native") not in DEPTH_MODES:
+        raise ScenarioError(f"scenario spec: sensors.depth.mode {sensors['depth'].get('mode')!r}; "
+                            f"expected one of {list(DEPTH_MODES)}")
+
+
 def rotations(q: np.ndarray) -> Rotation:
     """scipy rotations of scalar-first quaternions (n, 4)."""
     return Rotation.from_quat(np.asarray(q)[:, [1, 2, 3, 0]])
@@ -98,12 +127,13 @@ def measure(truth: dict, sensors: dict, run_params: dict, rng: np.random.Generat
     v, w = nu[:, :3], nu[:, 3:]
     if "imu" in sensors:
         s = sensors["imu"]
-        out["rates"] = w + (np.asarray(run_params["gyro_bias"]) if noisy else 0.0) + noise(s["gyro_sigma"], (n_t, 3))
+        bias = np.asarray(run_params.get("gyro_bias", 0.0)) if noisy else 0.0
+        out["rates"] = w + bias + noise(s["gyro_sigma"], (n_t, 3))
         r = np.asarray(s["position"], dtype=float)
         k = rot.inv().apply([0.0, 0.0, 1.0])
         f = (nu_dot[:, :3] + np.cross(w, v) + np.cross(nu_dot[:, 3:], r) + np.cross(w, np.cross(w, r))
              - truth["g"] * k)
-        out["acceleration"] = (f + (np.asarray(run_params["acc_bias"]) if noisy else 0.0)
+        out["acceleration"] = (f + (np.asarray(run_params.get("acc_bias", 0.0)) if noisy else 0.0)
                                + noise(s["acc_sigma"], (n_t, 3)))
     if "euler" in sensors:
         s = sensors["euler"]

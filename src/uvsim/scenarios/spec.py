@@ -26,10 +26,10 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from uvsim.scenarios.effects import CATALOGUED, EFFECTS, ScenarioError, sample_effect
-from uvsim.scenarios.inputs import (AMPLITUDE_RANGES, DOF_NAMES, THRUST_MARGIN, force_profile, sample_shape, scale_shape,
-                                    thrust_utilization)
-from uvsim.scenarios.sensors import DEPTH_MODES
+from uvsim.scenarios.effects import CATALOGUED, EFFECTS, ScenarioError, effect_from_dict, sample_effect
+from uvsim.scenarios.inputs import (AMPLITUDE_RANGES, DOF_NAMES, THRUST_MARGIN, force_profile, sample_shape,
+                                    scale_shape, thrust_utilization)
+from uvsim.scenarios.sensors import DEPTH_MODES, validate_sensors
 from uvsim.scenarios.vehicle_data import DEFAULT_VEHICLE_FILE, PERTURBABLE, load_vehicle_data
 
 PROFILES = ("diagnose", "issue10_timing", "realsensor")
@@ -47,6 +47,8 @@ START_HALF_WIDTH = (0.5, 0.5, 0.2)
 DIAGNOSE_SHAPES = {"step": 0.25, "step_reverse": 0.25, "sine": 0.15, "decay": 0.15, "telegraph": 0.1,
                    "spiral": 0.1}
 
+#: Keys every run of a spec has.
+RUN_KEYS = ("name", "dof", "split", "weight", "duration", "shape", "pos0", "yaw0")
 OVERRIDES = {
     "n_runs": "number of training runs",
     "n_validation": "number of validation runs (the first is a spiral, except in realsensor)",
@@ -103,7 +105,32 @@ class ScenarioSpec:
                          if k not in d)
         if missing:
             raise ScenarioError(f"scenario spec: missing field(s) {missing}")
-        return cls(**{"description": "", "effects": [], **d})
+        spec = cls(**{"description": "", "effects": [], **d})
+        spec.validate()
+        return spec
+
+    def validate(self) -> None:
+        """Raise :class:`ScenarioError` naming the first malformed field."""
+        if self.input_kind not in INPUT_KINDS:
+            raise ScenarioError(f"scenario spec: input_kind {self.input_kind!r}; expected one of {list(INPUT_KINDS)}")
+        if not (isinstance(self.rate_hz, (int, float)) and 0 < self.rate_hz <= 1000):
+            raise ScenarioError(f"scenario spec: rate_hz {self.rate_hz!r}; expected a number in (0, 1000] Hz")
+        if not (isinstance(self.max_step, (int, float)) and 1e-5 <= self.max_step <= 0.05):
+            raise ScenarioError(f"scenario spec: max_step {self.max_step!r}; expected seconds in [1e-5, 0.05]")
+        validate_sensors(self.sensors)
+        if not isinstance(self.vehicle, dict) or "file" not in self.vehicle:
+            raise ScenarioError("scenario spec: vehicle: expected a mapping with at least 'file'")
+        if not isinstance(self.runs, list) or not self.runs:
+            raise ScenarioError("scenario spec: runs: expected a non-empty list")
+        for i, r in enumerate(self.runs):
+            missing = [k for k in RUN_KEYS if not isinstance(r, dict) or k not in r]
+            if missing:
+                raise ScenarioError(f"scenario spec: runs[{i}]: missing {missing}")
+            if not (isinstance(r["duration"], (int, float)) and r["duration"] * self.rate_hz >= 1):
+                raise ScenarioError(f"scenario spec: runs[{i}].duration {r['duration']!r}; expected seconds "
+                                    "covering at least two samples")
+        for e in self.effects:
+            effect_from_dict(e)
 
 
 def sensor_suite(spec: "ScenarioSpec") -> str:
@@ -169,6 +196,9 @@ def _effects(rng, over, kind, default_n, pool, context, forced=(), suite="mocap"
     if spec is None:
         n = int(over.get("n_effects", default_n if default_n is not None else rng.integers(0, 3)))
         pool = list(pool) + (["periodic_force"] if over.get("include_uncatalogued") else [])
+        if n > len(pool):
+            raise ScenarioError(f"sample_scenario: n_effects = {n}, but only {len(pool)} effect types can be drawn "
+                                f"here ({', '.join(pool)})")
         chosen = [f for f in forced if f in pool][:n]
         rest = [p for p in pool if p not in chosen]
         chosen += [str(x) for x in rng.choice(rest, size=min(n - len(chosen), len(rest)), replace=False)]
@@ -298,7 +328,8 @@ def _realsensor(seed, rng, over) -> ScenarioSpec:
     sensors = {
         "imu": {"position": [_u(rng, -0.05, 0.10), _u(rng, -0.03, 0.03), _u(rng, -0.08, 0.0)],
                 "gyro_sigma": _u(rng, 0.001, 0.005), "acc_sigma": _u(rng, 0.01, 0.05)},
-        "euler": {"time_constant": _u(rng, 0.05, 0.3), "sigma": _u(rng, 0.002, 0.01), "yaw": bool(over.get("yaw", False))},
+        "euler": {"time_constant": _u(rng, 0.05, 0.3), "sigma": _u(rng, 0.002, 0.01),
+                  "yaw": bool(over.get("yaw", False))},
         "depth": {"position": [-0.15, 0.0, 0.0], "rate_hz": 10.0,
                   "mode": over.get("depth_mode", str(rng.choice(DEPTH_MODES))), "sigma": _u(rng, 0.005, 0.02)},
     }
