@@ -9,6 +9,7 @@ from __future__ import annotations
 import ast
 import dataclasses
 import filecmp
+import json
 from pathlib import Path
 
 import numpy as np
@@ -143,16 +144,20 @@ def _general_plant(n=1, restoring=False):
                  current=np.zeros((3, n)), allocation=rep(np.eye(6)), lag_time=np.zeros((6, n)))
 
 
+def _tumble(plant, nu0, duration, renormalize=True):
+    """Unforced motion of ``plant`` from rest attitude with body velocity ``nu0``; states (n_t, 19)."""
+    y0 = np.zeros((19, 1))
+    y0[3] = 1.0
+    y0[7:13, 0] = nu0
+    t = np.arange(0, duration + 1e-9, 0.05)
+    return integrate(plant, t, np.zeros((t.size, 6, 1)), y0, max_step=0.002, renormalize=renormalize)[0][:, :, 0]
+
+
 def test_energy_is_conserved_without_damping_and_restoring():
     """Tumbling free body (general M_RB with CG offset and products of inertia, full M_A):
     T = 1/2 nu^T (M_RB + M_A) nu is constant (the Coriolis terms do no work)."""
     plant = _general_plant()
-    y0 = np.zeros((19, 1))
-    y0[3] = 1.0
-    y0[7:13, 0] = [0.4, -0.3, 0.2, 1.5, -2.0, 1.0]
-    t = np.arange(0, 10.0 + 1e-9, 0.05)
-    Y, _ = integrate(plant, t, np.zeros((t.size, 6, 1)), y0, max_step=0.002)
-    nu = Y[:, 7:13, 0]
+    nu = _tumble(plant, [0.4, -0.3, 0.2, 1.5, -2.0, 1.0], 10.0)[:, 7:13]
     T = 0.5 * np.einsum("ti,ij,tj->t", nu, plant.M[:, :, 0], nu)
     assert np.abs(nu[-1] - nu[0]).max() > 0.1              # it really tumbled
     assert np.abs(T / T[0] - 1).max() < 1e-10
@@ -163,15 +168,11 @@ def test_energy_with_restoring_is_kinetic_plus_potential():
     kinetic energy plus the potential of the loads, -(W - B) z - (W r_g - B r_b) . R^T e_3 ...
     i.e. V = -sum F_i (z + (R r_i)_z), is conserved."""
     plant = _general_plant(restoring=True)
-    y0 = np.zeros((19, 1))
-    y0[3] = 1.0
-    y0[7:13, 0] = [0.3, -0.2, 0.1, 0.8, -0.6, 0.5]
-    t = np.arange(0, 10.0 + 1e-9, 0.05)
-    Y, _ = integrate(plant, t, np.zeros((t.size, 6, 1)), y0, max_step=0.002)
-    nu = Y[:, 7:13, 0]
-    R = rotation(Y[:, 3:7, 0].T)                           # (3, 3, n_t)
+    Y = _tumble(plant, [0.3, -0.2, 0.1, 0.8, -0.6, 0.5], 10.0)
+    nu = Y[:, 7:13]
+    R = rotation(Y[:, 3:7].T)                              # (3, 3, n_t)
     kin = 0.5 * np.einsum("ti,ij,tj->t", nu, plant.M[:, :, 0], nu)
-    pot = -(plant.load[0] * Y[:, 2, 0] + np.einsum("jt,j->t", R[2], plant.load_moment[:, 0]))
+    pot = -(plant.load[0] * Y[:, 2] + np.einsum("jt,j->t", R[2], plant.load_moment[:, 0]))
     E = kin + pot
     assert np.ptp(pot) > 0.1
     assert np.ptp(E) / np.ptp(pot) < 1e-8
@@ -181,13 +182,9 @@ def test_quaternion_stays_unit():
     """Without renormalization RK4 keeps |q| = 1 to ~1e-10 over 5 s of tumbling; with it (the
     default) to round-off."""
     plant = _general_plant()
-    y0 = np.zeros((19, 1))
-    y0[3] = 1.0
-    y0[7:13, 0] = [0.4, -0.3, 0.2, 1.5, -2.0, 1.0]
-    t = np.arange(0, 5.0 + 1e-9, 0.05)
     for renorm, tol in ((False, 1e-9), (True, 1e-14)):
-        Y, _ = integrate(plant, t, np.zeros((t.size, 6, 1)), y0, max_step=0.002, renormalize=renorm)
-        assert np.abs(np.linalg.norm(Y[:, 3:7, 0], axis=1) - 1).max() < tol
+        Y = _tumble(plant, [0.4, -0.3, 0.2, 1.5, -2.0, 1.0], 5.0, renormalize=renorm)
+        assert np.abs(np.linalg.norm(Y[:, 3:7], axis=1) - 1).max() < tol
 
 
 def test_integration_error_by_step_halving(veh):
@@ -509,6 +506,7 @@ def test_profiles_shape():
         assert d.runs[-2]["shape"]["shape"] == "spiral" and d.runs[-2]["split"] == "validation"
         r = sample_scenario(seed, "realsensor")
         assert "mocap" not in r.sensors and all(x["dof"] == "mixed" for x in r.runs)
+    assert json.loads(json.dumps(sample_scenario(3, "realsensor", dvl=True).to_dict()))   # plain data
     assert sample_scenario(3, "diagnose").to_dict() == sample_scenario(3, "diagnose").to_dict()
     assert sample_scenario(3, "diagnose").to_dict() != sample_scenario(4, "diagnose").to_dict()
     assert len(sample_scenario(1, "diagnose", n_effects=2).effects) == 2

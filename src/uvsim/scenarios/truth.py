@@ -53,8 +53,10 @@ def commanded_outputs(veh: VehicleData, inputs: np.ndarray, kind: str) -> np.nda
 
 def equilibrium_attitude(load_moment: np.ndarray) -> tuple[float, float]:
     """Roll and pitch (rad) at which the restoring moment ``m1 x k`` vanishes stably
-    (``k = R^T e_3`` parallel to ``m1 = sum F_i r_i``)."""
+    (``k = R^T e_3`` parallel to ``m1 = sum F_i r_i``; level when ``m1 = 0``)."""
     k = np.asarray(load_moment, dtype=float)
+    if np.linalg.norm(k) < 1e-12:                     # CG on the CB: neutral in any attitude, start level
+        return 0.0, 0.0
     k = k / np.linalg.norm(k)
     return float(np.arctan2(k[1], k[2])), float(-np.arcsin(np.clip(k[0], -1, 1)))
 
