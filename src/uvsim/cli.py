@@ -26,6 +26,7 @@ COMMAND_MODULES = [
     "uvsim.commands.maneuver",
     "uvsim.commands.calibrate",
     "uvsim.commands.diagnose",
+    "uvsim.commands.scenario",
 ]
 
 
