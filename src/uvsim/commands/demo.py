@@ -46,7 +46,10 @@ def _run(args) -> int:
     from uvsim.logs import read_dataset
     from uvsim.vehicle import load_vehicle
 
+    from uvsim.commands.checks import check_outputs
+
     out = Path(args.out)
+    check_outputs(dirs={"--out": out})
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     ds = read_dataset(shipped_dataset_path())

@@ -10,6 +10,7 @@ import json
 from pathlib import Path
 
 from uvsim.commands import parse_pairs
+from uvsim.commands.checks import add_allow_argument, check_outputs, check_runs_at_door, diagnosis_problems, fail_if, say
 
 
 def register(subparsers) -> None:
@@ -31,6 +32,7 @@ def register(subparsers) -> None:
     p.add_argument("--weights", help="per signal group weights, e.g. position=1,attitude=2 (default 1 each)")
     p.add_argument("--max-nfev", type=int, default=30, help="evaluation budget of each fit (default 30)")
     p.add_argument("--quiet", action="store_true", help="no progress messages")
+    add_allow_argument(p)
     p.set_defaults(func=run)
 
 
@@ -69,15 +71,36 @@ def format_table(report: dict) -> str:
 
 def run(args) -> int:
     from uvsim.diagnosis import diagnose, save_fixed_vehicle
+    from uvsim.errors import CalibrationError
+    from uvsim.logs import read_dataset
+    from uvsim.vehicle import load_vehicle
 
-    say = None if args.quiet else (lambda m: print(f"uvsim diagnose: {m}", flush=True))
-    diag = diagnose(args.data, args.vehicle, retune=_list(args.retune), only=_list(args.only),
-                    noise=parse_pairs(args.noise, "--noise"), weights=parse_pairs(args.weights, "--weights"), max_nfev=args.max_nfev,
-                    progress=say)
-    print(format_table(diag.report))
+    progress = None if args.quiet else (lambda m: print(f"uvsim diagnose: {m}", flush=True))
+    noise, weights = parse_pairs(args.noise, "--noise"), parse_pairs(args.weights, "--weights")
+    check_outputs({"--json": args.json_out, "--out": args.out}, {"--plots": args.plots})
+    ds = read_dataset(args.data)
+    if args.vehicle is None and ds.vehicle is None:
+        raise CalibrationError(f"{ds.path}: no --vehicle given and the manifest names none")
+    veh = load_vehicle(args.vehicle if args.vehicle is not None else (ds.vehicle_file or ds.vehicle))
+    notes = check_runs_at_door("diagnose", ds.runs, veh, args.allow)
+    diag = diagnose(ds, veh, retune=_list(args.retune), only=_list(args.only), noise=noise, weights=weights,
+                    max_nfev=args.max_nfev, progress=progress)
+    rep = diag.report
+    split = rep["runs"]["split"]
+    if split != "from the manifest":  # the runs were re-split: say so (it is in the report too)
+        line = f"note: {ds.path / 'manifest.yaml'}: {split} ({', '.join(rep['runs']['validation'])})"
+        say("diagnose", line)
+        notes.append(line)
+    rep["input_notes"] = notes
+    problems = diagnosis_problems(rep, diag.validation)
+    rep["status"] = {"ok": not problems, "problems": problems}
     if args.json_out:
         Path(args.json_out).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json_out).write_text(json.dumps(diag.report, indent=2, default=float))
+        Path(args.json_out).write_text(json.dumps(rep, indent=2, default=float))
+    fail_if(problems, "diagnose", "No corrected vehicle was written" + (f"; the report is in {args.json_out}."
+                                                                        if args.json_out else "."))
+    print(format_table(rep))
+    if args.json_out:
         print(f"report: {args.json_out}")
     if args.out:
         save_fixed_vehicle(diag, args.out)

@@ -1,6 +1,7 @@
 """``uvsim simulate --vehicle V --run RUN.csv --out OUT.csv [--current N,E,D]``."""
 from __future__ import annotations
 
+from uvsim.commands.checks import add_allow_argument, check_outputs, check_runs_at_door
 from uvsim.errors import UvsimError
 
 
@@ -25,6 +26,7 @@ def register(sub) -> None:
     p.add_argument("--initial-window", type=float, default=0.0, metavar="S",
                    help="estimate the initial position/attitude by a quadratic fit over the first S seconds "
                         "(default 0: the first measured sample)")
+    add_allow_argument(p)
     p.set_defaults(func=_run)
 
 
@@ -33,9 +35,11 @@ def _run(args) -> int:
     from uvsim.simulate import simulate_run
     from uvsim.vehicle import load_vehicle
 
+    current = _triple(args.current) if args.current else None
+    check_outputs({"--out": args.out})
     veh = load_vehicle(args.vehicle)
     run = read_run(args.run)
-    current = _triple(args.current) if args.current else None
+    check_runs_at_door("simulate", [run], veh, args.allow)
     res = simulate_run(veh, run, current=current, method=args.method, substeps=args.substeps,
                        initial_window_s=args.initial_window)
     df = res.to_pandas()

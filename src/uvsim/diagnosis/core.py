@@ -300,6 +300,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
             "score": {"criterion": "BIC", "bic": item["bic"], "delta_bic": float(dbic),
                       "validation_improvement": improvement, "explained_noise_sigmas": explained},
             "accepted": accepted,
+            "at_bound": at_bound,
             "why": why,
             "notes": cand.notes,
             "function_evaluations": fr.nfev,
