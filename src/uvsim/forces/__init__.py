@@ -38,8 +38,13 @@ def make_term(spec, *, context: str = "effects") -> ForceTerm:
     if isinstance(spec, ForceTerm):
         return spec
     _load_builtin()
-    if not isinstance(spec, dict) or "type" not in spec:
-        raise VehicleError(f"{context}: expected a mapping with a 'type' key, got {spec!r}")
+    if not isinstance(spec, dict):
+        raise VehicleError(f"{context}: expected a mapping with a 'type' key, got {spec!r}"[:300])
+    if "type" not in spec:
+        near = [k for k in spec if did_you_mean("type", [k])]
+        hint = f" (is {near[0]!r} a misspelt 'type'?)" if near else f" (keys found: {', '.join(map(str, spec))})"
+        raise VehicleError(f"{context}: missing 'type' (the name of the plug-in){hint}; known types: "
+                           f"{', '.join(sorted(_REGISTRY))}")
     kind = spec["type"]
     cls = _REGISTRY.get(kind) if isinstance(kind, str) else None
     if cls is None:
