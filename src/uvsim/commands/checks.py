@@ -109,21 +109,29 @@ def calibration_problems(rep: Mapping, ds) -> list[str]:
     probs = rmse_problems(rep["training_rmse"], [r for r in ds.runs if r.split == "train"], "training RMSE")
     probs += rmse_problems(rep["validation_rmse"], [r for r in ds.runs if r.split == "validation"],
                            "validation RMSE")
-    for d, a in rep["identifiability"].items():
+    hits = bound_hits(rep)
+    for d in rep["dofs"]:
         names = [k for k in DOF_PARAMETERS.get(d, ()) if k in rep["parameters"]]
-        if names and set(names) <= set(a.get("at_bound", ())):
+        if names and set(names) <= set(hits):
             probs.append(f"every fitted {d} parameter ({', '.join(names)}) ended on a search bound, so the data "
                          "do not determine them (wrong units, or a starting vehicle far off: widen --margin)")
     return probs
 
 
+#: A fitted value within this fraction of its search range from a bound is "on the bound"
+#: (a bounded least-squares solver such as scipy's 'trf' stays strictly inside its bounds,
+#: so a value pushed against one ends a hair inside it).
+BOUND_TOL = 1e-3
+
+
 def bound_hits(rep: Mapping) -> dict[str, str]:
     """{parameter: "lower"|"upper"} for the fitted parameters on a search bound."""
     out = {}
-    for a in rep["identifiability"].values():
-        for k in a.get("at_bound", ()):
-            lo, hi = rep["bounds"][k]
-            v = rep["parameters"][k]
+    for k, v in rep["parameters"].items():
+        if k not in rep["bounds"]:
+            continue
+        lo, hi = rep["bounds"][k]
+        if min(v - lo, hi - v) <= BOUND_TOL * (hi - lo):
             out[k] = "lower" if abs(v - lo) <= abs(v - hi) else "upper"
     return out
 
