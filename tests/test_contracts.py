@@ -461,6 +461,16 @@ API_CASES = {
         ("d:", "'efects'", "did you mean 'effects'")),
     "read-dataset-vehicel": (lambda t: uvsim.logs.read_dataset(manifest(t, lambda d: {"vehicel": d.pop("vehicle"), **d})),
                              uvsim.errors.LogFormatError, ("manifest.yaml", "did you mean 'vehicle'")),
+    "calibrator-time-ms": (lambda t: __import__("uvsim.calibration").calibration.Calibrator(
+        population=4, generations=1).fit(dataset(t, scale(["t"], 1000.0)), "bluerov2_heavy_initial"),
+        uvsim.errors.PlausibilityError, ("surge_01.csv", "column 't'", "milliseconds")),
+    "calibrator-gap-allowed-still-checks-others": (lambda t: __import__("uvsim.calibration").calibration.Calibrator(
+        population=4, generations=1, allow=["time-gap"]).fit(dataset(t, scale(["x"], 1000.0)),
+                                                             "bluerov2_heavy_initial"),
+        uvsim.errors.PlausibilityError, ("surge_01.csv", "column 'x'", "--allow speed")),
+    "diagnose-gap": (lambda t: __import__("uvsim.diagnosis").diagnosis.diagnose(
+        dataset(t, gap(100, 100.0)), "bluerov2_heavy", only=["current"], max_nfev=3),
+        uvsim.errors.PlausibilityError, ("surge_01.csv", "column 't'", "row 100", "gap")),
     "check-runs-mm": (lambda t: __import__("uvsim.plausibility").plausibility.check_runs(
         [uvsim.logs.read_run(run_file(t, scale(["x"], 1000.0)))], uvsim.load_vehicle("bluerov2_heavy")),
         uvsim.errors.PlausibilityError, ("run.csv", "column 'x'")),

@@ -125,6 +125,7 @@ def _run(args) -> int:
     from uvsim.calibration import Calibrator
     from uvsim.checkpoint import Checkpoint
     from uvsim.logs import read_dataset
+    from uvsim.plausibility import parse_allow
     from uvsim.vehicle import load_vehicle
 
     out = Path(args.out)
@@ -144,7 +145,7 @@ def _run(args) -> int:
                      margin=args.margin, workers=args.workers, dask=args.dask, checkpoint=ckpt, resume=args.resume,
                      refine=not args.no_refine, estimate_initial_velocity=args.estimate_initial_velocity,
                      signal_weights=weights, low_speed_exponent=args.low_speed_exponent,
-                     progress=want_progress(args))
+                     progress=want_progress(args), allow=parse_allow(args.allow))
     try:
         cal.fit(ds, veh)
     except KeyboardInterrupt:

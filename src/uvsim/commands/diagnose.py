@@ -73,6 +73,7 @@ def run(args) -> int:
     from uvsim.diagnosis import diagnose, save_fixed_vehicle
     from uvsim.errors import CalibrationError
     from uvsim.logs import read_dataset
+    from uvsim.plausibility import parse_allow
     from uvsim.vehicle import load_vehicle
 
     progress = None if args.quiet else (lambda m: print(f"uvsim diagnose: {m}", flush=True))
@@ -84,7 +85,7 @@ def run(args) -> int:
     veh = load_vehicle(args.vehicle if args.vehicle is not None else (ds.vehicle_file or ds.vehicle))
     notes = check_runs_at_door("diagnose", ds.runs, veh, args.allow)
     diag = diagnose(ds, veh, retune=_list(args.retune), only=_list(args.only), noise=noise, weights=weights,
-                    max_nfev=args.max_nfev, progress=progress)
+                    max_nfev=args.max_nfev, progress=progress, allow=parse_allow(args.allow))
     rep = diag.report
     split = rep["runs"]["split"]
     if split != "from the manifest":  # the runs were re-split: say so (it is in the report too)

@@ -52,6 +52,7 @@ from uvsim.diagnosis.signatures import evidence as signature_evidence
 from uvsim.errors import CalibrationError, UvsimError, VehicleError
 from uvsim.forces import make_term
 from uvsim.logs import Dataset, read_dataset
+from uvsim.plausibility import check_runs, parse_allow
 from uvsim.vehicle import load_vehicle
 
 NOISE_LEVEL = 1.5
@@ -145,7 +146,7 @@ def _run_summary(m: dict) -> dict:
 
 def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: Sequence[str] | None = None,
              noise: Mapping[str, float] | None = None, weights: Mapping[str, float] | None = None,
-             max_nfev: int = 30, progress=None) -> Diagnosis:
+             max_nfev: int = 30, progress=None, allow=()) -> Diagnosis:
     """Diagnose which catalogue effect the model lacks (module docstring).
 
     Parameters
@@ -161,6 +162,8 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         multiplying its normalized residual's square in the fit and the score.
     max_nfev : function-evaluation budget of each least-squares fit.
     progress : optional callable ``progress(message)``.
+    allow : names of plausibility checks (:mod:`uvsim.plausibility`) that may fail; every
+        other check of the runs against the vehicle raises before any fit.
 
     Returns
     -------
@@ -173,6 +176,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         if vehicle is None:
             raise CalibrationError(f"{dataset.path}: no vehicle given and the manifest names none")
     veh = load_vehicle(vehicle)
+    check_runs(dataset.runs, veh, parse_allow(allow, "allow"))  # units, sampling, PWM range
     train, val, split_note = _split(dataset)
 
     groups = ("position", "attitude", "velocity", "rates")
