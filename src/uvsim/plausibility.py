@@ -206,6 +206,18 @@ def _check_time(run, vehicle, tau, what) -> list[Finding]:
     return out
 
 
+def _over_limit(run, c, values, limit, check, unit, hint, implied=False):
+    """A Finding when more than EXCEED_FRACTION of ``values`` (per row of column ``c``)
+    exceed ``limit``; None otherwise."""
+    i = _exceeds(values, limit)
+    if i is None:
+        return None
+    what = (f"implied {'speed' if check == 'speed' else 'angular rate'} {values[i]:.4g} {unit} (change over "
+            f"{LAG_S:g} s) in" if implied else f"{run.data[c].iloc[i]:.6g} {unit}, and")
+    return Finding(check, (f"{_src(run)}: column {c!r}, {_row(run, i)}: {what} more than {100 * EXCEED_FRACTION:g} % "
+                           f"of the rows above {limit:g} {unit}; {hint}"))
+
+
 def _check_translation(run) -> list[Finding]:
     from uvsim.logs import DEPTH_COLUMN, POSITION_COLUMNS, VELOCITY_COLUMNS
 
@@ -215,31 +227,20 @@ def _check_translation(run) -> list[Finding]:
         if c not in data.columns:
             continue
         x = data[c].to_numpy()
-        if c in ("z", DEPTH_COLUMN):
-            deep = np.flatnonzero(x > MAX_DEPTH)
-            if deep.size:
-                i = int(deep[0])
-                out.append(Finding("position-range", (
-                    f"{_src(run)}: column {c!r}, {_row(run, i)}: {x[i]:.6g} m is deeper than the deepest ocean "
-                    f"({MAX_DEPTH:g} m); expected metres (positions in millimetres?)")))
-                continue
-        i = _exceeds(_implied_rate(t, x, k), MAX_SPEED)
-        if i is not None:
-            v = _implied_rate(t, x, k)[i]
-            out.append(Finding("speed", (
-                f"{_src(run)}: column {c!r}, {_row(run, i)}: implied speed {v:.4g} m/s (change over {LAG_S:g} s) "
-                f"in more than {100 * EXCEED_FRACTION:g} % of the rows above {MAX_SPEED:g} m/s; expected metres "
-                "(positions in millimetres or centimetres?)")))
+        deep = np.flatnonzero(x > MAX_DEPTH) if c in ("z", DEPTH_COLUMN) else ()
+        if len(deep):
+            i = int(deep[0])
+            out.append(Finding("position-range", (
+                f"{_src(run)}: column {c!r}, {_row(run, i)}: {x[i]:.6g} m is deeper than the deepest ocean "
+                f"({MAX_DEPTH:g} m); expected metres (positions in millimetres?)")))
+            continue
+        out.append(_over_limit(run, c, _implied_rate(t, x, k), MAX_SPEED, "speed", "m/s",
+                               "expected metres (positions in millimetres or centimetres?)", implied=True))
     for c in VELOCITY_COLUMNS:
         if c in data.columns:
-            v = np.abs(data[c].to_numpy())
-            i = _exceeds(v, MAX_SPEED)
-            if i is not None:
-                out.append(Finding("speed", (
-                    f"{_src(run)}: column {c!r}, {_row(run, i)}: {data[c].iloc[i]:.6g} m/s, and more than "
-                    f"{100 * EXCEED_FRACTION:g} % of the rows above {MAX_SPEED:g} m/s; expected m/s "
-                    "(velocity in cm/s or mm/s?)")))
-    return out
+            out.append(_over_limit(run, c, np.abs(data[c].to_numpy()), MAX_SPEED, "speed", "m/s",
+                                   "expected m/s (velocity in cm/s or mm/s?)"))
+    return [f for f in out if f is not None]
 
 
 def _check_rotation(run) -> list[Finding]:
@@ -264,23 +265,13 @@ def _check_rotation(run) -> list[Finding]:
             ok = np.isfinite(a)
             u = np.full_like(a, np.nan)
             u[ok] = np.unwrap(a[ok])
-            rate = _implied_rate(t, u, k)
-            i = _exceeds(rate, MAX_RATE)
-            if i is not None:
-                out.append(Finding("angular-rate", (
-                    f"{_src(run)}: column {c!r}, {_row(run, i)}: implied angular rate {rate[i]:.4g} rad/s (change "
-                    f"over {LAG_S:g} s) in more than {100 * EXCEED_FRACTION:g} % of the rows above {MAX_RATE:g} "
-                    "rad/s; expected radians (angles in degrees?)")))
+            out.append(_over_limit(run, c, _implied_rate(t, u, k), MAX_RATE, "angular-rate", "rad/s",
+                                   "expected radians (angles in degrees?)", implied=True))
     for c in RATE_COLUMNS:
         if c in data.columns:
-            r = np.abs(data[c].to_numpy())
-            i = _exceeds(r, MAX_RATE)
-            if i is not None:
-                out.append(Finding("angular-rate", (
-                    f"{_src(run)}: column {c!r}, {_row(run, i)}: {data[c].iloc[i]:.6g} rad/s, and more than "
-                    f"{100 * EXCEED_FRACTION:g} % of the rows above {MAX_RATE:g} rad/s; expected rad/s "
-                    "(rates in deg/s?)")))
-    return out
+            out.append(_over_limit(run, c, np.abs(data[c].to_numpy()), MAX_RATE, "angular-rate", "rad/s",
+                                   "expected rad/s (rates in deg/s?)"))
+    return [f for f in out if f is not None]
 
 
 def _check_accel(run, vehicle) -> list[Finding]:
