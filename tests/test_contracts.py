@@ -498,3 +498,15 @@ def test_shipped_inputs_pass_every_contract():
         assert ds.meta.get("truth") and ds.meta.get("noise")
         assert [f for r in ds.runs for f in check_run(r, veh)] == []
         assert all(not r.notes for r in ds.runs)
+
+
+def test_loop_through_pitch_90_is_not_an_angular_rate_problem():
+    """SAM's tight loop passes pitch +-90 deg, where roll and yaw jump by pi: the rate check
+    uses the rotation between attitudes, not Euler differences."""
+    from uvsim.logs import Run
+    from uvsim.maneuvers import run_maneuver
+    from uvsim.plausibility import check_run
+
+    frame = run_maneuver("tight_loop").frame
+    assert np.abs(np.diff(np.unwrap(frame["roll"].to_numpy()))).max() > 3.0  # the pi jump is there
+    assert check_run(Run("tight_loop", None, frame), uvsim.load_vehicle("sam")) == []

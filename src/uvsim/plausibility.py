@@ -25,8 +25,9 @@ Checks (name: what is flagged):
     by ``u, v, w``, in more than 1 % of the rows above ``MAX_SPEED``: positions in mm
     or cm, velocities in cm/s.
 ``angular-rate``
-    Angular rate implied by roll/pitch/yaw (unwrapped, over ``LAG_S``) or given by
-    ``p, q, r``, in more than 1 % of the rows above ``MAX_RATE``: angles in degrees.
+    Angular rate implied by the attitude (the rotation angle between attitudes ``LAG_S``
+    apart; angle by angle, unwrapped, for a partial attitude) or given by ``p, q, r``, in
+    more than 1 % of the rows above ``MAX_RATE``: angles in degrees.
 ``angle-range``
     ``roll`` outside [-pi, pi] or ``pitch`` outside [-pi/2, pi/2] (ZYX Euler angles,
     ``ANGLE_TOL`` of slack): angles in degrees.
@@ -54,6 +55,7 @@ from typing import Iterable
 import numpy as np
 
 from uvsim.errors import PlausibilityError, UvsimError
+from uvsim.kinematics import attitude_error_angle
 from uvsim.schema import did_you_mean
 
 #: Speeds above this (m/s) are not an underwater vehicle's (an order of magnitude above
@@ -214,7 +216,8 @@ def _over_limit(run, c, values, limit, check, unit, hint, implied=False):
         return None
     what = (f"implied {'speed' if check == 'speed' else 'angular rate'} {values[i]:.4g} {unit} (change over "
             f"{LAG_S:g} s) in" if implied else f"{run.data[c].iloc[i]:.6g} {unit}, and")
-    return Finding(check, (f"{_src(run)}: column {c!r}, {_row(run, i)}: {what} more than {100 * EXCEED_FRACTION:g} % "
+    label = f"column {c!r}" if c in run.data.columns else f"columns {c}"
+    return Finding(check, (f"{_src(run)}: {label}, {_row(run, i)}: {what} more than {100 * EXCEED_FRACTION:g} % "
                            f"of the rows above {limit:g} {unit}; {hint}"))
 
 
@@ -259,14 +262,25 @@ def _check_rotation(run) -> list[Finding]:
                 out.append(Finding("angle-range", (
                     f"{_src(run)}: column {c!r}, {_row(run, i)}: {a[i]:.6g} is outside [-{bound:.4g}, "
                     f"{bound:.4g}] rad (ZYX Euler angles); expected radians (angles in degrees?)")))
-    for c in EULER_COLUMNS:
-        if c in data.columns and c not in out_of_range:
-            a = data[c].to_numpy()
-            ok = np.isfinite(a)
-            u = np.full_like(a, np.nan)
-            u[ok] = np.unwrap(a[ok])
-            out.append(_over_limit(run, c, _implied_rate(t, u, k), MAX_RATE, "angular-rate", "rad/s",
-                                   "expected radians (angles in degrees?)", implied=True))
+    if run.has_full_attitude and not out_of_range:
+        # the rotation angle between attitudes k samples apart: no Euler singularity (roll and
+        # yaw jump by pi when a loop passes pitch +-90 deg)
+        q = run.quaternion
+        rate = np.full(t.size, np.nan)
+        if t.size > k:
+            rate[:-k] = attitude_error_angle(q[:-k], q[k:]) / (t[k:] - t[:-k])
+        label = "qw..qz" if run.has_quaternion else "roll, pitch, yaw"
+        out.append(_over_limit(run, label, rate, MAX_RATE, "angular-rate", "rad/s",
+                               "expected radians (angles in degrees?)", implied=True))
+    elif not run.has_full_attitude:
+        for c in EULER_COLUMNS:  # partial attitude (e.g. an IMU without magnetometer): angle by angle
+            if c in data.columns and c not in out_of_range:
+                a = data[c].to_numpy()
+                ok = np.isfinite(a)
+                u = np.full_like(a, np.nan)
+                u[ok] = np.unwrap(a[ok])
+                out.append(_over_limit(run, c, _implied_rate(t, u, k), MAX_RATE, "angular-rate", "rad/s",
+                                       "expected radians (angles in degrees?)", implied=True))
     for c in RATE_COLUMNS:
         if c in data.columns:
             out.append(_over_limit(run, c, np.abs(data[c].to_numpy()), MAX_RATE, "angular-rate", "rad/s",
