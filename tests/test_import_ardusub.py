@@ -252,15 +252,22 @@ def test_cli_import_then_simulate_compare(tmp_path, capsys):
     assert "T4_rear_left" in capsys.readouterr().err
 
 
-def test_calibrate_accepts_an_imported_dataset_with_a_dof_segment(tmp_path):
+def test_calibrate_accepts_an_imported_dataset_with_a_dof_segment(tmp_path, capsys):
+    """The imported dataset passes every input contract and the calibration runs; on this
+    short surface log with a stand-in vehicle the fit predicts nothing (docs/import_export.md),
+    which the result checks of issue 13 report as such (exit 2, nothing written) rather than
+    as a success."""
     seg = tmp_path / "seg.yaml"
     seg.write_text(yaml.safe_dump({"segments": [{"start": 896.2, "end": 912.1, "dof": "yaw", "name": "yaw_1"}]}))
     ds = tmp_path / "ds"
     assert main(["import", "ardusub", str(TLOG), "--out", str(ds), "--segments", str(seg), "--adapt-vehicle"]) == 0
     out = tmp_path / "fit.yaml"
-    assert main(["calibrate", "--data", str(ds), "--population", "4", "--generations", "1",
-                 "--out", str(out)]) == 0
-    assert load_vehicle(out).name
+    rc = main(["calibrate", "--data", str(ds), "--population", "4", "--generations", "1", "--out", str(out)])
+    if rc == 0:
+        assert load_vehicle(out).name
+    else:
+        err = capsys.readouterr().err
+        assert rc == 2 and "fails its sanity checks" in err and not out.exists(), err
 
 
 @pytest.mark.xfail(strict=False, reason="needs issue 14 mixed-run calibration")

@@ -471,12 +471,12 @@ def test_manifest_missing(tmp_path):
 
 
 @pytest.mark.parametrize("text, frag", [
-    ("runs: [file: a.csv\n  - {", "cannot parse YAML"),
+    ("runs: [file: a.csv\n  - {", "not valid YAML"),
     ("- a.csv\n", "expected a mapping"),
     ("vehicle: v\n", "'runs' must be a non-empty list"),
     ("runs: []\n", "'runs' must be a non-empty list"),
     ("runs:\n  - a.csv\n", "runs[0]: expected a mapping with a 'file'"),
-    ("runs:\n  - file: a.csv\n    wieght: 2\n", "unknown key(s) ['wieght']"),
+    ("runs:\n  - file: a.csv\n    wieght: 2\n", "unknown key 'wieght' (did you mean 'weight'?)"),
     ("vehicle: [1, 2]\nruns:\n  - file: a.csv\n", "'vehicle' must be"),
 ])
 def test_manifest_unparseable_or_malformed(tmp_path, text, frag):

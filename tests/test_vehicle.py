@@ -116,7 +116,7 @@ def test_with_parameters_and_save_round_trip(tmp_path):
 
 
 def test_absurd_override_rejected():
-    with pytest.raises(VehicleError, match="not positive definite"):
+    with pytest.raises(VehicleError, match="I_xx = -1: expected a positive value"):
         uvsim.Model("bluerov2_heavy", {"I_xx": -1.0})
     with pytest.raises(VehicleError, match="non-finite"):
         uvsim.Model("bluerov2_heavy", {"X_u": np.nan})

@@ -2,15 +2,23 @@
 
 Each sub-command lives in its own module under :mod:`uvsim.commands` and exposes
 ``register(subparsers)``, which adds its parser and sets ``func`` to a callable
-``func(args) -> int``.  Library errors (:class:`uvsim.errors.UvsimError`) are
-reported on stderr as one line and exit with status 2; nothing in the library
-calls ``sys.exit``.
+``func(args) -> int``.  Library errors (:class:`uvsim.errors.UvsimError`) and
+operating-system errors (disk full, ...) are reported on stderr as one line and exit
+with status 2; nothing in the library calls ``sys.exit``.
+
+Interrupts: SIGINT (Ctrl-C) and SIGTERM both unwind the command (so worker pools are
+stopped and checkpoints stay consistent), print one line and exit with 130 (SIGINT) or
+143 (SIGTERM).  Messages the library logs on the ``uvsim`` logger at INFO level (e.g.
+``resuming from CKPT: the GA, generation 3 of 30 done``) are printed on stderr.
 """
 from __future__ import annotations
 
 import argparse
 import importlib
+import logging
+import signal
 import sys
+import threading
 
 from uvsim.errors import UvsimError
 
@@ -42,14 +50,44 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM received: unwinds the command like Ctrl-C does."""
+
+
+def _raise_terminated(signum, frame):
+    raise Terminated()
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    in_main = threading.current_thread() is threading.main_thread()
+    old_term = signal.signal(signal.SIGTERM, _raise_terminated) if in_main else None
+    logger = logging.getLogger("uvsim")
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter(f"uvsim {args.command}: %(message)s"))
+    old_level = logger.level
+    logger.addHandler(handler)
+    logger.setLevel(logging.INFO)
     try:
         return int(args.func(args) or 0)
     except UvsimError as exc:
-        print(f"uvsim {args.command}: error: {exc}", file=sys.stderr)
+        text = " ".join(line.strip() for line in str(exc).splitlines())  # one line
+        print(f"uvsim {args.command}: error: {text}", file=sys.stderr)
         return 2
+    except OSError as exc:  # e.g. disk full while writing an output
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"uvsim {args.command}: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt as exc:
+        term = isinstance(exc, Terminated)
+        print(f"uvsim {args.command}: interrupted ({'SIGTERM' if term else 'SIGINT'})", file=sys.stderr)
+        return 143 if term else 130
+    finally:
+        logger.removeHandler(handler)
+        logger.setLevel(old_level)
+        if in_main:
+            signal.signal(signal.SIGTERM, old_term)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -25,3 +25,18 @@ class HydroError(UvsimError, ValueError):
 
 class CalibrationError(UvsimError, RuntimeError):
     """A calibration could not be set up or run."""
+
+
+class PlausibilityError(LogFormatError):
+    """A run's values make no physical sense for the vehicle (wrong units, a sample
+    interval the integrator cannot follow, PWM outside the thrust curve):
+    :mod:`uvsim.plausibility`, ``--allow NAME`` on the commands."""
+
+
+class ResultCheckError(UvsimError, RuntimeError):
+    """A fit finished but its result fails the sanity checks (non-finite or exploding
+    RMSE, every parameter on a search bound) and is not reported as a success."""
+
+
+class CheckpointError(CalibrationError):
+    """A checkpoint cannot be written or read, or belongs to another problem."""

@@ -22,7 +22,9 @@ import pandas as pd
 import yaml
 
 from uvsim.errors import LogFormatError
+from uvsim.files import load_yaml
 from uvsim.kinematics import attitude_error_angle, euler_to_quat, quat_to_euler
+from uvsim.schema import check_keys, require_mapping
 
 DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw", "mixed")
 SPLITS = ("train", "validation")
@@ -51,13 +53,22 @@ MEASURED_COLUMNS = (POSITION_COLUMNS + (DEPTH_COLUMN,) + QUAT_COLUMNS + EULER_CO
 #: is not a command any of these ESCs understands (e.g. 0 = "no pulse", or a
 #: column logged in percent or in normalized units), so it is rejected.
 PWM_RANGE_US = (1000.0, 2000.0)
-#: Tolerance on |q| - 1 for logged quaternions before they are normalized.
+#: Tolerance on |q| - 1 for logged quaternions: beyond it a run is rejected.
 QUAT_NORM_TOL = 1e-2
+#: Quaternions are divided by their norm; when |q| - 1 exceeds this in some row (more
+#: than the rounding of a log written with 4+ decimals) the run records a note
+#: (:attr:`Run.notes`) that the commands print and put in their reports.
+QUAT_NOTE_TOL = 1e-3
 #: Largest disagreement (rad) allowed between quaternion and Euler columns
 #: when a run logs both.
 ATTITUDE_CONSISTENCY_TOL = 1e-2
 MANIFEST = "manifest.yaml"
-_RUN_KEYS = {"file", "dof", "weight", "split"}
+#: Top-level keys of a manifest: the contract (vehicle, description, runs), the keys that
+#: uvsim's own generators and importers write (truth, noise, sources, import) and ``meta``
+#: for free-form metadata.
+#: Anything else is a typo (``vehicel``, ``run``) and an error with a did-you-mean.
+MANIFEST_KEYS = ("vehicle", "description", "runs", "meta", "truth", "noise", "sources", "import")
+_RUN_KEYS = ("file", "dof", "weight", "split")
 _ACTUATOR_RE = re.compile(r"^(thrust|pwm)_([1-9][0-9]*)$")
 _ACTUATOR_LIKE_RE = re.compile(r"^(thrust|pwm|thruster)\D*\d+$", re.IGNORECASE)
 
@@ -261,6 +272,19 @@ def _check_voltage_column(v: np.ndarray, source: str) -> None:
         )
 
 
+def _quaternion_notes(df: pd.DataFrame, source: str) -> list[str]:
+    """A note when the logged quaternions are renormalized by more than QUAT_NOTE_TOL."""
+    if not all(c in df.columns for c in QUAT_COLUMNS):
+        return []
+    dev = np.abs(np.linalg.norm(df[list(QUAT_COLUMNS)].to_numpy(), axis=1) - 1.0)
+    if not np.any(dev > QUAT_NOTE_TOL):  # NaN rows compare False
+        return []
+    i = int(np.nanargmax(dev))
+    n = int(np.sum(dev > QUAT_NOTE_TOL))
+    return [f"{source}: quaternion qw..qz renormalized to unit norm; |q| deviates from 1 by up to "
+            f"{dev[i]:.3g} ({_row(i, source)}; {n} of {len(dev)} rows beyond {QUAT_NOTE_TOL:g})"]
+
+
 @dataclass
 class Run:
     """One logged run, validated on construction.
@@ -277,6 +301,9 @@ class Run:
     weight: float = 1.0
     split: str = "train"
     empty_columns: list[str] = field(init=False, default_factory=list)
+    #: What the reader changed in the data beyond the float64 conversion (e.g. quaternions
+    #: renormalized by more than :data:`QUAT_NOTE_TOL`); commands print these.
+    notes: list[str] = field(init=False, default_factory=list)
     _kind: str = field(init=False, repr=False, default="")
     _input_columns: list[str] = field(init=False, repr=False, default_factory=list)
 
@@ -287,6 +314,7 @@ class Run:
         self.split = _check_choice(self.split, SPLITS, "split", src, none_ok=False)
         self.weight = _check_weight(self.weight, src)
         self.data, self.empty_columns, self._kind, self._input_columns = _validate(self.data, src)
+        self.notes = _quaternion_notes(self.data, src)
 
     def _cols(self, names) -> np.ndarray:
         """(n, len(names)) array, NaN for absent columns."""
@@ -508,7 +536,7 @@ def _need_pyarrow(path: Path, verb: str) -> None:
 
 
 def _csv_header(path: Path) -> list[str]:
-    with open(path, newline="") as fh:
+    with open(path, newline="", encoding="utf-8") as fh:
         return [h.strip() for h in next(csv.reader(fh), [])]
 
 
@@ -527,18 +555,27 @@ def read_run(path, *, dof=None, weight=1.0, split="train", n_thrusters: int | No
     if not path.is_file():
         raise LogFormatError(f"{path}: run file does not exist (or is not a file)")
     if suffix == ".csv":
-        header = _csv_header(path)
-        dup = sorted({h for h in header if header.count(h) > 1})
-        if dup:  # pandas would silently rename the second one to 'x.1'
-            raise LogFormatError(f"{path}: column {dup[0]!r} appears more than once")
         try:
+            header = _csv_header(path)
+            dup = sorted({h for h in header if header.count(h) > 1})
+            if dup:  # pandas would silently rename the second one to 'x.1'
+                raise LogFormatError(f"{path}: column {dup[0]!r} appears more than once")
             # Blank lines are kept as rows so that row i is line i + 2 in messages;
             # blank lines at the end of the file hold nothing and are removed.
             df = pd.read_csv(path, skipinitialspace=True, skip_blank_lines=False)
             filled = np.flatnonzero(df.notna().any(axis=1).to_numpy())
             df = df.iloc[: filled[-1] + 1 if filled.size else 0]
-        except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as e:
-            raise LogFormatError(f"{path}: cannot parse as CSV: {e}") from e
+        except LogFormatError:
+            raise
+        except UnicodeDecodeError as e:
+            raise LogFormatError(f"{path}: not a text CSV file (byte {e.start} is not UTF-8); expected a CSV "
+                                 "file with a header row (docs/log_format.md)") from None
+        except PermissionError:
+            raise LogFormatError(f"{path}: permission denied reading the run file") from None
+        except (pd.errors.ParserError, pd.errors.EmptyDataError, csv.Error, ValueError) as e:
+            raise LogFormatError(f"{path}: cannot parse as CSV: {e}") from None
+        except OSError as e:
+            raise LogFormatError(f"{path}: cannot read the run file: {e.strerror or e}") from None
     elif suffix == ".parquet":
         _need_pyarrow(path, "reading")
         try:
@@ -562,12 +599,12 @@ def read_dataset(path) -> Dataset:
     root = manifest.parent
     if not manifest.is_file():
         raise LogFormatError(f"{manifest}: dataset manifest not found (a dataset is a directory with {MANIFEST})")
-    try:
-        doc = yaml.safe_load(manifest.read_text())
-    except yaml.YAMLError as e:
-        raise LogFormatError(f"{manifest}: cannot parse YAML: {e}") from e
+    doc = load_yaml(manifest, error=LogFormatError, what="dataset manifest (YAML)")
     if not isinstance(doc, dict):
         raise LogFormatError(f"{manifest}: expected a mapping with keys vehicle, description, runs")
+    check_keys(doc, MANIFEST_KEYS, str(manifest), error=LogFormatError,
+               hint=" (free-form metadata goes under 'meta:')")
+    require_mapping(doc.get("meta"), f"{manifest}: meta", error=LogFormatError)
     entries = doc.get("runs")
     if not isinstance(entries, list) or not entries:
         raise LogFormatError(f"{manifest}: 'runs' must be a non-empty list of {{file: ..., dof: ...}} entries")
@@ -580,9 +617,7 @@ def read_dataset(path) -> Dataset:
         where = f"{manifest}: runs[{k}]"
         if not isinstance(entry, dict) or not isinstance(entry.get("file"), str):
             raise LogFormatError(f"{where}: expected a mapping with a 'file' entry, got {entry!r}")
-        unknown = set(entry) - _RUN_KEYS
-        if unknown:
-            raise LogFormatError(f"{where}: unknown key(s) {sorted(unknown)}; allowed: {sorted(_RUN_KEYS)}")
+        check_keys(entry, _RUN_KEYS, where, error=LogFormatError)
         file = root / entry["file"]
         key = file.resolve()
         if key in seen_files:

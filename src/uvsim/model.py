@@ -32,7 +32,7 @@ from uvsim.errors import SimulationError, VehicleError
 from uvsim.forces.base import Context
 from uvsim.bilinear import CORIOLIS, CROSS, ROT_QRATE, bilinear
 from uvsim.rigid_body import rigid_body_mass_matrix
-from uvsim.vehicle import ADDED_MASS_NAMES, INERTIA_NAMES, inertia_tensor, load_vehicle
+from uvsim.vehicle import ADDED_MASS_NAMES, INERTIA_NAMES, check_parameter_values, inertia_tensor, load_vehicle
 
 POS, QUAT, NU = slice(0, 3), slice(3, 7), slice(7, 13)
 STATE_NAMES = ["x", "y", "z", "qw", "qx", "qy", "qz", "u", "v", "w", "p", "q", "r"]
@@ -130,6 +130,7 @@ class Model:
             if not np.all(np.isfinite(a)):
                 raise VehicleError(f"parameter {k}: non-finite value(s) {a}")
             params[k] = a if a.ndim == 1 and a.size == n else float(a.reshape(-1)[0]) if a.size == 1 else a
+        check_parameter_values({k: params[k] for k in overrides}, self.terms)
         self.params = params
         params['g'] = vehicle.g  # environment constant, read by the restoring term
         self.n = n

@@ -36,6 +36,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from uvsim.errors import SimulationError, VehicleError
+from uvsim.schema import check_keys, did_you_mean
 
 #: Directory of the shipped tables (``<name>.csv`` with columns pwm_us, thrust_N).
 DATA_DIR = Path(__file__).resolve().parent / "data" / "thrusters"
@@ -534,7 +535,7 @@ def available_tables() -> list[str]:
 def _shipped_path(name, field) -> Path:
     names = available_tables()
     if not isinstance(name, str) or name not in names:
-        raise VehicleError(f"{field}: unknown thrust curve {name!r}; shipped tables: {names}")
+        raise VehicleError(f"{field}: unknown thrust curve {name!r}{did_you_mean(name, names)}; shipped tables: {names}")
     return DATA_DIR / f"{name}.csv"
 
 
@@ -585,7 +586,8 @@ def load_thrust_curve(spec, *, field: str = "curve", base_dir=None) -> ThrustCur
             return LinearThrustCurve.from_mapping(spec, field=field)
         if kind == "table":
             return TabulatedThrustCurve.from_mapping(spec, field=field, base_dir=base_dir)
-        raise VehicleError(f"{field}.type: unknown thrust curve type {kind!r}; expected 'table' or 'linear'")
+        raise VehicleError(f"{field}.type: unknown thrust curve type {kind!r}{did_you_mean(kind, ('table', 'linear'))}; "
+                           "expected 'table' or 'linear'")
     raise VehicleError(
         f"{field}: expected a shipped curve name (one of {available_tables()}) or a mapping, "
         f"got {type(spec).__name__}"
@@ -624,9 +626,7 @@ def _number(x, what) -> float:
 
 
 def _check_keys(d, allowed, field):
-    unknown = sorted(set(d) - allowed)
-    if unknown:
-        raise VehicleError(f"{field}: unknown key(s) {unknown}; allowed: {sorted(allowed)}")
+    check_keys(d, sorted(allowed), field, error=VehicleError)
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:

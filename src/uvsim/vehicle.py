@@ -38,15 +38,26 @@ import yaml
 
 from uvsim.constants import G
 from uvsim.errors import VehicleError
+from uvsim.files import load_yaml
 from uvsim.forces import ForceTerm, make_term
 from uvsim.forces.actuators import Actuators, build_actuators
 from uvsim.rigid_body import rigid_body_mass_matrix
+from uvsim.schema import check_keys, did_you_mean, require_mapping, unknown_key_message
 
 ADDED_MASS_NAMES = ("X_udot", "Y_vdot", "Z_wdot", "K_pdot", "M_qdot", "N_rdot")
 INERTIA_NAMES = ("I_xx", "I_yy", "I_zz", "I_xy", "I_xz", "I_yz")
 RIGID_NAMES = ("m", "B", "x_g", "y_g", "z_g", "x_b", "y_b", "z_b") + INERTIA_NAMES
 CURRENT_NAMES = ("current_n", "current_e", "current_d")
 DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw")
+
+#: Keys a vehicle file may have at the top level; free-form metadata goes under ``meta``
+#: (docs/contracts.md).  The plug-in sections (``damping``, ``thrusters`` with a ``type``,
+#: each ``effects`` entry) are checked by their plug-in classes.
+VEHICLE_KEYS = ("name", "description", "sources", "meta", "environment", "rigid_body", "added_mass",
+                "damping", "thrusters", "effects", "sensors")
+ENVIRONMENT_KEYS = ("g", "rho", "current_ned")
+RIGID_BODY_KEYS = ("mass", "buoyancy", "r_g", "r_b", "inertia")
+SENSOR_KEYS = ("position", "source")
 
 
 def inertia_tensor(Ixx, Iyy, Izz, Ixy=0.0, Ixz=0.0, Iyz=0.0) -> np.ndarray:
@@ -208,7 +219,7 @@ class Vehicle:
 
     def summary(self) -> dict:
         """The numbers ``uvsim vehicle show --json`` prints."""
-        DL, DQ = _damping_diagonals(self.damping)
+        DL, DQ = damping_diagonals(self.damping)
         return {
             "name": self.name,
             "source": self.source,
@@ -226,7 +237,43 @@ class Vehicle:
         }
 
 
-def _damping_diagonals(term):
+#: Sign rules of the rigid-body and added-mass parameters (the loader's, for overrides):
+#: name -> (strictly positive?, what the vehicle file calls it).
+_SIGN_RULES = {"m": (True, "rigid_body.mass (kg)"), "B": (False, "rigid_body.buoyancy (N)"),
+               **{k: (True, f"rigid_body.inertia.{k} (kg m^2)") for k in INERTIA_NAMES[:3]},
+               **{k: (False, f"added_mass.{k} (a positive magnitude)") for k in ADDED_MASS_NAMES}}
+
+
+def check_parameter_values(values: Mapping[str, Any], terms=()) -> None:
+    """Apply the vehicle-file rules to named parameter values given as overrides.
+
+    Parameters
+    ----------
+    values : name -> float or array (one entry per parameter set).
+    terms : the force terms whose parameters may be among ``values``
+        (:meth:`uvsim.forces.base.ForceTerm.check_values`).
+
+    Raises
+    ------
+    VehicleError
+        Naming the parameter, the value (and parameter set) and the rule, e.g. a
+        positive damping coefficient or a negative added mass.
+    """
+    from uvsim.forces.base import first_violation
+
+    for k, v in values.items():
+        if k in _SIGN_RULES:
+            strict, field_name = _SIGN_RULES[k]
+            a = np.asarray(v, float)
+            bad = first_violation(a, a > 0 if strict else a >= 0, k)
+            if bad:
+                raise VehicleError(f"parameter {bad}: expected a {'positive' if strict else 'non-negative'} "
+                                   f"value, as for {field_name} in a vehicle file")
+    for term in terms:
+        term.check_values(values)
+
+
+def damping_diagonals(term):
     from uvsim.forces.damping import LINEAR_NAMES, QUADRATIC_NAMES
 
     p = term.parameters()
@@ -254,8 +301,8 @@ def vehicle_path(name_or_path: str | Path) -> Path:
     cand = Path(str(resources.files("uvsim") / "vehicles" / f"{name_or_path}.yaml"))
     if not cand.exists():
         raise VehicleError(
-            f"unknown vehicle {str(name_or_path)!r}: not a file and not a built-in "
-            f"(built-ins: {', '.join(builtin_vehicles())})"
+            f"unknown vehicle {str(name_or_path)!r}{did_you_mean(name_or_path, builtin_vehicles())}: not a "
+            f"file and not a built-in (built-ins: {', '.join(builtin_vehicles())})"
         )
     return cand
 
@@ -265,10 +312,7 @@ def load_vehicle(name_or_path: "str | Path | Vehicle") -> Vehicle:
     if isinstance(name_or_path, Vehicle):
         return name_or_path
     path = vehicle_path(name_or_path)
-    try:
-        d = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        raise VehicleError(f"{path}: not valid YAML: {exc}") from None
+    d = load_yaml(path, error=VehicleError, what="vehicle file (YAML)")
     if not isinstance(d, dict):
         raise VehicleError(f"{path}: expected a mapping at the top level")
     return vehicle_from_dict(d, source=str(path))
@@ -279,6 +323,8 @@ def _num(d: Mapping, key: str, where: str, *, positive=False, nonneg=False, defa
         if default is not None:
             return float(default)
         raise VehicleError(f"{where}.{key}: missing (expected a number)")
+    if isinstance(d[key], bool):
+        raise VehicleError(f"{where}.{key}: expected a number, got {d[key]!r}")
     try:
         v = float(d[key])
     except (TypeError, ValueError):
@@ -320,10 +366,13 @@ def _sensors(spec, f: str) -> dict:
     out = {}
     for name, val in spec.items():
         if name not in SENSOR_NAMES:
-            raise VehicleError(f"{f}: sensors.{name}: unknown sensor; expected one of {', '.join(SENSOR_NAMES)}")
-        if not isinstance(val, dict) or set(val) - {"position", "source"}:
+            raise VehicleError(unknown_key_message(f"{f}: sensors", name, SENSOR_NAMES, noun="sensor"))
+        if not isinstance(val, dict):
             raise VehicleError(f"{f}: sensors.{name}: expected a mapping {{position: [x, y, z]}} "
                                "(m, body frame; optional source)")
+        check_keys(val, SENSOR_KEYS, f"{f}: sensors.{name}", error=VehicleError)
+        if "position" not in val:
+            raise VehicleError(f"{f}: sensors.{name}.position: missing (expected [x, y, z], m, body frame)")
         pos = _vec3(val, "position", f"{f}: sensors.{name}")
         if np.linalg.norm(pos) > MAX_SENSOR_OFFSET:
             raise VehicleError(f"{f}: sensors.{name}.position {pos.tolist()} is more than {MAX_SENSOR_OFFSET:g} m "
@@ -335,16 +384,20 @@ def _sensors(spec, f: str) -> dict:
 def vehicle_from_dict(d: dict, *, source: str = "<dict>", actuators: Actuators | None = None) -> Vehicle:
     """Build and validate a :class:`Vehicle` from a vehicle-file dictionary."""
     f = source
+    check_keys(d, VEHICLE_KEYS, f, error=VehicleError, hint=" (free-form metadata goes under 'meta:')")
     for key in ("rigid_body", "added_mass", "damping"):
         if not isinstance(d.get(key), dict):
             raise VehicleError(f"{f}: '{key}' section missing or not a mapping")
-    env = d.get("environment") or {}
+    env = require_mapping(d.get("environment"), f"{f}: environment", error=VehicleError,
+                          example="{g: 9.81, rho: 1000.0, current_ned: [0, 0, 0]}")
+    check_keys(env, ENVIRONMENT_KEYS, f"{f}: environment", error=VehicleError)
     g = _num(env, "g", f"{f}: environment", positive=True, default=G)
     rho = _num(env, "rho", f"{f}: environment", positive=True, default=1000.0)
     current = _vec3(env, "current_ned", f"{f}: environment", default=[0.0, 0.0, 0.0])
 
     rb = d["rigid_body"]
     w = f"{f}: rigid_body"
+    check_keys(rb, RIGID_BODY_KEYS, w, error=VehicleError)
     mass = _num(rb, "mass", w, positive=True)
     buoyancy = _num(rb, "buoyancy", w, nonneg=True)
     if not 0.2 < buoyancy / (mass * g) < 5.0 and buoyancy > 0:
@@ -357,6 +410,7 @@ def vehicle_from_dict(d: dict, *, source: str = "<dict>", actuators: Actuators |
     inertia_d = rb.get("inertia")
     if not isinstance(inertia_d, dict):
         raise VehicleError(f"{w}.inertia: expected a mapping I_xx, I_yy, I_zz (and optional I_xy, I_xz, I_yz)")
+    check_keys(inertia_d, INERTIA_NAMES, f"{w}.inertia", error=VehicleError)
     inertia = {}
     for k in INERTIA_NAMES:
         inertia[k] = _num(inertia_d, k, f"{w}.inertia", positive=k in INERTIA_NAMES[:3], default=None if k in INERTIA_NAMES[:3] else 0.0)
@@ -370,8 +424,12 @@ def vehicle_from_dict(d: dict, *, source: str = "<dict>", actuators: Actuators |
 
     am = d["added_mass"]
     w = f"{f}: added_mass"
+    check_keys(am, (*ADDED_MASS_NAMES, "matrix", "convention"), w, error=VehicleError)
     if "matrix" in am:
-        MA = np.asarray(am["matrix"], dtype=float)
+        try:
+            MA = np.asarray(am["matrix"], dtype=float)
+        except (TypeError, ValueError):
+            raise VehicleError(f"{w}.matrix: expected a finite 6x6 matrix of numbers") from None
         if MA.shape != (6, 6) or not np.all(np.isfinite(MA)):
             raise VehicleError(f"{w}.matrix: expected a finite 6x6 matrix")
         if not np.allclose(MA, MA.T, atol=1e-9 * max(1.0, np.abs(MA).max())):
@@ -381,9 +439,6 @@ def vehicle_from_dict(d: dict, *, source: str = "<dict>", actuators: Actuators |
     for i, k in enumerate(ADDED_MASS_NAMES):
         if k in am:
             MA[i, i] = _num(am, k, w, nonneg=True)
-    unknown = set(am) - set(ADDED_MASS_NAMES) - {"matrix", "convention"}
-    if unknown:
-        raise VehicleError(f"{w}: unknown key(s) {sorted(unknown)}; expected {', '.join(ADDED_MASS_NAMES)} or matrix")
     if np.any(np.diag(MA) < 0):
         raise VehicleError(
             f"{w}: diagonal added mass must be given as positive magnitudes (M_A = -diag(X_udot, ...) in SNAME sign)"

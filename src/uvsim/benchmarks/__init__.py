@@ -1,7 +1,9 @@
 """Benchmarks behind ``uvsim bench``.
 
 Each area has a module here exposing ``run(quick: bool = False) -> dict`` of
-``{json_key: value}`` and ``DESCRIPTIONS = {json_key: "text with unit"}``.  Results
+``{json_key: value}`` and ``DESCRIPTIONS = {json_key: "text with unit"}`` (a module
+whose problem sizes change with ``--quick`` also has ``describe(quick) -> dict``, so the
+labels say what was measured).  Results
 and the machine they were measured on go in docs/performance.md.
 """
 from __future__ import annotations

@@ -7,12 +7,25 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
-DESCRIPTIONS = {
-    "single_rk4_steps_per_s": "single-trajectory RK4 steps per second (BlueROV2 Heavy, PWM inputs, 50 Hz)",
-    "batched_vehicle_steps_per_s": "batched RK4 vehicle-steps per second, GA-sized batch (60 parameter sets x 8 runs "
-                                   "x 6 DOFs = 2880 trajectories, 14 s at 50 Hz), split over all cores",
-    "batched_vehicle_steps_per_s_1core": "the same batch on one core",
-}
+#: (single-trajectory samples, batch trajectories, batch samples) of the full and quick runs.
+SIZES = {False: (3001, 2880, 701), True: (601, 480, 201)}
+
+
+def describe(quick: bool = False) -> dict:
+    """Descriptions of the figures, with the problem sizes of this mode."""
+    n_single, n, n_t = SIZES[quick]
+    batch = ("GA-sized batch (60 parameter sets x 8 runs x 6 DOFs = 2880 trajectories" if not quick
+             else f"QUICK batch ({n} trajectories")
+    return {
+        "single_rk4_steps_per_s": f"single-trajectory RK4 steps per second (BlueROV2 Heavy, PWM inputs, 50 Hz, "
+                                  f"{n_single - 1} steps)",
+        "batched_vehicle_steps_per_s": f"batched RK4 vehicle-steps per second, {batch}, {(n_t - 1) * 0.02:g} s at "
+                                       "50 Hz), split over all cores",
+        "batched_vehicle_steps_per_s_1core": "the same batch on one core",
+    }
+
+
+DESCRIPTIONS = describe(False)
 
 
 def _inputs(n: int, n_t: int, seed: int = 0):
@@ -73,7 +86,8 @@ def batched(n: int = 2880, n_t: int = 701, workers: int | None = None) -> tuple[
 
 
 def run(quick: bool = False) -> dict:
-    single = single_rk4(601 if quick else 3001)
-    multi, one = batched(480 if quick else 2880, 201 if quick else 701)
+    n_single, n, n_t = SIZES[quick]
+    single = single_rk4(n_single)
+    multi, one = batched(n, n_t)
     return {"single_rk4_steps_per_s": single, "batched_vehicle_steps_per_s": multi,
             "batched_vehicle_steps_per_s_1core": one}

@@ -36,6 +36,7 @@ from uvsim.calibration.refine import identifiability, joint_residuals, refine_do
 from uvsim.errors import CalibrationError
 from uvsim.logs import Dataset, read_dataset
 from uvsim.metrics import channel_mask, check_weights, component_weights, pooled_rmse, run_metrics, signal_scales
+from uvsim.plausibility import check_runs, parse_allow
 from uvsim.vehicle import load_vehicle
 
 
@@ -116,6 +117,8 @@ class Calibrator:
     joint : after the sweeps, refine all DOFs' parameters together on every logged
         channel of all training runs (:func:`uvsim.calibration.refine.refine_joint`).
     joint_weights : signal weights of the joint fit (default: all channels 1).
+    allow : names of plausibility checks (:mod:`uvsim.plausibility`) that may fail; every
+        other check of the runs against the vehicle raises before the fit.
 
     Attributes (after :meth:`fit`)
     ------------------------------
@@ -139,7 +142,7 @@ class Calibrator:
                  initial_velocity: str = "zero", workers: int = 1, dask: str | None = None,
                  batch_rows: int = DEFAULT_BATCH_ROWS, checkpoint=None, resume=None, progress: bool = False,
                  effects=None, max_nfev: int = 20, refine_sweeps: int = 1, joint: bool = True,
-                 joint_weights: Mapping | None = None):
+                 joint_weights: Mapping | None = None, allow=()):
         self.dofs = dofs
         self.population, self.generations, self.seed = population, generations, seed
         self.tournament, self.crossover, self.mutation = tournament, crossover, mutation
@@ -153,6 +156,7 @@ class Calibrator:
         self.checkpoint, self.resume, self.progress = checkpoint, resume, progress
         self.effects, self.max_nfev, self.refine_sweeps = effects, max_nfev, refine_sweeps
         self.joint, self.joint_weights = joint, joint_weights
+        self.allow = allow
 
     # ------------------------------------------------------------------ helpers
     def get_params(self, deep: bool = True) -> dict:
@@ -185,6 +189,7 @@ class Calibrator:
         t0 = time.perf_counter()
         ds = _as_dataset(dataset)
         veh = _resolve_vehicle(vehicle, ds)
+        check_runs(ds.runs, veh, parse_allow(self.allow, "allow"))  # units, sampling, PWM range
         if self.effects:
             veh = veh.with_effects(list(self.effects))
         self.initial_vehicle_ = veh

@@ -44,13 +44,21 @@ def format_table5(cal, truth: dict | None = None) -> str:
     """Text table of :func:`table5_rows` plus the identifiable effective inertias."""
     lines = [f"{'parameter':10s} {'initial':>10s} {'fitted':>10s} {'diff %':>8s} {'1-sigma':>9s}"
              + (f" {'truth':>10s} {'error %':>8s}" if truth else "")]
+    from uvsim.commands.checks import bound_hits
+
+    rep = cal.report_
+    at_bound = list(bound_hits(rep))
     for r in table5_rows(cal, truth):
         sig = "   (sum)" if r["sigma"] is None else f"{r['sigma']:9.3g}"
         line = f"{r['parameter']:10s} {r['initial']:10.4g} {r['fitted']:10.4g} {r['difference_percent']:8.2f} {sig:>9s}"
         if truth:
             line += f" {r['truth']:10.4g} {r['error_percent']:8.2f}"
+        if r["parameter"] in at_bound:
+            line += "  ON A BOUND"
         lines.append(line)
-    rep = cal.report_
+    if at_bound:
+        lines.append(f"{', '.join(at_bound)}: ended on a search bound (+-{100 * rep['settings']['margin']:g} % of the "
+                     "initial value); the fit would have gone further and the 1-sigma does not hold there.")
     lines.append("")
     lines.append("identifiable effective inertia (rigid body + added):")
     for d in rep["dofs"]:

@@ -18,7 +18,9 @@ from __future__ import annotations
 
 import functools
 import math
+import os
 import random
+import sys
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -189,9 +191,39 @@ class SerialMap:
 
 _WORKER_EVALUATOR = None
 
+#: prctl(2) option asking the kernel to signal this process when its parent dies (Linux).
+_PR_SET_PDEATHSIG = 1
 
-def _init_worker(evaluator):
+
+def die_with_parent(parent_pid: int) -> None:
+    """Make this (worker) process end with its parent, whatever ends the parent.
+
+    On Linux the kernel sends SIGKILL to the worker when the parent dies, even by
+    SIGKILL (``prctl(PR_SET_PDEATHSIG)``); if the parent is already gone (it died
+    between the fork and this call) the worker exits now.  SIGTERM gets its default
+    action back (a forked worker inherits the parent's Python handler) and SIGINT is
+    ignored: a Ctrl-C reaches the whole process group, and the parent, which receives it
+    too, stops the workers itself (:meth:`ProcessMap.close`)."""
+    import signal
+    import sys
+
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        try:
+            ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+        except (OSError, AttributeError):  # pragma: no cover - no prctl in this libc
+            pass
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if os.getppid() != parent_pid:
+        os._exit(1)
+
+
+def _init_worker(evaluator, parent_pid=None):
     global _WORKER_EVALUATOR
+    if parent_pid is not None:
+        die_with_parent(parent_pid)
     _WORKER_EVALUATOR = evaluator
 
 
@@ -209,7 +241,10 @@ class ProcessMap(SerialMap):
     Linux, spawn elsewhere - there, scripts need the ``if __name__ == "__main__"`` guard).
 
     Each worker receives the evaluator once (pool initializer) and then only
-    the blocks' genes."""
+    the blocks' genes.  Workers die with this process (:func:`die_with_parent`), and
+    :meth:`close` called while an exception (KeyboardInterrupt, SIGTERM turned into one
+    by the CLI, an error) is propagating kills them at once instead of waiting for
+    the blocks in flight."""
 
     def __init__(self, evaluator: BatchEvaluator, workers: int):
         import multiprocessing as mp
@@ -222,7 +257,7 @@ class ProcessMap(SerialMap):
         # scripts without an ``if __name__ == "__main__"`` guard work; spawn elsewhere.
         method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
         self._pool = ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context(method),
-                                         initializer=_init_worker, initargs=(evaluator,))
+                                         initializer=_init_worker, initargs=(evaluator, os.getpid()))
 
     def _run(self, ev, blocks):
         return list(self._pool.map(_worker_block, blocks))
@@ -231,7 +266,20 @@ class ProcessMap(SerialMap):
         return list(self._pool.map(_worker_task, [(fn, a) for a in args_list]))
 
     def close(self):
+        if sys.exc_info()[0] is not None:  # called from a finally clause while an exception propagates
+            self.terminate()
+            return
         self._pool.shutdown(wait=True, cancel_futures=True)
+
+    def terminate(self):
+        """Kill the workers now and reap them (no process is left behind)."""
+        procs = list((getattr(self._pool, "_processes", None) or {}).values())
+        for p in procs:
+            if p.is_alive():
+                p.kill()
+        self._pool.shutdown(wait=False, cancel_futures=True)
+        for p in procs:
+            p.join(timeout=5)
 
 
 def _dask_block(evaluator, block):
@@ -274,4 +322,4 @@ class DaskMap(SerialMap):
     def close(self):
         self._client.close()
         if self._cluster is not None:
-            self._cluster.close()
+            self._cluster.close()  # stops its worker processes (which also exit when this process dies)

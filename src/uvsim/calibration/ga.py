@@ -20,28 +20,26 @@ from the initial (experimental) values - one exact copy, the rest with a small
 Gaussian spread ``seeded_sigma`` - the rest uniformly at random within the bounds.
 
 Randomness: DEAP's operators draw from Python's :mod:`random`; it and numpy are
-seeded explicitly from ``seed`` and their states are saved in each checkpoint, so
-an interrupted run resumed from its checkpoint continues exactly as if it had not
-been interrupted.  The DEAP classes are defined here (subclassing
+seeded explicitly from ``seed`` and their states are saved in each checkpoint
+(:class:`uvsim.checkpoint.Checkpoint`: atomic, fingerprinted), so an interrupted run
+resumed from its checkpoint continues exactly as if it had not been interrupted
+(it logs ``resuming from PATH: the GA, generation N of G done``).  The DEAP classes are defined here (subclassing
 ``deap.base.Fitness`` directly), not through the global ``deap.creator``.
 """
 from __future__ import annotations
 
-import hashlib
-import json
-import os
-import pickle
 import random
 import time
 from dataclasses import asdict, dataclass
-from pathlib import Path
 
 import numpy as np
 from deap import algorithms, base, tools
 
+from uvsim.checkpoint import Checkpoint, fingerprint  # noqa: F401  (fingerprint: used by the calibrator)
 from uvsim.errors import CalibrationError
 
-CHECKPOINT_VERSION = 1
+#: What a resumed GA must share with the run that wrote the checkpoint.
+RESUME_NEEDS = "--data, --vehicle, --dof, --seed, --population, --generations and GA settings"
 
 
 class FitnessMin(base.Fitness):
@@ -130,11 +128,6 @@ def initial_population(dof: str, p: int, initial_genes: np.ndarray, settings: GA
     return pop
 
 
-def fingerprint(obj) -> str:
-    """Stable hash of settings + problem description, stored in checkpoints."""
-    return hashlib.sha256(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()[:16]
-
-
 def _stats():
     s = tools.Statistics(lambda ind: ind.fitness.values[0])
     s.register("min", np.min)
@@ -153,27 +146,23 @@ def _record(logbook, gen, pop, nevals, wall):
                    wall_s=round(wall, 3))
 
 
-def _save_checkpoint(path: Path, state: dict) -> None:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "wb") as fh:
-        pickle.dump(state, fh, protocol=pickle.HIGHEST_PROTOCOL)
-    os.replace(tmp, path)
+def _checkpoint(path, key: str) -> Checkpoint:
+    return Checkpoint(path, kind="ga", key=key, what="the GA", must_match=RESUME_NEEDS)
+
+
+def _save_checkpoint(checkpoint: Checkpoint, state: dict) -> None:
+    """Write the GA state after a generation (atomic)."""
+    done = state["generation"]
+    total = state["settings"]["generations"]
+    checkpoint.save(state, progress=f"generation {done} of {total} done")
 
 
 def load_checkpoint(path) -> dict:
-    path = Path(path)
-    if not path.is_file():
-        raise CalibrationError(f"checkpoint {path} does not exist")
-    try:
-        with open(path, "rb") as fh:
-            state = pickle.load(fh)
-    except Exception as exc:  # corrupted or foreign pickle
-        raise CalibrationError(f"checkpoint {path} cannot be read: {exc}") from None
-    if not isinstance(state, dict) or state.get("version") != CHECKPOINT_VERSION:
-        raise CalibrationError(f"checkpoint {path} is not a uvsim calibration checkpoint (version {CHECKPOINT_VERSION})")
-    return state
+    """The GA state stored in ``path`` (no problem check; :func:`run_ga` checks it)."""
+    env = _checkpoint(path, "").read()
+    if env["kind"] != "ga":
+        raise CalibrationError(f"checkpoint {path} holds a {env['kind']!r} state, not a GA state")
+    return env["state"]
 
 
 def run_ga(problems: dict, evaluator, hook, settings: GASettings, *, checkpoint=None, resume=None,
@@ -203,11 +192,7 @@ def run_ga(problems: dict, evaluator, hook, settings: GASettings, *, checkpoint=
     tb.register("evaluate", evaluator)
     t_start = time.perf_counter()
     if resume is not None:
-        st = load_checkpoint(resume)
-        if st["key"] != key:
-            raise CalibrationError(
-                f"checkpoint {resume} was written for different settings, data or DOFs; resume needs the same "
-                "--data, --vehicle, --dof, --seed, --population, --generations and GA settings")
+        st = _checkpoint(resume, key).load()
         pops = st["populations"]
         hofs = st["halls"]
         logbooks = st["logbooks"]
@@ -262,8 +247,8 @@ def run_ga(problems: dict, evaluator, hook, settings: GASettings, *, checkpoint=
             hofs[d].update(pops[d])
             _record(logbooks[d], gen, pops[d], sum(1 for i in invalid if i.dof == d), wall())
         if checkpoint is not None:
-            _save_checkpoint(checkpoint, {
-                "version": CHECKPOINT_VERSION, "key": key, "generation": gen, "populations": pops,
+            _save_checkpoint(_checkpoint(checkpoint, key), {
+                "generation": gen, "populations": pops,
                 "halls": hofs, "logbooks": logbooks, "evaluations": evaluations, "wall_s": wall(),
                 "random_state": random.getstate(), "numpy_state": np.random.get_state(),
                 "settings": asdict(settings), "dofs": dofs,

@@ -31,7 +31,8 @@ def _run(args) -> int:
         if not args.json:
             print(f"[{area}] running ...", flush=True)
         results.update(mod.run(quick=args.quick))
-        desc.update(getattr(mod, "DESCRIPTIONS", {}))
+        describe = getattr(mod, "describe", None)  # labels with this mode's problem sizes
+        desc.update(describe(args.quick) if describe else getattr(mod, "DESCRIPTIONS", {}))
     if args.json:
         print(json.dumps(results, indent=2))
         return 0

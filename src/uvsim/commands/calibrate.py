@@ -14,6 +14,8 @@ import math
 from pathlib import Path
 
 from uvsim.commands import parse_pairs
+from uvsim.commands.checks import (add_allow_argument, add_progress_arguments, bound_hits, calibration_problems,
+                                   check_outputs, check_runs_at_door, fail_if, say, want_progress)
 
 ADDED_MASS_ROWS = ("X_udot", "Y_vdot", "Z_wdot", "K_pdot", "M_qdot", "N_rdot")
 
@@ -47,7 +49,8 @@ def register(sub) -> None:
     p.add_argument("--json", default=None, help="report JSON")
     p.add_argument("--plots", default=None, help="directory for plots (measured vs simulated, error boxplots, "
                                                  "GA convergence)")
-    p.add_argument("--progress", action="store_true", help="show a progress bar per generation")
+    add_allow_argument(p)
+    add_progress_arguments(p)
     p.set_defaults(func=_run)
 
 
@@ -87,6 +90,8 @@ def save_fitted_vehicle(cal, path) -> Path:
         sig = cal.uncertainty_.get(k)
         if sig is not None:
             s = f"+- {_fmt(sig)}"
+        elif k not in pair_of or rep["effective_inertia_uncertainty"].get(pair_of[k][0]) is None:
+            s = "no uncertainty (no refinement)" if not rep["settings"]["refine"] else "uncertainty not determined"
         else:
             d, (a, b) = pair_of[k]
             s = (f"only {a} + {b} = {rep['effective_inertia'][d]:.6g} +- "
@@ -118,18 +123,45 @@ def save_fitted_vehicle(cal, path) -> Path:
 
 def _run(args) -> int:
     from uvsim.calibration import Calibrator
+    from uvsim.checkpoint import Checkpoint
     from uvsim.logs import read_dataset
+    from uvsim.plausibility import parse_allow
+    from uvsim.vehicle import load_vehicle
 
-    ds = read_dataset(args.data)
     out = Path(args.out)
     ckpt = args.checkpoint or str(out.with_suffix(out.suffix + ".ckpt"))
+    weights = parse_pairs(args.weights, "--weights")
+    check_outputs({"--out": out, "--json": args.json, "--checkpoint": ckpt}, {"--plots": args.plots})
+    if args.resume:
+        Checkpoint(args.resume, kind="ga", key="").read()  # exists and is a checkpoint, before any work
+    ds = read_dataset(args.data)
+    if args.vehicle is None and ds.vehicle is None:
+        from uvsim.errors import CalibrationError
+
+        raise CalibrationError(f"{ds.path}: no --vehicle given and the manifest names none")
+    veh = load_vehicle(args.vehicle if args.vehicle is not None else (ds.vehicle_file or ds.vehicle))
+    notes = check_runs_at_door("calibrate", ds.runs, veh, args.allow)
     cal = Calibrator(dofs=args.dof, population=args.population, generations=args.generations, seed=args.seed,
                      margin=args.margin, workers=args.workers, dask=args.dask, checkpoint=ckpt, resume=args.resume,
                      refine=not args.no_refine, estimate_initial_velocity=args.estimate_initial_velocity,
-                     signal_weights=parse_pairs(args.weights, "--weights"), low_speed_exponent=args.low_speed_exponent,
-                     progress=args.progress)
-    cal.fit(ds, args.vehicle)
+                     signal_weights=weights, low_speed_exponent=args.low_speed_exponent,
+                     progress=want_progress(args), allow=parse_allow(args.allow))
+    try:
+        cal.fit(ds, veh)
+    except KeyboardInterrupt:
+        _say_resume(ckpt)
+        raise
     rep = cal.report_
+    rep["input_notes"] = notes
+    problems = calibration_problems(rep, ds)
+    if problems:
+        if args.json:
+            rep["status"] = {"ok": False, "problems": problems}
+            Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+            Path(args.json).write_text(json.dumps(jsonable(rep), indent=2))
+        fail_if(problems, "calibrate", f"Nothing was written to {out}" + (f"; the report is in {args.json}."
+                                                                        if args.json else "."))
+    rep["status"] = {"ok": True, "problems": []}
     out.parent.mkdir(parents=True, exist_ok=True)
     save_fitted_vehicle(cal, out)
     if args.json:
@@ -139,14 +171,33 @@ def _run(args) -> int:
         from uvsim.plotting.calibration import plot_calibration
 
         plot_calibration(cal, ds, args.plots)
+    hits = bound_hits(rep)
     print(f"calibrated {', '.join(rep['dofs'])} of {rep['vehicle']}: {rep['evaluations']} GA evaluations, "
           f"{rep['wall_seconds']:.1f} s")
     print(f"{'parameter':10s} {'initial':>11s} {'fitted':>11s} {'1-sigma':>10s}")
     for k, v in rep["parameters"].items():
-        print(f"{k:10s} {rep['initial_parameters'][k]:11.5g} {v:11.5g} {_fmt(rep['uncertainty'][k]):>10s}")
+        flag = f"  ON {hits[k].upper()} BOUND" if k in hits else ""
+        print(f"{k:10s} {rep['initial_parameters'][k]:11.5g} {v:11.5g} {_fmt(rep['uncertainty'][k]):>10s}{flag}")
+    if hits:
+        print(f"{len(hits)} parameter(s) ended on a search bound (+-{100 * args.margin:g} % of the initial value): "
+              f"{', '.join(hits)}. The fit would have gone further; their 1-sigma assumes an interior optimum "
+              "and does not hold. Widen --margin or check the data and the starting vehicle.")
     for d, a in rep["identifiability"].items():
         if a["not_identifiable"]:
             print(f"{d}: identifiable: {', '.join(a['identifiable_combinations'])}")
     print(f"training RMSE {jsonable(rep['training_rmse'])}; validation RMSE {jsonable(rep['validation_rmse'])}")
     print(f"-> {out}" + (f", {args.json}" if args.json else "") + (f", plots in {args.plots}" if args.plots else ""))
     return 0
+
+
+def _say_resume(ckpt) -> None:
+    """After an interrupt: where the GA state is and how to continue."""
+    from uvsim.checkpoint import Checkpoint
+    from uvsim.errors import UvsimError
+
+    try:
+        env = Checkpoint(ckpt, kind="ga", key="").read()
+    except UvsimError:
+        say("calibrate", "interrupted before the first GA generation was checkpointed; start again")
+        return
+    say("calibrate", f"interrupted; {ckpt} holds the GA after {env['progress']}; continue with --resume {ckpt}")

@@ -15,6 +15,9 @@ def register(sub) -> None:
     p = sub.add_parser("demo", help="run the main job on the shipped tank dataset (what `make demo` runs)")
     p.add_argument("--out", default="demo_output", help="directory for plots and results (default demo_output)")
     p.add_argument("--skip-calibration", action="store_true", help="only the simulation part")
+    from uvsim.commands.checks import add_progress_arguments
+
+    add_progress_arguments(p)
     p.set_defaults(func=_run)
 
 
@@ -46,7 +49,10 @@ def _run(args) -> int:
     from uvsim.logs import read_dataset
     from uvsim.vehicle import load_vehicle
 
+    from uvsim.commands.checks import check_outputs
+
     out = Path(args.out)
+    check_outputs(dirs={"--out": out})
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     ds = read_dataset(shipped_dataset_path())
@@ -80,6 +86,8 @@ def _run(args) -> int:
         from uvsim.calibration.demo import run as calibration_demo
 
         print()
-        calibration_demo(out, ds)
+        from uvsim.commands.checks import want_progress
+
+        calibration_demo(out, ds, settings={"progress": want_progress(args)})
     print(f"\ndone in {time.perf_counter() - t0:.1f} s; outputs in {out}/")
     return 0

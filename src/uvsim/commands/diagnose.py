@@ -1,8 +1,8 @@
-"""``uvsim diagnose``: which effect does the model lack?  Fit it and report before/after.
+"""``uvsim diagnose``: which effects does the model lack?  Fit them and report before/after.
 
-    uvsim diagnose --data DIR --vehicle NAME|FILE --json report.json [--plots DIR] [--out fixed.yaml]
-                   [--retune X_u,X_uu] [--only current,tether] [--noise position=0.002,attitude=0.005]
-                   [--weights position=1,attitude=2]
+    uvsim diagnose --data DIR [--vehicle NAME|FILE] [--json report.json] [--plots DIR] [--out fixed.yaml]
+                   [--retune X_uu,N_rr] [--only current,tether] [--noise depth=0.01,attitude=0.005]
+                   [--weights position=1,depth=0] [--horizon 3] [--max-effects 2] [--workers 2]
 """
 from __future__ import annotations
 
@@ -10,27 +10,37 @@ import json
 from pathlib import Path
 
 from uvsim.commands import parse_pairs
+from uvsim.commands.checks import add_allow_argument, check_outputs, check_runs_at_door, diagnosis_problems, fail_if, say
 
 
 def register(subparsers) -> None:
+    from uvsim.diagnosis.candidates import EFFECTS
+    from uvsim.diagnosis.core import DEFAULT_HORIZON
+
     p = subparsers.add_parser(
-        "diagnose", help="trace the residual of a model to a missing effect, fit it, report before/after",
-        description="Simulate every run of a dataset with the given vehicle, compute the residuals (output "
-                    "and inverse-dynamics force), fit each catalogue effect (current, tether, thruster_lag, "
-                    "thrust_asymmetry, ballast, coupled_damping, bottom_effect) on the training runs, score them by BIC on "
-                    "the validation runs and keep the best one only if it is significant.  See docs/diagnose.md.")
+        "diagnose", help="trace the residual of a model to missing effects, fit them, report before/after",
+        description="Forward selection of catalogue effects (" + ", ".join(EFFECTS) + "): every candidate is "
+                    "screened by equation error, the best are fitted through the simulator (windowed prediction "
+                    "error on the training runs) and one is kept only if it improves the validation runs "
+                    "significantly (block bootstrap over windows); repeat with the rest.  See docs/diagnose.md.")
     p.add_argument("--data", required=True, help="dataset directory (manifest.yaml + runs, docs/log_format.md)")
     p.add_argument("--vehicle", help="built-in vehicle name or vehicle YAML (default: the manifest's vehicle)")
     p.add_argument("--json", dest="json_out", help="write the report as JSON to this file")
-    p.add_argument("--plots", help="directory for residual plots (before/after over time)")
+    p.add_argument("--plots", help="directory for plots (validation runs before/after, steps)")
     p.add_argument("--out", help="write the corrected vehicle YAML here")
-    p.add_argument("--retune", help="comma-separated base coefficients re-tuned with every candidate (e.g. X_u,X_uu)")
+    p.add_argument("--retune", help="comma-separated base coefficients re-fitted with every model (e.g. X_uu,N_rr)")
     p.add_argument("--only", help="comma-separated catalogue effects to try (default: all)")
-    p.add_argument("--noise", help="noise levels per signal group, e.g. position=0.002,attitude=0.005 "
-                                   "(default: estimated from the data)")
-    p.add_argument("--weights", help="per signal group weights, e.g. position=1,attitude=2 (default 1 each)")
-    p.add_argument("--max-nfev", type=int, default=30, help="evaluation budget of each fit (default 30)")
+    p.add_argument("--noise", help="noise levels by signal group or channel, e.g. depth=0.01,attitude=0.005 "
+                                   "(default: estimated from the data at each sensor's native rate)")
+    p.add_argument("--weights", help="weights by signal group or channel, e.g. position=1,depth=0 (default 1)")
+    p.add_argument("--horizon", type=float, default=DEFAULT_HORIZON,
+                   help=f"window length of the fits, s (default {DEFAULT_HORIZON:g})")
+    p.add_argument("--max-effects", type=int, default=2, help="most effects to add (default 2)")
+    p.add_argument("--top", type=int, default=3, help="candidates fitted through the simulator per step (default 3)")
+    p.add_argument("--max-iter", type=int, default=12, help="Levenberg-Marquardt iterations per fit (default 12)")
+    p.add_argument("--workers", type=int, default=1, help="processes for the simulations (same result)")
     p.add_argument("--quiet", action="store_true", help="no progress messages")
+    add_allow_argument(p)
     p.set_defaults(func=run)
 
 
@@ -38,46 +48,89 @@ def _list(s):
     return [x.strip() for x in s.split(",") if x.strip()] if s else None
 
 
-def _fmt(d: dict) -> str:
-    return ", ".join(f"{k} {v:.4g}" for k, v in d.items())
-
-
 def format_table(report: dict) -> str:
-    """The candidate table and the before/after lines as text."""
-    lines = [f"{'candidate':18s} {'k':>2s} {'train RMS':>9s} {'val RMS':>9s} {'dBIC':>9s}  accepted  why",
-             "-" * 100]
-    for c in report["candidates"]:
-        if "score" not in c:
-            lines.append(f"{c['name']:18s} {'':>2s} {'':>9s} {'':>9s} {'':>9s}  {'no':8s}  {c['why']}")
-            continue
-        lines.append(f"{c['name']:18s} {c['n_parameters']:2d} {c['train_rms_noise_sigmas']:9.2f} "
-                     f"{c['validation_rms_noise_sigmas']:9.2f} {c['score']['delta_bic']:9.1f}  "
-                     f"{'YES' if c['accepted'] else 'no':8s}  {c['why']}")
-    lines.append("(RMS in noise sigmas: every signal divided by its noise level; dBIC = BIC - BIC of the given model)")
+    """Each step's candidates and the before/after lines as text."""
+    lines = []
+    for st in report["steps"]:
+        lines.append(f"step {st['step']}: validation cost {st['before_cost_per_entry']:.3f} (squared noise sigmas "
+                     f"per residual) with {', '.join(e['effect'] + ':' + e['variant'] for e in report['effects'][:st['step'] - 1]) or 'the given model'}")
+        lines.append(f"  {'candidate':30s} {'screen':>7s} {'val cost':>9s} {'change':>8s} {'P(better)':>9s}  accepted  why")
+        screen = {(s["effect"], s["variant"]): s["screening_reduction"] for s in st["screened"]}
+        shown = set()
+        for c in st["candidates"]:
+            key = (c["effect"], c["variant"])
+            shown.add(key)
+            red = screen.get(key)
+            if "compare" in c:
+                lines.append(f"  {c['effect'] + ':' + c['variant']:30s} {_pct(red):>7s} "
+                             f"{c['validation_cost_per_entry']:9.3f} {-100 * c['compare']['relative']:+7.1f}% "
+                             f"{c['compare']['p_better']:9.3f}  {'YES' if c['chosen'] else ('(yes)' if c['accepted'] else 'no'):8s}  {c['why']}")
+            else:
+                lines.append(f"  {c['effect'] + ':' + c['variant']:30s} {_pct(red):>7s} {'':>9s} {'':>8s} {'':>9s}  "
+                             f"{'no':8s}  {c['why']}")
+        rest = [f"{e}:{v} {_pct(r)}" for (e, v), r in screen.items() if (e, v) not in shown]
+        if rest:
+            lines.append("  screened only: " + ", ".join(rest))
+    lines.append("(screen: share of the equation error a candidate removes; val cost: validation cost per residual "
+                 "in squared noise sigmas; change: of the validation cost)")
     lines.append("")
-    lines.append(f"effect: {report['effect']}   confidence: {report['confidence']}")
-    for k, d in report["parameters"].items():
-        std = f" +- {d['std']:.2g}" if d.get("std") is not None else ""
-        lines.append(f"  {k} = {d['value']:.5g}{std} {d['unit']}")
+    lines.append(f"effects: {report['effect']}   confidence: {report['confidence']}")
+    for e in report["effects"]:
+        lines.append(f"  {e['effect']}:{e['variant']}")
+        for k, d in e["parameters"].items():
+            std = f" +- {d['std']:.2g}" if d.get("std") is not None else ""
+            lines.append(f"    {k} = {d['value']:.5g}{std} {d['unit']}")
+    for k, d in report.get("retuned", {}).items():
+        lines.append(f"  re-tuned {k}: {d['before']:.5g} -> {d['value']:.5g}")
     lines.append(report["message"])
     lines.append("")
-    lines.append(f"{'validation RMSE':18s} {'before':>12s} {'after':>12s}")
+    lines.append(f"{'validation RMSE (open loop)':28s} {'before':>12s} {'after':>12s}")
     for k in report["rmse_before"]:
-        lines.append(f"{k:18s} {report['rmse_before'][k]:12.5g} {report['rmse_after'].get(k, float('nan')):12.5g}")
+        lines.append(f"{k:28s} {report['rmse_before'][k]:12.5g} {report['rmse_after'].get(k, float('nan')):12.5g}")
+    lines.append(f"{report['fits']} fits in {report['seconds']:.1f} s")
     return "\n".join(lines)
+
+
+def _pct(x):
+    return "-" if x is None else f"{100 * x:.1f}%"
 
 
 def run(args) -> int:
     from uvsim.diagnosis import diagnose, save_fixed_vehicle
+    from uvsim.errors import CalibrationError
+    from uvsim.logs import read_dataset
+    from uvsim.plausibility import parse_allow
+    from uvsim.vehicle import load_vehicle
 
-    say = None if args.quiet else (lambda m: print(f"uvsim diagnose: {m}", flush=True))
-    diag = diagnose(args.data, args.vehicle, retune=_list(args.retune), only=_list(args.only),
-                    noise=parse_pairs(args.noise, "--noise"), weights=parse_pairs(args.weights, "--weights"), max_nfev=args.max_nfev,
-                    progress=say)
-    print(format_table(diag.report))
+    progress = None if args.quiet else (lambda m: print(f"uvsim diagnose: {m}", flush=True))
+    noise, weights = parse_pairs(args.noise, "--noise"), parse_pairs(args.weights, "--weights")
+    check_outputs({"--json": args.json_out, "--out": args.out}, {"--plots": args.plots})
+    ds = read_dataset(args.data)
+    if args.vehicle is None and ds.vehicle is None:
+        raise CalibrationError(f"{ds.path}: no --vehicle given and the manifest names none")
+    veh = load_vehicle(args.vehicle if args.vehicle is not None else (ds.vehicle_file or ds.vehicle))
+    notes = check_runs_at_door("diagnose", ds.runs, veh, args.allow)
+    diag = diagnose(ds, veh, retune=_list(args.retune), only=_list(args.only), noise=noise, weights=weights,
+                    horizon=args.horizon, max_effects=args.max_effects, top=args.top, max_iter=args.max_iter,
+                    workers=args.workers, progress=progress, allow=parse_allow(args.allow))
+    rep = diag.report
+    split = rep["runs"]["split"]
+    if split != "from the manifest":  # the runs were re-split: say so (it is in the report too)
+        line = f"note: {ds.path / 'manifest.yaml'}: {split}"
+        say("diagnose", line)
+        notes.append(line)
+    for n in rep.get("sampling_notes", []):
+        say("diagnose", f"note: {n}")
+    rep["input_notes"] = notes
+    problems = diagnosis_problems(rep, diag.validation)
+    rep["status"] = {"ok": not problems, "problems": problems}
     if args.json_out:
         Path(args.json_out).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json_out).write_text(json.dumps(diag.report, indent=2, default=float))
+        Path(args.json_out).write_text(json.dumps(rep, indent=2, default=float))
+    fail_if(problems, "diagnose", "No corrected vehicle was written" + (f"; the report is in {args.json_out}."
+                                                                        if args.json_out else "."))
+    print(format_table(rep))
+    if args.json_out:
         print(f"report: {args.json_out}")
     if args.out:
         save_fixed_vehicle(diag, args.out)

@@ -100,6 +100,9 @@ def _run_table(args) -> int:
         raise HydroError("usage: uvsim hydro table NAME --out DIR [--plot]")
     if not args.out:
         raise HydroError("uvsim hydro table needs --out DIR")
+    from uvsim.commands.checks import check_outputs
+
+    check_outputs(dirs={"--out": args.out})
     cfd = read_polar_csv(args.cfd, kind="cfd") if args.cfd else None
     expt = read_polar_csv(args.expt, kind="experiment") if args.expt else None
     if args.name == "naca0015":

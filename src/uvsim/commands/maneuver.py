@@ -31,9 +31,11 @@ def register(subparsers) -> None:
 def run(args) -> int:
     from pathlib import Path
 
+    from uvsim.commands.checks import check_outputs
     from uvsim.logs import write_run
     from uvsim.maneuvers import run_maneuver
 
+    check_outputs({"--out": args.out}, {"--plots": args.plots})
     res = run_maneuver(args.name, dataset=args.dataset, dt=args.dt, duration=args.duration)
     out = Path(args.out)
     if out.parent and not out.parent.exists():

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from uvsim.commands.checks import add_allow_argument, check_outputs, check_runs_at_door
 from uvsim.errors import UvsimError
 
 ANGLES = ("roll", "pitch", "yaw")
@@ -43,6 +44,7 @@ def register(sub) -> None:
     p.add_argument("--compare", action="store_true",
                    help="print RMSE / NRMSE / Fit %% per logged channel and write a measured-vs-simulated plot")
     p.add_argument("--plot", default=None, help="figure for --compare (default: <out or run>_compare.png)")
+    add_allow_argument(p)
     p.set_defaults(func=_run)
 
 
@@ -66,9 +68,11 @@ def _run(args) -> int:
 
     if args.out is None and not args.compare:
         raise UvsimError("--out: required unless --compare is given")
+    current = _triple(args.current) if args.current else None
+    check_outputs({"--out": args.out, "--plot": args.plot})
     veh = load_vehicle(_vehicle_for(args))
     run = read_run(args.run)
-    current = _triple(args.current) if args.current else None
+    check_runs_at_door("simulate", [run], veh, args.allow)
     res = simulate_run(veh, run, current=current, method=args.method, substeps=args.substeps,
                        initial_window_s=args.initial_window)
     if args.out:

@@ -47,6 +47,7 @@ from uvsim.fitting.parameters import FreeParameter, ParameterSpace, default_boun
 from uvsim.forces import make_term
 from uvsim.logs import Dataset, read_dataset
 from uvsim.measurements import measurements_for
+from uvsim.plausibility import check_runs, parse_allow
 from uvsim.vehicle import load_vehicle
 
 #: One-sided confidence level of "significantly better" (block bootstrap).
@@ -314,7 +315,7 @@ def _judge(row, val_cur) -> tuple[bool, str]:
 def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: Sequence[str] | None = None,
              noise: Mapping[str, float] | None = None, weights: Mapping[str, float] | None = None,
              horizon: float = DEFAULT_HORIZON, max_effects: int = 2, top: int = 3, max_iter: int = 12,
-             workers: int = 1, progress=None) -> Diagnosis:
+             workers: int = 1, progress=None, allow=()) -> Diagnosis:
     """Diagnose which catalogue effects the model lacks (module docstring).
 
     Parameters
@@ -332,6 +333,8 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     max_iter : Levenberg-Marquardt iterations per fit.
     workers : processes for the simulations.
     progress : callable(message).
+    allow : names of plausibility checks (:mod:`uvsim.plausibility`) that may fail; every
+        other finding is an error naming the file, column and row.
     """
     t_start = time.perf_counter()
     say = progress or (lambda msg: None)
@@ -341,6 +344,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         if vehicle is None:
             raise CalibrationError(f"{dataset.path}: no vehicle given and the manifest names none")
     veh = load_vehicle(vehicle)
+    check_runs(dataset.runs, veh, parse_allow(allow, "allow"))  # units, sampling, PWM range
     if only is not None:
         unknown = sorted(set(only) - set(EFFECTS))
         if unknown:

@@ -17,7 +17,8 @@ from typing import Any, Mapping
 import numpy as np
 
 from uvsim.errors import VehicleError
-from uvsim.forces.base import ForceTerm
+from uvsim.forces.base import ForceTerm, first_violation
+from uvsim.schema import check_keys
 
 
 @dataclass(frozen=True)
@@ -52,10 +53,7 @@ class Effect(ForceTerm):
 
     def __init__(self, **kwargs):
         where = f"effects ({self.kind})"
-        known = {f.key for f in self.FIELDS} | set(self.OPTIONS)
-        unknown = set(kwargs) - known
-        if unknown:
-            raise VehicleError(f"{where}: unknown field(s) {sorted(unknown)}; expected {', '.join(sorted(known))}")
+        check_keys(kwargs, [f.key for f in self.FIELDS] + list(self.OPTIONS), where, error=VehicleError)
         self.values: dict[str, float] = {}
         for f in self.FIELDS:
             raw = kwargs.get(f.key, f.default)
@@ -97,6 +95,19 @@ class Effect(ForceTerm):
         from uvsim.forces import make_term
 
         return make_term(d, context=f"effects ({self.kind})")
+
+    def check_values(self, values):
+        """Each overridden field within its physically sensible range (as in the file)."""
+        for f in self.FIELDS:
+            name = self.param_name(f.key)
+            if name in values:
+                v = np.asarray(values[name], float)
+                ok = ((v > f.lo) if f.lo_open else (v >= f.lo)) & (v <= f.hi)
+                bad = first_violation(v, ok, name)
+                if bad:
+                    lb = "(" if f.lo_open else "["
+                    raise VehicleError(f"parameter {bad} {f.unit}: outside the physically sensible range "
+                                       f"{lb}{f.lo:g}, {f.hi:g}] for {f.doc} (effects ({self.kind}).{f.key})")
 
     # -- helpers for prepare -----------------------------------------------------
     def p(self, params: Mapping[str, Any], key: str, n: int) -> np.ndarray:

@@ -7,10 +7,12 @@ name-or-class registry).  Built-ins: ``restoring``, ``diagonal`` damping,
 """
 from __future__ import annotations
 
+import inspect
 from typing import Callable
 
 from uvsim.errors import VehicleError
 from uvsim.forces.base import Context, ForceTerm, param
+from uvsim.schema import check_keys, did_you_mean
 
 _REGISTRY: dict[str, Callable[..., ForceTerm]] = {}
 
@@ -36,19 +38,41 @@ def make_term(spec, *, context: str = "effects") -> ForceTerm:
     if isinstance(spec, ForceTerm):
         return spec
     _load_builtin()
-    if not isinstance(spec, dict) or "type" not in spec:
-        raise VehicleError(f"{context}: expected a mapping with a 'type' key, got {spec!r}")
+    if not isinstance(spec, dict):
+        raise VehicleError(f"{context}: expected a mapping with a 'type' key, got {spec!r}"[:300])
+    if "type" not in spec:
+        near = [k for k in spec if did_you_mean("type", [k])]
+        hint = f" (is {near[0]!r} a misspelt 'type'?)" if near else f" (keys found: {', '.join(map(str, spec))})"
+        raise VehicleError(f"{context}: missing 'type' (the name of the plug-in){hint}; known types: "
+                           f"{', '.join(sorted(_REGISTRY))}")
     kind = spec["type"]
-    cls = _REGISTRY.get(kind)
+    cls = _REGISTRY.get(kind) if isinstance(kind, str) else None
     if cls is None:
-        raise VehicleError(f"{context}: unknown term type {kind!r}; known: {', '.join(sorted(_REGISTRY))}")
+        raise VehicleError(f"{context}: unknown term type {kind!r}{did_you_mean(kind, _REGISTRY)}; "
+                           f"known: {', '.join(sorted(_REGISTRY))}")
     kwargs = {k: v for k, v in spec.items() if k != "type"}
+    keys = accepted_keys(cls)
+    if keys is not None:
+        check_keys(kwargs, keys, f"{context} ({kind})", error=VehicleError)
     try:
         return cls(**kwargs)
     except TypeError as exc:
         raise VehicleError(f"{context} ({kind}): {exc}") from None
     except VehicleError as exc:
         raise VehicleError(f"{context}: {exc}") from None
+
+
+def accepted_keys(cls) -> list[str] | None:
+    """The vehicle-file keys a term class accepts: its ``accepted_keys()`` if it defines
+    one, else the keyword parameters of its constructor; None when the constructor takes
+    ``**kwargs`` and checks its keys itself."""
+    own = getattr(cls, "accepted_keys", None)
+    if callable(own):
+        return list(own())
+    params = list(inspect.signature(cls.__init__).parameters.values())[1:]
+    if any(p.kind is p.VAR_KEYWORD for p in params):
+        return None
+    return [p.name for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
 
 
 _BUILTIN_MODULES = ["uvsim.forces.restoring", "uvsim.forces.damping", "uvsim.forces.actuators", "uvsim.effects",

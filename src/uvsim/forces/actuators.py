@@ -29,6 +29,7 @@ import numpy as np
 from uvsim.errors import SimulationError, VehicleError
 from uvsim.forces import register
 from uvsim.forces.base import ForceTerm
+from uvsim.schema import check_keys
 
 
 def allocation_matrix(positions, directions) -> np.ndarray:
@@ -209,12 +210,29 @@ class Actuators(ForceTerm):
                 raise SimulationError("inputs are PWM but the vehicle's thrusters have no thrust curves")
             f = np.empty_like(u)
             for curve, idx in groups:
-                if voltage is not None and getattr(curve, "voltage_dependent", False):
-                    f[:, idx] = curve.thrust(u[:, idx], voltage=np.asarray(voltage, float)[:, None])
-                else:
-                    f[:, idx] = curve.thrust(u[:, idx])
+                try:
+                    if voltage is not None and getattr(curve, "voltage_dependent", False):
+                        f[:, idx] = curve.thrust(u[:, idx], voltage=np.asarray(voltage, float)[:, None])
+                    else:
+                        f[:, idx] = curve.thrust(u[:, idx])
+                except SimulationError as exc:
+                    raise SimulationError(self._pwm_error(u, curve, idx, exc)) from None
             return f
         raise SimulationError(f"unknown input kind {kind!r}")
+
+    def _pwm_error(self, u, curve, idx, exc) -> str:
+        """Name the input column and thruster of a PWM outside ``curve``'s range."""
+        sub = u[:, idx]
+        bad = ~((sub >= curve.pwm_min) & (sub <= curve.pwm_max))
+        if not bad.any():
+            return str(exc)
+        row, j = np.unravel_index(int(np.argmax(bad)), sub.shape)
+        col = int(idx[j])
+        name = self.names[col] if self.names else f"T{col + 1}"
+        return (f"input column pwm_{col + 1} (thruster {name}): PWM {sub[row, j]:g} us is outside the range "
+                f"{curve.pwm_min:g}..{curve.pwm_max:g} us of thrust curve {curve.name!r} (trajectory {row} of the "
+                "batch); commands are never clipped. For a logged run, uvsim.plausibility.check_run names its file "
+                "and row")
 
     def forces(self, ctx, prep):
         kind = ctx.input_kind
@@ -258,6 +276,12 @@ def _scaled(f, gain, rev):
     return f
 
 
+#: Keys of a vehicle file's ``thrusters`` section (without ``type``) and of each unit.
+THRUSTERS_KEYS = ("curve", "units", "configuration_matrix", "names", "gains", "reverse_ratios", "force_gain",
+                  "force_reverse_ratio")
+UNIT_KEYS = ("name", "position", "direction", "curve", "gain", "reverse_ratio")
+
+
 def build_actuators(spec, where: str) -> Actuators:
     """Build :class:`Actuators` from a vehicle file's ``thrusters`` section.
 
@@ -290,6 +314,7 @@ def build_actuators(spec, where: str) -> Actuators:
         return term
     if not isinstance(spec, dict):
         raise VehicleError(f"{where}: thrusters: expected a mapping with 'units' or 'configuration_matrix'")
+    check_keys(spec, THRUSTERS_KEYS, f"{where}: thrusters", error=VehicleError)
     default_curve = spec.get("curve")
     curve_cache: dict = {}
 
@@ -313,9 +338,16 @@ def build_actuators(spec, where: str) -> Actuators:
         P, D, names, curves, gains, rev = [], [], [], [], [], []
         for i, unit in enumerate(units):
             field = f"thrusters.units[{i}]"
+            if not isinstance(unit, dict):
+                raise VehicleError(f"{where}: {field}: expected a mapping {{name, position: [x, y, z], "
+                                   f"direction: [dx, dy, dz]}}, got {unit!r}")
+            check_keys(unit, UNIT_KEYS, f"{where}: {field}", error=VehicleError)
             for key in ("position", "direction"):
-                val = unit.get(key) if isinstance(unit, dict) else None
-                arr = np.asarray(val, dtype=float) if val is not None else None
+                val = unit.get(key)
+                try:
+                    arr = np.asarray(val, dtype=float) if val is not None else None
+                except (TypeError, ValueError):
+                    arr = None
                 if arr is None or arr.shape != (3,) or not np.all(np.isfinite(arr)):
                     raise VehicleError(f"{where}: {field}.{key}: expected 3 finite numbers, got {val!r}")
             d = np.asarray(unit["direction"], float)
@@ -331,7 +363,10 @@ def build_actuators(spec, where: str) -> Actuators:
         positions = np.asarray(P, float)
         directions = np.asarray(D, float)
     elif "configuration_matrix" in spec:
-        B = np.asarray(spec["configuration_matrix"], dtype=float)
+        try:
+            B = np.asarray(spec["configuration_matrix"], dtype=float)
+        except (TypeError, ValueError):
+            B = np.zeros(0)
         if B.ndim != 2 or B.shape[0] != 6 or not np.all(np.isfinite(B)):
             raise VehicleError(f"{where}: thrusters.configuration_matrix: expected 6 rows of finite numbers")
         n = B.shape[1]

@@ -84,6 +84,12 @@ class ForceTerm:
         """Named scalar parameters with their current values."""
         return {}
 
+    def check_values(self, values: Mapping[str, np.ndarray]) -> None:
+        """Raise :class:`uvsim.errors.VehicleError` when a value given for one of this
+        term's named parameters (each an array, one entry per parameter set) breaks the
+        rule the vehicle-file loader applies to that field (e.g. a positive damping
+        coefficient).  Called for overrides, so the API and the YAML agree."""
+
     def bind(self, vehicle, index: int) -> "ForceTerm":
         """Called when a :class:`uvsim.model.Model` is built: a term that needs the
         vehicle (e.g. its thruster allocation) or its own position ``index`` in the term
@@ -136,6 +142,17 @@ def _replace_in(d: dict, values: Mapping[str, float]) -> None:
             _replace_in(val, values)
         elif key in values:
             d[key] = float(values[key])
+
+
+def first_violation(values, ok, name: str) -> str:
+    """``"X_u = 50"`` (or ``"X_u = 50 in parameter set 3"`` for arrays) for the first entry
+    of ``values`` where ``ok`` is False; ``""`` when every entry is ok."""
+    a = np.atleast_1d(np.asarray(values, float))
+    bad = np.flatnonzero(~np.broadcast_to(ok, a.shape))
+    if not bad.size:
+        return ""
+    i = int(bad[0])
+    return f"{name} = {a[i]:g}" + (f" in parameter set {i}" if a.size > 1 else "")
 
 
 def param(params: Mapping[str, Any], name: str, n: int) -> np.ndarray:

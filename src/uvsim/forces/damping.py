@@ -16,7 +16,8 @@ import numpy as np
 
 from uvsim.errors import VehicleError
 from uvsim.forces import register
-from uvsim.forces.base import ForceTerm
+from uvsim.forces.base import ForceTerm, first_violation
+from uvsim.schema import check_keys
 
 LINEAR_NAMES = ("X_u", "Y_v", "Z_w", "K_p", "M_q", "N_r")
 QUADRATIC_NAMES = ("X_uu", "Y_vv", "Z_ww", "K_pp", "M_qq", "N_rr")
@@ -29,12 +30,12 @@ def _coeffs(values, names, field):
         values = dict(zip(names, values))
     if not isinstance(values, dict):
         raise VehicleError(f"damping.{field}: expected a mapping {names[0]}..{names[-1]} or a list of 6 numbers")
-    unknown = set(values) - set(names)
-    if unknown:
-        raise VehicleError(f"damping.{field}: unknown coefficient(s) {sorted(unknown)}; expected {', '.join(names)}")
+    check_keys(values, names, f"damping.{field}", error=VehicleError)
     out = {}
     for name in names:
         v = values.get(name, 0.0)
+        if isinstance(v, bool):
+            raise VehicleError(f"damping.{field}.{name}: expected a number, got {v!r}")
         try:
             v = float(v)
         except (TypeError, ValueError):
@@ -61,6 +62,16 @@ class DiagonalDamping(ForceTerm):
 
     def parameters(self):
         return {**self.linear, **self.quadratic}
+
+    def check_values(self, values):
+        for k, v in values.items():
+            if k in self.linear or k in self.quadratic:
+                bad = first_violation(v, np.asarray(v, float) <= 0, k)
+                if bad:
+                    raise VehicleError(
+                        f"parameter {bad}: damping coefficients are in the paper sign (negative for a damped "
+                        "vehicle, as in the vehicle file's damping section); a positive value would feed "
+                        "energy into the motion")
 
     def prepare(self, params, n):
         DL = np.stack([np.broadcast_to(np.asarray(params[k], float), (n,)) for k in LINEAR_NAMES], -1)

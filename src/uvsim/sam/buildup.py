@@ -62,7 +62,8 @@ import numpy as np
 
 from uvsim.errors import VehicleError
 from uvsim.forces import register
-from uvsim.forces.base import ForceTerm
+from uvsim.forces.base import ForceTerm, first_violation
+from uvsim.schema import check_keys
 
 #: Body-table data sets (seed 003 sec. V-C compares Jorgensen-only, CFD and multifidelity).
 DATASETS = ("multifidelity", "jorgensen", "datcom")
@@ -167,6 +168,13 @@ def _pos(spec, key, where):
     return v
 
 
+#: Keys of a ``components`` entry, by kind (see :class:`ComponentBuildup`).
+COMPONENT_KEYS = {
+    "body": ("name", "kind", "hull", "nose", "rpy_deg"),
+    "wing": ("name", "kind", "position", "rpy_deg", "area", "chord", "aspect_ratio", "oswald", "gimbal"),
+}
+
+
 @register("component_buildup")
 class ComponentBuildup(ForceTerm):
     """Component build-up damping (see module docstring).
@@ -225,9 +233,7 @@ class ComponentBuildup(ForceTerm):
         self.rho = _pos({"rho": rho}, "rho", where)
         self.nu = _pos({"nu": nu}, "nu", where)
         rot = dict(rotational or {})
-        unknown = set(rot) - set(ROT_NAMES)
-        if unknown:
-            raise VehicleError(f"{where}.rotational: unknown key(s) {sorted(unknown)}; expected {ROT_NAMES}")
+        check_keys(rot, ROT_NAMES, f"{where}.rotational", error=VehicleError)
         self.rotational = {k: float(rot.get(k, 0.0)) for k in ROT_NAMES}
         for k, v in self.rotational.items():
             if not np.isfinite(v) or v > 0:
@@ -235,9 +241,7 @@ class ComponentBuildup(ForceTerm):
         self.cross_coupled = None
         if cross_coupled is not None:
             cc = dict(cross_coupled)
-            unknown = set(cc) - set(CROSS_NAMES)
-            if unknown:
-                raise VehicleError(f"{where}.cross_coupled: unknown key(s) {sorted(unknown)}; expected {CROSS_NAMES}")
+            check_keys(cc, CROSS_NAMES, f"{where}.cross_coupled", error=VehicleError)
             self.cross_coupled = {k: float(cc.get(k, 0.0)) for k in CROSS_NAMES}
         self.re_grid = None if re_grid is None else [float(x) for x in re_grid]
         self.spec_components = [dict(c) for c in components]
@@ -249,6 +253,8 @@ class ComponentBuildup(ForceTerm):
         if not isinstance(spec, dict):
             raise VehicleError(f"{where}: expected a mapping")
         kind = spec.get("kind")
+        if kind in COMPONENT_KEYS:
+            check_keys(spec, COMPONENT_KEYS[kind], where, error=VehicleError)
         name = str(spec.get("name", f"component_{i}"))
         C = rotation_rpy(spec.get("rpy_deg", [0.0, 0.0, 0.0]))
         if kind == "body":
@@ -270,6 +276,14 @@ class ComponentBuildup(ForceTerm):
                 raise VehicleError(f"{where}.gimbal: expected true or false, got {gimbal!r}")
             return Component(name, "wing", pos, C, area, chord, _wing_table(ar, oswald), gimbal)
         raise VehicleError(f"{where}.kind: expected 'body' or 'wing', got {kind!r}")
+
+    def check_values(self, values):
+        for k in ROT_NAMES:
+            if k in values:
+                bad = first_violation(values[k], np.asarray(values[k], float) <= 0, k)
+                if bad:
+                    raise VehicleError(f"parameter {bad}: rotational damping is in the SNAME sign (<= 0), as in "
+                                       "the vehicle file's damping (component_buildup).rotational")
 
     def parameters(self):
         p = dict(self.rotational)

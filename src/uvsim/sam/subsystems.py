@@ -52,6 +52,7 @@ from uvsim.errors import SimulationError, VehicleError
 from uvsim.forces import register
 from uvsim.forces.actuators import Actuators
 from uvsim.forces.base import ForceTerm
+from uvsim.schema import check_keys
 
 
 def _num(spec: dict, key: str, where: str, default=None, positive=False):
@@ -81,6 +82,8 @@ class _Servo:
     """Limits and dynamics of one actuator channel."""
 
     def __init__(self, spec: dict, where: str, lo, hi, tau, rate, ref=None):
+        keys = ("min", "max", "time_constant", "rate") + (() if ref is None else ("reference",))
+        check_keys(spec, keys, where, error=VehicleError)
         self.lo = _num(spec, "min", where, lo)
         self.hi = _num(spec, "max", where, hi)
         if self.hi <= self.lo:

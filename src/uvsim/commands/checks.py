@@ -1,0 +1,149 @@
+"""What the commands check before and after their work (docs/contracts.md).
+
+Before: every output path can be written (:mod:`uvsim.files`), the runs make physical
+sense for the vehicle (:mod:`uvsim.plausibility`, ``--allow NAME``), and what the
+readers changed in the data (:attr:`uvsim.logs.Run.notes`) is printed.
+After: a fit's result is sane before it is reported as a success (finite RMSE, not an
+order of magnitude beyond the measured signals, not every parameter of a DOF on a search
+bound), otherwise :class:`uvsim.errors.ResultCheckError` (exit status 2) says why.
+"""
+from __future__ import annotations
+
+import math
+import sys
+from typing import Iterable, Mapping
+
+from uvsim.errors import ResultCheckError
+from uvsim.files import check_output_dir, check_output_file
+
+#: A fitted model whose RMSE exceeds this many times the spread of the measured signal
+#: (the RMS of its deviation from the run mean) predicts nothing: the fit "exploded".
+EXPLODE_FACTOR = 10.0
+
+
+def add_allow_argument(p) -> None:
+    from uvsim.plausibility import CHECKS, NOT_ALLOWABLE
+
+    names = ", ".join(c for c in CHECKS if c not in NOT_ALLOWABLE)
+    p.add_argument("--allow", default=None, metavar="NAME[,NAME]",
+                   help=f"turn these plausibility checks of the runs into warnings ({names}; docs/contracts.md)")
+
+
+def add_progress_arguments(p) -> None:
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--progress", dest="progress", action="store_true", default=None,
+                   help="progress bars for the long phases (default: when stderr is a terminal)")
+    g.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bars")
+
+
+def want_progress(args) -> bool:
+    return sys.stderr.isatty() if args.progress is None else bool(args.progress)
+
+
+def say(command: str, message: str) -> None:
+    print(f"uvsim {command}: {message}", file=sys.stderr, flush=True)
+
+
+def check_outputs(files: Mapping[str, object] = (), dirs: Mapping[str, object] = ()) -> None:
+    """Check output files ``{option: path}`` and directories before any work (None = not given)."""
+    for option, path in dict(files).items():
+        if path is not None:
+            check_output_file(path, option)
+    for option, path in dict(dirs).items():
+        if path is not None:
+            check_output_dir(path, option)
+
+
+def check_runs_at_door(command: str, runs, vehicle, allow_text: str | None) -> list[str]:
+    """Plausibility of ``runs`` for ``vehicle`` and the readers' notes: raises for a
+    finding not allowed, prints allowed findings and notes; returns the printed lines
+    (for the report)."""
+    from uvsim.plausibility import check_runs, parse_allow
+
+    allow = parse_allow(allow_text)
+    lines = [f"warning (allowed {f.check}): {f.message}" for f in check_runs(runs, vehicle, allow)]
+    lines += [f"note: {n}" for r in runs for n in r.notes]
+    for line in lines:
+        say(command, line)
+    return lines
+
+
+def _spread(runs) -> dict[str, float]:
+    """{group_unit key: spread of the measured signal} over ``runs`` (empty if none)."""
+    from uvsim.metrics import GROUP_UNITS, signal_scales, signals_from_run
+    from uvsim.errors import UvsimError
+
+    if not runs:
+        return {}
+    try:
+        sc = signal_scales([signals_from_run(r) for r in runs])
+    except UvsimError:  # a group without spread: no exploding check for it
+        return {}
+    return {f"{g}_{GROUP_UNITS[g]}": float(v) for g, v in sc.items() if g in GROUP_UNITS}
+
+
+def rmse_problems(rmse: Mapping[str, float], runs, what: str) -> list[str]:
+    """Non-finite RMSEs and RMSEs beyond EXPLODE_FACTOR x the measured spread."""
+    out = []
+    spread = _spread(runs)
+    for k, v in rmse.items():
+        if v is None or not math.isfinite(v):
+            out.append(f"{what} {k} is not finite (the simulation diverged)")
+        elif k in spread and spread[k] > 0 and v > EXPLODE_FACTOR * spread[k]:
+            out.append(f"{what} {k} = {v:.4g} is {v / spread[k]:.3g} times the spread of the measured signal "
+                       f"({spread[k]:.4g}); expected at most {EXPLODE_FACTOR:g} times (the simulation diverged)")
+    return out
+
+
+def fail_if(problems: Iterable[str], command: str, hint: str) -> None:
+    problems = list(problems)
+    if problems:
+        raise ResultCheckError(f"the result of {command} fails its sanity checks and is not reported as a "
+                               f"success: {'; '.join(problems)}. {hint}")
+
+
+def calibration_problems(rep: Mapping, ds) -> list[str]:
+    """Sanity problems of a calibration report (``Calibrator.report_``)."""
+    from uvsim.calibration.params import DOF_PARAMETERS
+
+    probs = rmse_problems(rep["training_rmse"], [r for r in ds.runs if r.split == "train"], "training RMSE")
+    probs += rmse_problems(rep["validation_rmse"], [r for r in ds.runs if r.split == "validation"],
+                           "validation RMSE")
+    hits = bound_hits(rep)
+    for d in rep["dofs"]:
+        names = [k for k in DOF_PARAMETERS.get(d, ()) if k in rep["parameters"]]
+        if names and set(names) <= set(hits):
+            probs.append(f"every fitted {d} parameter ({', '.join(names)}) ended on a search bound, so the data "
+                         "do not determine them (wrong units, or a starting vehicle far off: widen --margin)")
+    return probs
+
+
+#: A fitted value within this fraction of its search range from a bound is "on the bound"
+#: (a bounded least-squares solver such as scipy's 'trf' stays strictly inside its bounds,
+#: so a value pushed against one ends a hair inside it).
+BOUND_TOL = 1e-3
+
+
+def bound_hits(rep: Mapping) -> dict[str, str]:
+    """{parameter: "lower"|"upper"} for the fitted parameters on a search bound."""
+    out = {}
+    for k, v in rep["parameters"].items():
+        if k not in rep["bounds"]:
+            continue
+        lo, hi = rep["bounds"][k]
+        if min(v - lo, hi - v) <= BOUND_TOL * (hi - lo):
+            out[k] = "lower" if abs(v - lo) <= abs(v - hi) else "upper"
+    return out
+
+
+def diagnosis_problems(rep: Mapping, val_runs) -> list[str]:
+    """Sanity problems of a diagnosis report."""
+    probs = rmse_problems(rep["rmse_before"], val_runs, "validation RMSE of the given model")
+    probs += rmse_problems(rep["rmse_after"], val_runs, "validation RMSE after the fit")
+    for step in rep.get("steps", []):
+        chosen = next((c for c in step["candidates"] if c.get("chosen")), None)
+        if chosen is not None and chosen.get("free") and set(chosen["free"]) <= set(chosen.get("at_bounds", ())):
+            probs.append(f"every fitted parameter of the accepted effect {chosen['effect']}:{chosen['variant']} "
+                         f"({', '.join(chosen['free'])}) ended on a bound of its search range, so the data do not "
+                         "determine them")
+    return probs

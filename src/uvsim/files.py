@@ -1,0 +1,135 @@
+"""File-system contracts: input files that can be read, output paths that can be written.
+
+Inputs.  :func:`read_text` reads a text input (vehicle YAML, manifest) and turns every
+way it can fail - missing, a directory, no permission, not UTF-8 text (a binary file) -
+into the caller's :class:`uvsim.errors.UvsimError` subclass naming the file and what
+was expected.
+
+Outputs.  The commands check every output path *before* any work starts
+(:func:`check_output_file`, :func:`check_output_dir`), so a long calibration never
+fails at its end because ``--out`` points under a file or into a read-only directory.
+A path is accepted when it is not an existing directory (for a file) or file (for a
+directory), no component of its parent is a file, and a file can actually be created
+in its nearest existing ancestor directory (a real test write, since permission bits
+say nothing for root or for read-only file systems).  Nothing is left behind: the
+probe file is removed and no directory is created by the check.
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+from uvsim.errors import UvsimError
+
+
+class OutputPathError(UvsimError, ValueError):
+    """An output path (``--out``, ``--json``, ``--checkpoint``, ``--plots``, ...) cannot be written."""
+
+
+def read_text(path, *, error: type = UvsimError, what: str = "file") -> str:
+    """The UTF-8 text of ``path``; every failure raises ``error`` naming the file.
+
+    Parameters
+    ----------
+    path : file to read.
+    error : :class:`UvsimError` subclass to raise.
+    what : what the file should be, for messages (``"vehicle file"``, ``"manifest"``).
+    """
+    p = Path(path)
+    try:
+        raw = p.read_bytes()
+    except FileNotFoundError:
+        raise error(f"{p}: {what} does not exist") from None
+    except IsADirectoryError:
+        raise error(f"{p}: is a directory, expected a {what}") from None
+    except PermissionError:
+        raise error(f"{p}: permission denied reading the {what}") from None
+    except OSError as exc:
+        raise error(f"{p}: cannot read the {what}: {exc.strerror or exc}") from None
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise error(f"{p}: not a text file (byte {exc.start} is not UTF-8); expected a {what} "
+                    "in UTF-8 text") from None
+
+
+def load_yaml(path, *, error: type = UvsimError, what: str = "YAML file"):
+    """Read and parse a YAML file (:func:`read_text`, ``yaml.safe_load``); a syntax error
+    raises ``error`` in one line with the file, line and column."""
+    import yaml
+
+    text = read_text(path, error=error, what=what)
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" line {mark.line + 1}, column {mark.column + 1}:" if mark is not None else ""
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        context = getattr(exc, "context", None)
+        raise error(f"{path}: not valid YAML:{where} {problem}" + (f" ({context})" if context else "")) from None
+
+
+def _nearest_existing(p: Path) -> Path:
+    """The path itself or its closest existing ancestor."""
+    cur = p
+    while not cur.exists() and cur != cur.parent:
+        cur = cur.parent
+    return cur
+
+
+def _probe_writable(directory: Path, option: str, target: Path) -> None:
+    try:
+        fd, name = tempfile.mkstemp(prefix=".uvsim-write-test-", dir=directory)
+    except OSError as exc:
+        raise OutputPathError(f"{option} {target}: cannot create files in {directory} "
+                              f"({exc.strerror or exc}); expected a writable directory") from None
+    os.close(fd)
+    os.unlink(name)
+
+
+def _check_parents(p: Path, option: str) -> Path:
+    base = _nearest_existing(p.parent)
+    if not base.is_dir():
+        raise OutputPathError(f"{option} {p}: {base} is a file, not a directory; expected a path whose "
+                              "parent directories are directories (or do not exist yet)")
+    return base
+
+
+def check_output_file(path, option: str) -> Path:
+    """Check that file ``path`` can be written (see module docstring); returns it as a Path.
+
+    Raises
+    ------
+    OutputPathError
+        Naming ``option`` (e.g. ``"--out"``), the path and the reason.
+    """
+    if path is None or str(path).strip() == "":
+        raise OutputPathError(f"{option}: empty path; expected a file name")
+    p = Path(path)
+    if p.is_dir():
+        raise OutputPathError(f"{option} {p}: is a directory; expected a file name")
+    base = _check_parents(p, option)
+    if p.exists():
+        try:
+            with open(p, "ab"):
+                pass
+        except OSError as exc:
+            raise OutputPathError(f"{option} {p}: exists and cannot be overwritten "
+                                  f"({exc.strerror or exc})") from None
+        return p
+    _probe_writable(base, option, p)
+    return p
+
+
+def check_output_dir(path, option: str) -> Path:
+    """Check that directory ``path`` exists or can be created, and that files can be
+    written in it (see module docstring); returns it as a Path."""
+    if path is None or str(path).strip() == "":
+        raise OutputPathError(f"{option}: empty path; expected a directory")
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise OutputPathError(f"{option} {p}: is a file; expected a directory (existing or to be created)")
+    base = p if p.is_dir() else _check_parents(p, option)
+    _probe_writable(base, option, p)
+    return p

@@ -1,0 +1,74 @@
+"""Key contracts of the YAML inputs: unknown keys are errors with a did-you-mean.
+
+Vehicle files (:mod:`uvsim.vehicle`), dataset manifests (:mod:`uvsim.logs`) and the
+plug-in sections (damping models, effects, thrust curves, SAM subsystems) each declare
+the keys they accept; :func:`check_keys` rejects anything else, naming the file, the
+section, the unknown key, the closest known key (``difflib.get_close_matches``) and the
+accepted keys.  So ``rb:`` instead of ``r_b:`` is an error, not a silent default of 0.
+
+Free-form metadata belongs under a ``meta:`` key (vehicle files and manifests), which
+is never interpreted.  The value checks (numbers, units, physical ranges) stay with the
+code that reads each field: it knows the units and the physics.
+"""
+from __future__ import annotations
+
+import difflib
+from typing import Any, Iterable, Mapping
+
+from uvsim.errors import UvsimError
+
+#: Similarity (difflib ratio) above which a known key is suggested for an unknown one.
+SUGGEST_CUTOFF = 0.7
+
+
+def did_you_mean(name: Any, choices: Iterable[Any]) -> str:
+    """``" (did you mean 'r_b'?)"`` for the closest of ``choices``, or ``""``.
+
+    The comparison ignores case, so ``Mass`` suggests ``mass``; equally close choices
+    are all named (``I_xzz``: ``'I_zz' or 'I_xz'``)."""
+    names = [str(c) for c in choices]
+    lower = {n.lower(): n for n in names}
+    key = str(name).lower()
+    scored = sorted(((difflib.SequenceMatcher(None, key, c).ratio(), c) for c in lower), key=lambda x: -x[0])
+    best = [c for r, c in scored if r >= SUGGEST_CUTOFF and r >= scored[0][0] - 1e-9] if scored else []
+    if not best:
+        return ""
+    return f" (did you mean {' or '.join(repr(lower[c]) for c in best)}?)"
+
+
+def unknown_key_message(where: str, key: Any, allowed: Iterable[Any], hint: str = "", noun: str = "key") -> str:
+    """The message of an unknown key: where, the key, a suggestion and what is accepted."""
+    allowed = [str(a) for a in allowed]
+    return (f"{where}: unknown {noun} {str(key)!r}{did_you_mean(key, allowed)}; expected "
+            f"{', '.join(allowed) if allowed else 'no keys'}{hint}")
+
+
+def check_keys(mapping: Mapping, allowed: Iterable[Any], where: str, *, error: type = UvsimError,
+               hint: str = "") -> None:
+    """Raise ``error`` for the first key of ``mapping`` not in ``allowed``.
+
+    Parameters
+    ----------
+    mapping : the section read from YAML (its keys are checked, in file order).
+    allowed : the accepted keys, in the order the message lists them.
+    where : file and section, e.g. ``"sam.yaml: rigid_body"``.
+    error : the :class:`uvsim.errors.UvsimError` subclass to raise.
+    hint : appended to the message (e.g. where free-form metadata goes).
+    """
+    allowed = list(allowed)
+    known = set(allowed)
+    for key in mapping:
+        if key not in known:
+            raise error(unknown_key_message(where, key, allowed, hint))
+
+
+def require_mapping(value: Any, where: str, *, error: type = UvsimError, example: str = "",
+                    none_ok: bool = True) -> dict:
+    """``value`` as a dict (``{}`` for None when ``none_ok``); raises ``error`` naming
+    ``where`` for anything else (a list, a number, text)."""
+    if value is None and none_ok:
+        return {}
+    if not isinstance(value, Mapping):
+        ex = f" such as {example}" if example else ""
+        raise error(f"{where}: expected a mapping{ex}, got {type(value).__name__} {value!r}"[:300])
+    return dict(value)
