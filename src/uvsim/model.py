@@ -148,7 +148,9 @@ class Model:
         if np.any(self.mass <= 0):
             raise VehicleError("parameter m: mass must be positive")
         self.r_g = np.stack([arr("x_g"), arr("y_g"), arr("z_g")], -1)
-        varying = set(overrides)
+        # an override that is the same for every row is shared (e.g. values held fixed in a fit)
+        varying = {k for k, v in overrides.items()
+                   if np.ndim(params[k]) > 0 and np.size(params[k]) > 1 and np.any(params[k] != params[k][0])}
         rb_names = ["m", "x_g", "y_g", "z_g", *INERTIA_NAMES]
         shared_rb = not (varying & set(rb_names))
         shared_am = not (varying & set(ADDED_MASS_NAMES))

@@ -1,4 +1,8 @@
-"""``uvsim bench [--json] [--quick] [--only AREA,...]``: speed figures (docs/performance.md)."""
+"""``uvsim bench [--json] [--quick] [--only AREA,...]``: speed figures (docs/performance.md).
+
+``uvsim bench diagnose --scenarios N --seed S [--two-effects M] [--results FILE]``: the
+diagnosis on randomized scenarios from the independent truth model
+(:mod:`uvsim.benchmarks.scenarios`, docs/diagnose.md)."""
 from __future__ import annotations
 
 import json
@@ -7,7 +11,15 @@ import platform
 
 
 def register(sub) -> None:
-    p = sub.add_parser("bench", help="measure simulator / calibration speed")
+    p = sub.add_parser("bench", help="measure simulator / calibration speed; 'bench diagnose': scenario benchmark")
+    p.add_argument("suite", nargs="?", choices=["diagnose"], default=None,
+                   help="'diagnose': diagnose randomized scenarios (default: the speed figures)")
+    p.add_argument("--scenarios", type=int, default=20, help="(diagnose) single-effect or clean scenarios")
+    p.add_argument("--two-effects", type=int, default=0, help="(diagnose) two-effect scenarios")
+    p.add_argument("--seed", type=int, default=0, help="(diagnose) first scenario seed")
+    p.add_argument("--workers", type=int, default=1, help="(diagnose) processes per diagnosis")
+    p.add_argument("--results", default=None,
+                   help="(diagnose) JSON-lines file of finished scenarios; an interrupted benchmark resumes from it")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--quick", action="store_true", help="smaller problems (a smoke test, not the recorded figures)")
     p.add_argument("--only", default=None, help="comma-separated areas (core, hydro, sam, calibration)")
@@ -18,6 +30,8 @@ def _run(args) -> int:
     from uvsim.benchmarks import available
     from uvsim.errors import UvsimError
 
+    if args.suite == "diagnose":
+        return _diagnose(args)
     mods = available()
     if args.only:
         want = [a.strip() for a in args.only.split(",") if a.strip()]
@@ -39,4 +53,37 @@ def _run(args) -> int:
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}")
     for k, v in results.items():
         print(f"  {k:34s} {v:14,.1f}   {desc.get(k, '')}")
+    return 0
+
+
+def _diagnose(args) -> int:
+    from uvsim.benchmarks.scenarios import run_benchmark
+    from uvsim.commands.checks import check_outputs
+
+    check_outputs({"--results": args.results})
+    out = run_benchmark(args.scenarios, args.seed, two_effects=args.two_effects, workers=args.workers,
+                        results=args.results, progress=None if args.json else (lambda m: print(m, flush=True)))
+    s = out["summary"]
+    if args.json:
+        print(json.dumps(out, indent=2, default=float))
+        return 0
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}")
+    print(f"scenarios: {s['scenarios']} (seed {args.seed}); single-effect or clean: "
+          f"{s['single_or_clean']['correct']}/{s['single_or_clean']['n']} named correctly"
+          + (f" ({100 * s['single_or_clean']['correct_rate']:.0f} %)" if s['single_or_clean']['n'] else ""))
+    if s["two_effects"]["n"]:
+        print(f"two effects: both named in {s['two_effects']['both_named']}/{s['two_effects']['n']} "
+              f"({100 * s['two_effects']['both_named_rate']:.0f} %)")
+    if s["false_positive_rate_clean"] is not None:
+        print(f"false positives on clean data: {100 * s['false_positive_rate_clean']:.0f} % "
+              f"of {s['clean_scenarios']}")
+    if s["halved_share_of_correct_detections"] is not None:
+        print(f"validation RMSE at least halved in {100 * s['halved_share_of_correct_detections']:.0f} % of "
+              f"{s['correct_detections']} correct detections")
+    print("detection rate per effect: " + ", ".join(f"{e} {d['found']}/{d['of']}" for e, d in s["detection_rate"].items()))
+    sec = s["seconds_per_dataset"]
+    print(f"seconds per dataset: mean {sec['mean']:.1f}, median {sec['median']:.1f}, max {sec['max']:.1f}")
+    print("confusion (true -> named: count):")
+    for c in s["confusion"]:
+        print(f"  {c['true']:32s} -> {c['named']:32s} {c['count']}")
     return 0

@@ -12,19 +12,24 @@ effect are compared by the same criterion, and the simplest sufficient one wins
 effect                variants (free parameters)                              needs
 ====================  ======================================================  ==========
 current               horizontal (n, e); 3d (n, e, d)                          -
-tether                horizontal pull (stiffness, anchor n, e); 3d (+ anchor    position
-                      d); 3d_attach (+ attachment x, y, z on the frame);
+tether                horizontal pull (stiffness, anchor n, e); horizontal_     position
+                      slack (+ slack length); 3d (+ anchor d); 3d_slack;
+                      3d_attach (+ attachment x, y, z on the frame);
                       tension (constant pull, anchor n, e, d); 3d_drag (3d +
                       wetted cable length, quadratic cross-flow drag)
 ballast               xy (weight, x, y); xyz (weight, x, y, z)                  -
 thruster_lag          steady (time constant; starts at the command);            -
                       from_rest (starts at zero thrust)
-thrust_asymmetry      common (one reverse ratio); per_unit (one per thruster,    -
-                      or per DOF for generalized-force inputs)
-thruster_gain         unit_i (thruster i's gain, one variant per thruster);     per-thruster
-                      all (every thruster's gain)                              inputs
-coupled_damping       the two off-diagonal derivatives that explain most of     -
-                      the equation error
+thrust_asymmetry      common (one reverse ratio); per_thruster (one per          -
+                      thruster); per_dof (one per DOF, generalized-force
+                      inputs)
+thruster_gain         unit_i (thruster i's gain, one variant per thruster);     thrusters
+                      all (every thruster's gain); with generalized-force
+                      inputs through the pseudo-inverse allocation
+coupled_damping       drag_centre_z / _xz / _xyz (the translational damping     -
+                      acts at a centre of pressure off the origin, seed 003
+                      eq. 25); or the named off-diagonal derivatives that a
+                      forward stepwise regression of the equation error picks
 bottom_effect         drag coefficient and floor depth                          depth
 ====================  ======================================================  ==========
 """
@@ -90,10 +95,11 @@ def _tether(p_ref):
          "tether_anchor_e": (pe - ANCHOR_RANGE, pe + ANCHOR_RANGE),
          "tether_anchor_d": (pd - ANCHOR_RANGE, pd + ANCHOR_RANGE),
          "tether_attach_x": (-ATTACH_R, ATTACH_R), "tether_attach_y": (-ATTACH_R, ATTACH_R),
-         "tether_attach_z": (-ATTACH_R, ATTACH_R), "tether_length": (0.0, 2 * ANCHOR_RANGE)}
+         "tether_attach_z": (-ATTACH_R, ATTACH_R), "tether_length": (0.0, 2 * ANCHOR_RANGE),
+         "tether_slack_length": (0.0, ANCHOR_RANGE)}
     s = {"tether_stiffness": 0.5, "tether_tension": 1.0, "tether_anchor_n": pn - 5.0, "tether_anchor_e": pe,
          "tether_anchor_d": pd, "tether_attach_x": 0.0, "tether_attach_y": 0.0, "tether_attach_z": 0.0,
-         "tether_length": 10.0}
+         "tether_length": 10.0, "tether_slack_length": 0.0}
     base = {"type": "tether", "tension": 0.0, "stiffness": 0.5, "slack_length": 0.0, "length": 0.0,
             "anchor_n": pn - 5.0, "anchor_e": pe, "anchor_d": pd}
     anchor3 = ["tether_anchor_n", "tether_anchor_e", "tether_anchor_d"]
@@ -101,8 +107,13 @@ def _tether(p_ref):
         Candidate("tether", "horizontal", {**base, "horizontal": True},
                   ["tether_stiffness", "tether_anchor_n", "tether_anchor_e"], b, s,
                   "elastic line pulling horizontally towards an anchor (cable on the floor or at the surface)"),
+        Candidate("tether", "horizontal_slack", {**base, "horizontal": True},
+                  ["tether_stiffness", "tether_slack_length", "tether_anchor_n", "tether_anchor_e"], b, s,
+                  "elastic line pulling horizontally once stretched beyond its slack length"),
         Candidate("tether", "3d", dict(base), ["tether_stiffness"] + anchor3, b, s,
                   "elastic line pulling in 3-D towards an anchor, attached at the body origin"),
+        Candidate("tether", "3d_slack", dict(base), ["tether_stiffness", "tether_slack_length"] + anchor3, b, s,
+                  "elastic line pulling in 3-D once stretched beyond its slack length"),
         Candidate("tether", "3d_attach", dict(base),
                   ["tether_stiffness"] + anchor3 + ["tether_attach_x", "tether_attach_y", "tether_attach_z"], b, s,
                   "elastic line in 3-D, attached anywhere on the frame (moments from the lever arm)"),
@@ -140,12 +151,18 @@ def _lag(dt):
 def _asymmetry(kind, k):
     cands = [Candidate("thrust_asymmetry", "common", {"type": "thrust_asymmetry", "ratio": 1.0},
                        ["thrust_asymmetry_ratio"], {"thrust_asymmetry_ratio": (0.1, 1.5)},
-                       {"thrust_asymmetry_ratio": 1.0}, "one reverse/forward ratio for every thruster")]
-    names = ([f"thruster_reverse_{i + 1}" for i in range(k)] if kind != "force"
-             else [f"force_reverse_{c}" for c in "XYZKMN"])
-    cands.append(Candidate("thrust_asymmetry", "per_unit", None, names, {n: (0.1, 1.5) for n in names},
-                           {n: 1.0 for n in names},
-                           "a reverse ratio per thruster" if kind != "force" else "a reverse ratio per DOF"))
+                       {"thrust_asymmetry_ratio": 1.0},
+                       "one reverse/forward ratio for every thruster" if kind != "force"
+                       else "one reverse/forward ratio for every generalized-force component")]
+    if k:
+        names = [f"thruster_reverse_{i + 1}" for i in range(k)]
+        cands.append(Candidate("thrust_asymmetry", "per_thruster", None, names, {n: (0.1, 1.5) for n in names},
+                               {n: 1.0 for n in names}, "a reverse ratio per thruster" + (
+                                   " (force inputs: through the pseudo-inverse allocation)" if kind == "force" else "")))
+    if kind == "force":
+        names = [f"force_reverse_{c}" for c in "XYZKMN"]
+        cands.append(Candidate("thrust_asymmetry", "per_dof", None, names, {n: (0.1, 1.5) for n in names},
+                               {n: 1.0 for n in names}, "a reverse ratio per generalized-force component"))
     return cands
 
 
@@ -171,6 +188,18 @@ def _bottom(z_max):
                       ["bottom_effect_damping", "bottom_effect_floor_d"], b, s,
                       f"extra vertical drag near a floor searched within {lo:.2f}..{hi:.2f} m; decay length 0.25 m "
                       "(the BlueROV2's height)")]
+
+
+def _drag_centre():
+    b = {"drag_centre_x": (-0.5, 0.5), "drag_centre_y": (-0.5, 0.5), "drag_centre_z": (-0.5, 0.5)}
+    s = {"drag_centre_x": 0.0, "drag_centre_y": 0.0, "drag_centre_z": 0.0}
+    spec = {"type": "drag_centre"}
+    return [Candidate("coupled_damping", "drag_centre_z", spec, ["drag_centre_z"], b, s,
+                      "translational drag acting below/above the origin (K_v, K_vv, M_u, M_uu; seed 003 eq. 25)"),
+            Candidate("coupled_damping", "drag_centre_xz", spec, ["drag_centre_x", "drag_centre_z"], b, s,
+                      "translational drag acting at (x, 0, z) off the origin (seed 003 eq. 25)"),
+            Candidate("coupled_damping", "drag_centre_xyz", spec, ["drag_centre_x", "drag_centre_y", "drag_centre_z"],
+                      b, s, "translational drag acting at a point (x, y, z) off the origin (seed 003 eq. 25)")]
 
 
 def coupled_candidate(pairs: Sequence[str]) -> Candidate:
@@ -211,8 +240,10 @@ def catalogue(*, input_kind: str, n_thrusters: int, dt: float, p_ref, has_positi
         out += _lag(dt)
     if "thrust_asymmetry" in want:
         out += _asymmetry(input_kind, n_thrusters)
-    if "thruster_gain" in want and input_kind != "force" and n_thrusters:
+    if "thruster_gain" in want and n_thrusters:
         out += _gain(n_thrusters)
+    if "coupled_damping" in want:
+        out += _drag_centre()
     if "bottom_effect" in want and z_max is not None and np.isfinite(z_max):
         out += _bottom(z_max)
     return out

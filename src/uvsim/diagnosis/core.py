@@ -64,8 +64,14 @@ AT_NOISE = 1.5
 #: Candidates fitted through the simulator: at most ``top`` effects whose screening
 #: reduction is at least this share of the best one's (and above SCREEN_FLOOR).
 SCREEN_SHARE = 0.25
-SCREEN_FLOOR = 0.002
+SCREEN_FLOOR = 0.01
+#: Simpler variants of a winning effect are fitted and compared on validation only when
+#: their screening reduction is at least this share of the winner's.
+SIMPLER_SHARE = 0.5
 DEFAULT_HORIZON = 3.0
+#: Relative cost decrease at which a diagnosis fit stops: the decisions compare costs
+#: that differ by percents, so 1e-5 is ample.
+FTOL = 1e-5
 
 
 @dataclass
@@ -90,6 +96,7 @@ class Diagnosis:
     validation: list
     open_loop_before: list = field(repr=False, default_factory=list)
     open_loop_after: list = field(repr=False, default_factory=list)
+    measurements_validation: list = field(repr=False, default_factory=list)
 
 
 def _split(dataset: Dataset) -> tuple[list, list, str]:
@@ -145,69 +152,106 @@ class _Selector:
         self.fits += 1
         self.say(f"fitting {label} ({space.p} parameter(s)) on {len(self.train)} training run(s)")
         return fit(vehicle, self.train, space, meas=self.meas_tr, horizons=(self.horizon,), max_iter=self.max_iter,
-                   workers=self.workers)
+                   workers=self.workers, ftol=FTOL)
 
     def val_cost(self, vehicle, values: Mapping) -> dict:
         """Per-window validation costs of a model with fixed parameters (nodes re-estimated)."""
         sp = ParameterSpace([], vehicle.parameters(), dict(values))
         res = fit(vehicle, self.val, sp, meas=self.meas_va, horizons=(self.horizon,), max_iter=self.max_iter,
-                  workers=self.workers)
+                  workers=self.workers, ftol=FTOL)
         w = np.concatenate(res.window_costs)
         return {"windows": w, "cost": float(w.sum()), "n": int(res.n_residuals),
                 "per_entry": float(w.sum() / max(res.n_residuals, 1))}
 
+    def seed_retune(self, vehicle) -> dict:
+        """Equation-error estimate of the re-tuned base coefficients (the start of the
+        baseline fit; damping and added mass enter the inverse dynamics linearly)."""
+        motions = [m for m in self.motions if m is not None]
+        if not motions or not self.retune:
+            return {}
+        self.say(f"equation-error start for the {len(self.retune)} re-tuned coefficient(s)")
+        sp = self.space(vehicle, self.retune, self.retune_bounds, {}, {})
+        try:
+            return EquationError(vehicle, motions, sp).gauss_newton(iterations=3)["values"]
+        except (UvsimError, np.linalg.LinAlgError, ValueError):
+            return {}
+
     # ---------------------------------------------------------------- screening
-    def screen(self, vehicle_cur, values_cur: Mapping, cands: list) -> tuple[list, dict]:
-        """Equation-error reduction and seed of every candidate (and the coupled-damping
-        pick); returns (candidates with their screening numbers, info)."""
+    def screen(self, cur, cands: list) -> tuple[list, dict]:
+        """Equation-error reduction and seed of every candidate, each fitted together with
+        the current model's free parameters (``cur``: vehicle, values, free, bounds), and the
+        coupled-damping pick; returns (candidates with their screening numbers, info)."""
         motions = [m for m in self.motions if m is not None]
         info = {"available": bool(motions)}
         if not motions:
             return [(c, None) for c in cands], info
-        sp0 = ParameterSpace([], vehicle_cur.parameters(), dict(values_cur))
-        ee0 = EquationError(vehicle_cur, motions, sp0)
-        r0 = ee0.residuals(np.zeros((1, 0)))[0]
+        veh0, vals0 = cur["vehicle"], dict(cur["values"])
+        ee0 = EquationError(veh0, motions, ParameterSpace([], veh0.parameters(), vals0))
+        if cur["free"]:  # the current model at its own equation-error optimum
+            sp0 = self.space(veh0, cur["free"], cur["bounds"], vals0, vals0)
+            vals0.update(EquationError(veh0, motions, sp0, scale=ee0.scale).gauss_newton(iterations=2)["values"])
+        r0 = EquationError(veh0, motions, ParameterSpace([], veh0.parameters(), vals0), scale=ee0.scale).residuals(
+            np.zeros((1, 0)))[0]
         rss0 = float(r0 @ r0)
         info.update(rss=rss0, n=int(r0.size), scale=ee0.scale.tolist())
         out = []
-        # coupled damping: the two derivatives that each explain most, from one Jacobian
+        # one Jacobian for the families that are linear in their parameters and picked by
+        # regression: the off-diagonal damping derivatives (forward stepwise, two of them)
+        # and each thruster's gain (one variant per thruster)
         terms = coupling_terms()
-        veh_c = vehicle_cur.with_effects([{"type": "coupled_damping", **{t: 0.0 for t in terms}}])
-        sp_c = self.space(veh_c, terms, {t: (-1e4, 1e4) for t in terms}, {}, values_cur)
-        eec = EquationError(veh_c, motions, sp_c, scale=ee0.scale)
-        h = 1e-3
-        Z = np.vstack([np.zeros(len(terms)), np.eye(len(terms)) * h / sp_c.scale])
-        R = eec.residuals(Z)
-        J = (R[1:] - R[0]) / h
-        red = (J @ R[0]) ** 2 / np.maximum(np.einsum("ij,ij->i", J, J), 1e-300)
-        best, rows = [], set()
-        for j in np.argsort(-red):
-            if terms[j][0] in rows:
+        veh_c = veh0.with_effects([{"type": "coupled_damping", **{t: 0.0 for t in terms}}])
+        gains = [f"thruster_gain_{i + 1}" for i in range(veh0.n_thrusters)]
+        lin = list(cur["free"]) + terms + (gains if any(c.effect == "thruster_gain" for c in cands) else [])
+        bnd = {**cur["bounds"], **{t: (-1e4, 1e4) for t in terms}, **{g: (0.05, 1.5) for g in gains}}
+        sp_l = self.space(veh_c, lin, bnd, vals0, vals0)
+        J, rl = EquationError(veh_c, motions, sp_l, scale=ee0.scale).jacobian()
+        J = J / sp_l.scale[:, None]  # per unit of each parameter
+        nb = len(cur["free"])
+        base_cols = list(range(nb))
+        pick = _stepwise(J[nb:nb + len(terms)], rl, terms, k=2, base=J[:nb])
+        cands = cands + [coupled_candidate(pick)]
+        single = {}
+        for i, g in enumerate(gains):
+            col = nb + len(terms) + i
+            if col < J.shape[0]:
+                single[g] = _ls_step(J[base_cols + [col]], rl, [*cur["free"], g], {**vals0})
+        tether_seed: dict = {}
+        for c in sorted(cands, key=lambda c: (c.effect != "tether", c.variant != "3d")):
+            if c.effect == "thruster_gain" and len(c.free) == 1 and c.free[0] in single:
+                vals, rss = single[c.free[0]]
+                out.append((c, {"reduction": max(0.0, 1.0 - rss / rss0), "values": vals}))
                 continue
-            best.append(terms[j])
-            rows.add(terms[j][0])
-            if len(best) == 2:
-                break
-        cands = cands + [coupled_candidate(best)]
-        for c in cands:
-            veh = vehicle_cur.with_effects([c.spec]) if c.spec is not None else vehicle_cur
+            veh = veh0.with_effects([c.spec]) if c.spec is not None else veh0
             best = None
-            for st in _starts(c):  # a small multi-start on the cheap equation error (the global stage)
+            # a small multi-start on the cheap equation error (the global stage); the other tether
+            # variants start from the best 3-D tether
+            starts = [{**c.start, **tether_seed}] if (c.effect == "tether" and tether_seed) else _starts(c)
+            for st in starts:
                 try:
-                    sp = self.space(veh, c.free, c.bounds, st, values_cur)
-                    r = EquationError(veh, motions, sp, scale=ee0.scale).gauss_newton(iterations=3)
+                    sp = self.space(veh, list(cur["free"]) + c.free, {**cur["bounds"], **c.bounds},
+                                    {**vals0, **st}, vals0)
+                    r = EquationError(veh, motions, sp, scale=ee0.scale).gauss_newton(iterations=2)
                 except (UvsimError, np.linalg.LinAlgError, ValueError) as exc:
                     r = {"rss": np.inf, "values": {}, "error": str(exc)}
                 if best is None or r["rss"] < best["rss"]:
                     best = r
             red = max(0.0, 1.0 - best["rss"] / rss0) if np.isfinite(best["rss"]) else 0.0
+            if c.effect == "tether" and c.variant == "3d" and best.get("values"):
+                tether_seed = {k: v for k, v in best["values"].items() if k in c.free}
             out.append((c, {"reduction": red, "values": best["values"], **({"error": best["error"]}
                                                                             if "error" in best else {})}))
         return out, info
 
     # ---------------------------------------------------------------- one step
+    def current(self, accepted, values) -> dict:
+        """The current model: vehicle, values, free parameters (re-tuned + accepted effects) and their bounds."""
+        free = list(self.retune) + [n for a in accepted for n in a.free]
+        bounds = {**self.retune_bounds, **{n: a.bounds[n] for a in accepted for n in a.free}}
+        return {"vehicle": self.vehicle_for(accepted), "values": dict(values), "free": free, "bounds": bounds}
+
     def step(self, accepted, values_cur, val_cur, *, exclude, only, top, k_step) -> dict:
-        vehicle_cur = self.vehicle_for(accepted)
+        cur = self.current(accepted, values_cur)
+        vehicle_cur = cur["vehicle"]
         run0 = self.train[0]
         dt = float(np.median(np.concatenate([np.diff(r.t) for r in self.train])))
         has_pos = any(r.has_position for r in self.train)
@@ -216,11 +260,10 @@ class _Selector:
         depths = [r.position[:, 2] for r in self.train if r.has_position and np.isfinite(r.position[:, 2]).any()]
         depths += [r.depth for r in self.train if r.has_depth]
         z_max = float(max(np.nanmax(z) for z in depths)) if depths else None
-        cands = catalogue(input_kind=run0.input_kind, n_thrusters=run0.inputs.shape[1] if run0.input_kind != "force"
-                          else 0, dt=dt, p_ref=p_ref, has_position=has_pos, z_max=z_max, only=only,
+        cands = catalogue(input_kind=run0.input_kind, n_thrusters=vehicle_cur.n_thrusters, dt=dt, p_ref=p_ref, has_position=has_pos, z_max=z_max, only=only,
                           exclude=exclude)
         self.say(f"step {k_step}: screening {len(cands) + 1} candidate variant(s) by equation error")
-        screened, ee_info = self.screen(vehicle_cur, values_cur, cands) if cands else ([], {"available": False})
+        screened, ee_info = self.screen(cur, cands) if cands else ([], {"available": False})
         # per effect: the simplest variant within VARIANT_SHARE of the best variant's reduction
         by_effect: dict = {}
         for c, s in screened:
@@ -247,21 +290,26 @@ class _Selector:
         else:
             picked = choice
         for c, s, _ in picked:
-            fitted.append(self.fit_candidate(c, s, vehicle_cur, values_cur, val_cur))
-        # variants: the simplest variant of the winning effect that is not significantly worse
-        return {"screening": ee_info, "screened": rows, "fitted": fitted, "all_screened": screened}
+            fitted.append(self.fit_candidate(c, s, cur, val_cur))
+        return {"screening": ee_info, "screened": rows, "fitted": fitted, "all_screened": screened, "cur": cur}
 
-    def fit_candidate(self, c: Candidate, s, vehicle_cur, values_cur, val_cur) -> dict:
+    def fit_candidate(self, c: Candidate, s, cur, val_cur) -> dict:
+        """Output-error fit of ``c`` together with the current model's free parameters,
+        and its validation cost."""
+        vehicle_cur, values_cur = cur["vehicle"], cur["values"]
         veh = vehicle_cur.with_effects([c.spec]) if c.spec is not None else vehicle_cur
         # start from the screening estimate (the best of its multi-start); without one, from
         # the catalogue's starts
-        starts = [{**c.start, **s["values"]}] if s and s.get("values") else _starts(c)
+        starts = [{**values_cur, **c.start, **s["values"]}] if s and s.get("values") else \
+            [{**values_cur, **st} for st in _starts(c)]
+        free = list(cur["free"]) + c.free
+        bounds = {**cur["bounds"], **c.bounds}
         best = None
         for st in starts:
-            sp = self.space(veh, c.free, c.bounds, st, values_cur)
+            sp = self.space(veh, free, bounds, st, values_cur)
             try:
-                res = self.fit_train(veh, sp, c.label)
-            except (UvsimError, np.linalg.LinAlgError) as exc:
+                res = self.fit_train(veh, sp, c.label + (f" + {len(cur['free'])} current" if cur["free"] else ""))
+            except (UvsimError, np.linalg.LinAlgError):
                 continue
             if best is None or res.cost < best.cost:
                 best = res
@@ -273,14 +321,49 @@ class _Selector:
         problem = None
         if c.spec is not None:
             try:
-                make_term(c.spec).with_parameters(best.values)
+                make_term(c.spec).with_parameters({k: v for k, v in best.values.items() if k in c.free})
             except VehicleError as exc:
                 problem = f"fitted values are not physical: {exc}"
         vc = self.val_cost(veh, vals)
         cmp = bootstrap_improvement(val_cur["windows"], vc["windows"], level=LEVEL)
-        row.update(result=best, values=dict(best.values), std=dict(best.std), train_cost=best.cost,
-                   val=vc, compare=cmp, problem=problem, at_bounds=best.at_bounds, vehicle=veh, all_values=vals)
+        row.update(result=best, values={k: best.values[k] for k in c.free}, std={k: best.std.get(k) for k in c.free},
+                   train_cost=best.cost, val=vc, compare=cmp, problem=problem,
+                   at_bounds=[n for n in best.at_bounds if n in c.free], vehicle=veh, all_values=vals)
         return row
+
+
+def _ls_step(J: np.ndarray, r: np.ndarray, names: Sequence[str], start: Mapping) -> tuple[dict, float]:
+    """One Gauss-Newton step on the columns ``J`` (k, m) (per unit of each named parameter)
+    from ``start``: (values, residual sum of squares of the linearization)."""
+    coef, *_ = np.linalg.lstsq(J.T, -r, rcond=None)
+    res = r + J.T @ coef
+    vals = {n: float(start.get(n, 0.0 if not n.startswith("thruster_gain") else 1.0)) + float(c)
+            for n, c in zip(names, coef)}
+    return vals, float(res @ res)
+
+
+def _stepwise(J: np.ndarray, r: np.ndarray, names: Sequence[str], k: int = 2, base: np.ndarray | None = None
+              ) -> list[str]:
+    """Forward stepwise selection of ``k`` regressors (rows of ``J``, (n_terms, m)) that,
+    together with the ``base`` regressors (always in), best explain ``-r`` (least squares);
+    at most one per force row (the first letter)."""
+    chosen: list[int] = []
+    B = np.zeros((0, J.shape[1])) if base is None else base
+    for _ in range(k):
+        best, best_rss = None, np.inf
+        for j in range(J.shape[0]):
+            if j in chosen or names[j][0] in {names[c][0] for c in chosen}:
+                continue
+            A = np.vstack([B, J[chosen + [j]]]).T
+            coef, *_ = np.linalg.lstsq(A, -r, rcond=None)
+            res = r + A @ coef
+            rss = float(res @ res)
+            if rss < best_rss:
+                best, best_rss = j, rss
+        if best is None:
+            break
+        chosen.append(best)
+    return [names[j] for j in chosen]
 
 
 def _starts(c: Candidate) -> list[dict]:
@@ -363,7 +446,8 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     # 1. baseline ----------------------------------------------------------------------
     values: dict = {}
     if sel.retune:
-        sp = sel.space(veh, sel.retune, sel.retune_bounds, {}, {})
+        start = sel.seed_retune(veh)
+        sp = sel.space(veh, sel.retune, sel.retune_bounds, start, {})
         base_fit = sel.fit_train(veh, sp, "the baseline (re-tuned base coefficients)")
         values = dict(base_fit.values)
     say("validation cost of the baseline")
@@ -395,14 +479,11 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         c = best["candidate"]
         accepted.append(c)
         exclude.add(c.effect)
-        # refit everything chosen so far (and the re-tuned coefficients) together
-        veh_k = sel.vehicle_for(accepted)
-        free = sel.retune + [n for a in accepted for n in a.free]
-        bnds = {**sel.retune_bounds, **{n: a.bounds[n] for a in accepted for n in a.free}}
-        start = {**values, **best["values"]}
-        joint = sel.fit_train(veh_k, sel.space(veh_k, free, bnds, start, {}), "all chosen effects together")
-        values = dict(joint.values)
-        val_new = sel.val_cost(veh_k, values)
+        # the candidate was fitted together with everything chosen before and the re-tuned
+        # coefficients: its fit is the new model
+        joint = best["result"]
+        values = dict(best["all_values"])
+        val_new = best["val"]
         step_rep.update(chosen=c.label, after_cost_per_entry=val_new["per_entry"],
                         joint_fit={"values": joint.values, "std": joint.std, "cost": joint.cost,
                                    "at_bounds": joint.at_bounds})
@@ -461,18 +542,21 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         "seconds": time.perf_counter() - t_start,
     }
     return Diagnosis(report, veh, veh_after, list(zip(accepted, [dict(values) for _ in accepted])), train, val,
-                     ol_before, ol_after)
+                     ol_before, ol_after, sel.meas_va)
 
 
 def _simplest_sufficient(sel, best, st, accepted, values, val_cur):
     """Among the winning effect's variants simpler than the winner, the simplest that is
     not significantly worse than it on validation (fitted here); None to keep the winner."""
     c = best["candidate"]
-    simpler = [cc for cc, _ in st["all_screened"] if cc.effect == c.effect and cc.complexity < c.complexity]
+    red = {id(cc): (s or {}).get("reduction", 0.0) for cc, s in st["all_screened"]}
+    # simpler variants that the screening does not already rule out (at least half the winner's reduction)
+    simpler = [cc for cc, _ in st["all_screened"] if cc.effect == c.effect and cc.complexity < c.complexity
+               and red[id(cc)] >= SIMPLER_SHARE * red.get(id(c), 0.0)]
     simpler.sort(key=lambda cc: cc.complexity)
     for cc in simpler:
         s = next((s for x, s in st["all_screened"] if x is cc), None)
-        row = sel.fit_candidate(cc, s, sel.vehicle_for(accepted), values, val_cur)
+        row = sel.fit_candidate(cc, s, st["cur"], val_cur)
         if "compare" not in row:
             continue
         ok, why = _judge(row, val_cur)

@@ -19,6 +19,8 @@ name                   physics                                       parameters 
 ``ballast``            extra weight/buoyancy at a body point           ballast_weight (N), ballast_x/y/z (m)
 ``coupled_damping``    off-diagonal damping derivatives (seed 003      K_vv, M_u, ... (SNAME names)
                        eq. 26)
+``drag_centre``        translational damping acting at a centre of     drag_centre_x/y/z (m)
+                       pressure off the origin (seed 003 eq. 25)
 ``bottom_effect``      extra vertical drag near the tank floor         bottom_effect_floor_d (m),
                        (seed 000 sec. 5)                               bottom_effect_damping (kg/m),
                                                                        bottom_effect_decay_length (m)
@@ -32,7 +34,9 @@ from uvsim.effects.ballast import Ballast  # noqa: F401
 from uvsim.effects.tether import Tether  # noqa: F401
 from uvsim.effects.thrusters import ThrusterLag, ThrustAsymmetry  # noqa: F401
 from uvsim.effects.coupled_damping import CoupledDampingEffect  # noqa: F401
+from uvsim.effects.drag_centre import DragCentre  # noqa: F401
 from uvsim.effects.bottom import BottomEffect  # noqa: F401
 
 #: The catalogue, in the order diagnosis tries it.
-CATALOGUE = ("current", "tether", "thruster_lag", "thrust_asymmetry", "ballast", "coupled_damping", "bottom_effect")
+CATALOGUE = ("current", "tether", "thruster_lag", "thrust_asymmetry", "ballast", "coupled_damping", "drag_centre",
+             "bottom_effect")

@@ -250,6 +250,16 @@ class EquationError:
         v = np.concatenate(parts, axis=1)
         return np.where(np.isfinite(v), v, 30.0)
 
+    def jacobian(self, z0=None, step: float = 1e-6) -> tuple[np.ndarray, np.ndarray]:
+        """Forward-difference Jacobian (p, m) with respect to the scaled variables at ``z0``
+        (default the space's start) and the residual (m,) there, in one batched evaluation."""
+        sp = self.space
+        z = sp.z0 if z0 is None else np.asarray(z0, float)
+        h = step * np.maximum(1.0, np.abs(z))
+        h = np.where(z + h > sp.z_upper, -h, h)
+        R = self.residuals(np.vstack([z, z + np.diag(h)]))
+        return (R[1:] - R[0]) / h[:, None], R[0]
+
     def gauss_newton(self, z0=None, *, iterations: int = 3) -> dict:
         """A few bounded Gauss-Newton steps from ``z0`` (exact in one step for parameters
         that enter the force linearly); each step costs one batched evaluation of

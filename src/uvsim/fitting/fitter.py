@@ -94,7 +94,7 @@ def build_problems(vehicle, runs, meas, space: ParameterSpace, horizon, z_ref, *
 
 def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence = DEFAULT_HORIZONS,
         max_iter: int = 20, gyro_bias: bool = True, noise=None, weights=None, initial_velocity: str = "zero",
-        z0=None, progress=None, workers: int = 1) -> FitResult:
+        z0=None, progress=None, workers: int = 1, ftol: float = 1e-6) -> FitResult:
     """Fit ``space``'s free parameters of ``vehicle`` to ``runs`` (module docstring).
 
     Parameters
@@ -109,6 +109,7 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
     z0 : start (scaled) instead of the space's start values.
     progress : callable(message) for stage / iteration reports.
     workers : processes for the simulations (results do not depend on it).
+    ftol : a stage stops when an iteration lowers the cost by less than this fraction.
     """
     runs = list(runs)
     if not runs:
@@ -126,7 +127,7 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
                                          initial_velocity=initial_velocity)
         label = "whole runs" if H is None else f"{H:g} s windows"
         say(f"fitting {space.p} parameter(s) on {len(runs)} run(s), {label}")
-        res = solve(problems, z, max_iter=max_iter, workers=workers,
+        res = solve(problems, z, max_iter=max_iter, workers=workers, ftol=ftol,
                     progress=lambda it, c, label=label: say(f"  {label}: iteration {it}, cost {c:.6g}"))
         z = res["z"]
         stages.append({"horizon_s": H, "iterations": res["iterations"], "cost": float(res["cost"]),

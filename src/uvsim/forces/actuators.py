@@ -18,6 +18,12 @@ the vehicle file's value):
 * ``force_gain_X`` ... ``force_gain_N`` and ``force_reverse_X`` ... (-): the same per
   degree of freedom for generalized-force inputs.
 
+With generalized-force inputs the thruster gains and reverse ratios act through the
+allocation: the commanded ``tau`` is distributed over the thrusters by the pseudo-inverse
+``f = B^+ tau`` (the unconstrained allocation of Fossen 2021 sec. 11.2.3, what a controller
+commanding ``tau`` does), scaled per thruster and summed back, ``tau = B f_eff``; with every
+factor at 1 this is exactly ``tau``.
+
 So the delivered thrust is ``f_i = gain_i * curve_i(u_i) * (reverse_i if curve_i(u_i) < 0
 else 1)`` and ``tau = B(r) f``.  With every parameter at its default the mapping is
 exactly the allocation above.
@@ -163,11 +169,11 @@ class Actuators(ForceTerm):
         k = self.n_thrusters
 
         def family(names, defaults):
-            """(k,) when no row overrides them (or all rows agree), else (n, k)."""
-            if not any(nm in params for nm in names):
-                return np.asarray(defaults, float)
-            a = np.stack([np.broadcast_to(np.asarray(params.get(nm, d), float), (n,)) for nm, d in zip(names, defaults)],
-                         -1)
+            """(k,) when every value is one number for all rows, else (n, k)."""
+            vals = [params.get(nm, d) for nm, d in zip(names, defaults)]
+            if all(np.ndim(v) == 0 for v in vals):
+                return np.array(vals, float)
+            a = np.stack([np.broadcast_to(np.asarray(v, float), (n,)) for v in vals], -1)
             return a[0] if np.all(a == a[:1]) else a
 
         if k:
@@ -238,9 +244,23 @@ class Actuators(ForceTerm):
         kind = ctx.input_kind
         u = ctx.u
         if kind == "force":
+            tau = u
+            if self.matrix is not None and (prep["gain"] is not None or prep["rev"] is not None):
+                # thrusters that deliver less than commanded: the commanded generalized force is
+                # allocated by the pseudo-inverse (Fossen 2021 sec. 11.2.3, unconstrained
+                # allocation), scaled per thruster and summed back
+                if prep["u"] is u:
+                    tau = prep["f"]
+                else:
+                    B = prep["B"]
+                    Bp = np.linalg.pinv(B)
+                    f = tau @ np.swapaxes(Bp, -1, -2) if Bp.ndim == 2 else np.einsum("nij,nj->ni", Bp, tau)
+                    f = _scaled(f, prep["gain"], prep["rev"])
+                    tau = f @ B.T if B.ndim == 2 else np.einsum("nij,nj->ni", B, f)
+                    prep["u"], prep["f"] = u, tau
             if prep["fgain"] is None and prep["frev"] is None:
-                return u
-            return _scaled(u, prep["fgain"], prep["frev"])
+                return tau
+            return _scaled(tau, prep["fgain"], prep["frev"])
         if self.matrix is None:
             raise SimulationError(f"inputs are per-thruster {kind} but the vehicle defines no thrusters")
         if prep["u"] is u and prep["v"] is ctx.voltage:

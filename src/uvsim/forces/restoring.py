@@ -25,6 +25,12 @@ class Restoring(ForceTerm):
     change with mass-changing actuators)."""
 
     def prepare(self, params, n):
+        if all(np.ndim(params[k]) == 0 for k in ("B", "x_b", "y_b", "z_b", "m", "x_g", "y_g", "z_g")):
+            B, r_b, G = self._prepare(params, 1)  # one parameter set for every row: shared G
+            return np.broadcast_to(B, (n,)), np.broadcast_to(r_b, (n, 3)), G
+        return self._prepare(params, n)
+
+    def _prepare(self, params, n):
         B = np.broadcast_to(np.asarray(params["B"], float), (n,))
         r_b = np.stack([np.broadcast_to(np.asarray(params[k], float), (n,)) for k in ("x_b", "y_b", "z_b")], -1)
         m = np.broadcast_to(np.asarray(params["m"], float), (n,))

@@ -1,4 +1,10 @@
-"""Plots of a diagnosis (:func:`uvsim.diagnosis.diagnose`): residuals before/after over time.
+"""Plots of a diagnosis (:func:`uvsim.diagnosis.diagnose`).
+
+* ``validation_runs.png``: for each of the first validation runs, its logged channels
+  measured, simulated with the given model and with the corrected one (open loop);
+* ``errors_over_time.png``: the error of each logged signal group before / after;
+* ``steps.png``: the validation cost of the given model, the baseline and after each
+  accepted effect, with every fitted candidate of each step.
 
 Part of :mod:`uvsim.plotting`, the only package that imports matplotlib.
 """
@@ -7,83 +13,124 @@ from __future__ import annotations
 from pathlib import Path
 
 import matplotlib.pyplot as plt  # the package __init__ selects the Agg backend
-import numpy as np  # noqa: E402
+import numpy as np
 
-DOF = ("X [N]", "Y [N]", "Z [N]", "K [N m]", "M [N m]", "N [N m]")
+from uvsim.measurements import UNITS
+
+GROUP_ERR = {"position": "position error [m]", "depth": "depth error [m]", "attitude": "attitude error [rad]",
+             "velocity": "velocity error [m/s]", "rates": "rate error [rad/s]", "acceleration": "accel. error [m/s^2]"}
 
 
-def plot_output_residuals(diag, path, max_runs: int = 6) -> Path:
-    """Position error |p - p_hat| (m) and attitude error angle (rad) over time, before and after,
-    for up to ``max_runs`` validation runs."""
+def _series(res, meas, group):
+    """(measured (n, k), predicted (n, k), channel names) on the channel scale."""
+    from uvsim.kinematics import quat_to_euler, unwrap_angles
+
+    grp = meas.groups[group]
+    p = np.asarray(res["pred"][group])
+    if group == "attitude" and grp.mode == "quaternion":
+        m, p = unwrap_angles(quat_to_euler(grp.values)), unwrap_angles(quat_to_euler(p))
+    elif group == "attitude":
+        m, p = unwrap_angles(np.array(grp.values, float)), unwrap_angles(p)
+    else:
+        m = np.array(grp.values, float)
+    m = np.where(grp.valid, m, np.nan)
+    return m, p, [c for c, on in zip(grp.channels, grp.logged) if on], np.flatnonzero(grp.logged)
+
+
+def plot_validation_runs(diag, path, max_runs: int = 3) -> Path:
+    """Logged channels of the first ``max_runs`` validation runs: measured, given model,
+    corrected model (open-loop simulations)."""
     runs = diag.validation[:max_runs]
-    fig, axes = plt.subplots(len(runs), 2, figsize=(11, 2.1 * len(runs) + 0.6), squeeze=False, sharex="row")
-    for i, run in enumerate(runs):
-        b, a = diag.residuals_before[i], diag.residuals_after[i]
-        for j, (key, label) in enumerate((("position", "position error [m]"), ("attitude_angle", "attitude error [rad]"))):
+    meas = [m for m in diag.measurements_validation[:max_runs]]
+    rows = max(sum(int(g.logged.sum()) for g in m.groups.values()) for m in meas)
+    fig, axes = plt.subplots(rows, len(runs), figsize=(4.6 * len(runs), 1.7 * rows + 0.8), squeeze=False,
+                             sharex="col")
+    for k, (run, m) in enumerate(zip(runs, meas)):
+        b, a = diag.open_loop_before[k], diag.open_loop_after[k]
+        i = 0
+        for g in m.groups:
+            mb, pb, names, cols = _series(b, m, g)
+            _, pa, _, _ = _series(a, m, g)
+            for name, j in zip(names, cols):
+                ax = axes[i, k]
+                ax.plot(run.t, mb[:, j], ".", ms=1.5, color="k", label="measured")
+                ax.plot(run.t, pb[:, j], color="tab:red", lw=1.0, label="given model")
+                ax.plot(run.t, pa[:, j], color="tab:blue", lw=1.0, label="corrected")
+                ax.set_ylabel(f"{name} [{UNITS[g]}]", fontsize=8)
+                ax.grid(alpha=0.3)
+                i += 1
+        for ax in axes[i:, k]:
+            ax.set_axis_off()
+        axes[0, k].set_title(run.name, fontsize=9)
+        axes[max(i - 1, 0), k].set_xlabel("t [s]")
+    axes[0, 0].legend(fontsize=7)
+    fig.suptitle(f"Validation runs, open loop: given model vs corrected ({diag.report['effect']})", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return Path(path)
+
+
+def plot_errors(diag, path, max_runs: int = 6) -> Path:
+    """Per validation run, the error norm of each logged group over time, before / after."""
+    runs = diag.validation[:max_runs]
+    meas = diag.measurements_validation[:max_runs]
+    groups = [g for g in ("position", "depth", "attitude", "velocity", "rates", "acceleration")
+              if any(g in m.groups for m in meas)]
+    fig, axes = plt.subplots(len(runs), len(groups), figsize=(3.8 * len(groups), 1.9 * len(runs) + 0.6),
+                             squeeze=False, sharex="row")
+    for i, (run, m) in enumerate(zip(runs, meas)):
+        rb = m.residuals(diag.open_loop_before[i]["pred"])
+        ra = m.residuals(diag.open_loop_after[i]["pred"])
+        for j, g in enumerate(groups):
             ax = axes[i, j]
-            if key not in b:
-                ax.text(0.5, 0.5, "not logged", ha="center", va="center", transform=ax.transAxes)
+            if g not in rb:
                 ax.set_axis_off()
                 continue
-            eb = b[key] if b[key].ndim == 1 else np.sqrt(np.nansum(b[key] ** 2, axis=1))
-            ea = a[key] if a[key].ndim == 1 else np.sqrt(np.nansum(a[key] ** 2, axis=1))
-            ax.plot(b["t"], eb, color="tab:red", lw=1.2, label="before (given model)")
-            ax.plot(a["t"], ea, color="tab:blue", lw=1.2, label=f"after ({diag.report['effect']})")
-            ax.set_ylabel(label, fontsize=8)
-            ax.set_title(f"{run.name} ({run.dof or 'run'})", fontsize=9)
+            eb = np.sqrt(np.nansum(rb[g] ** 2, axis=1))
+            ea = np.sqrt(np.nansum(ra[g] ** 2, axis=1))
+            ok = np.isfinite(rb[g]).any(axis=1)
+            ax.plot(run.t[ok], eb[ok], color="tab:red", lw=1.0, label="given model")
+            ax.plot(run.t[ok], ea[ok], color="tab:blue", lw=1.0, label="corrected")
+            ax.set_ylabel(GROUP_ERR[g], fontsize=8)
+            ax.set_title(run.name, fontsize=8)
             ax.grid(alpha=0.3)
-    axes[0, 0].legend(fontsize=8)
-    for ax in axes[-1]:
-        ax.set_xlabel("t [s]")
-    fig.suptitle(f"Validation residuals before / after: effect = {diag.report['effect']} "
+    axes[0, 0].legend(fontsize=7)
+    fig.suptitle(f"Validation errors over time (open loop), effect = {diag.report['effect']} "
                  f"({diag.report['confidence']})", fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=100)
     plt.close(fig)
     return Path(path)
 
 
-def plot_force_residuals(diag, path, max_runs: int = 3) -> Path:
-    """Inverse-dynamics generalized-force residual (body frame) before/after for up to
-    ``max_runs`` validation runs (one column per run, one row per DOF)."""
-    runs = diag.validation[:max_runs]
-    fig, axes = plt.subplots(6, len(runs), figsize=(4.2 * len(runs), 9), squeeze=False, sharex="col")
-    for k, run in enumerate(runs):
-        fb, fa = diag.force_before[k], diag.force_after[k]
-        for i in range(6):
-            ax = axes[i, k]
-            ax.plot(fb["t"], fb["body"][:, i], color="tab:red", lw=0.9, label="before")
-            ax.plot(fa["t"], fa["body"][:, i], color="tab:blue", lw=0.9, label="after")
-            ax.axhline(0, color="k", lw=0.5)
-            if k == 0:
-                ax.set_ylabel(DOF[i], fontsize=8)
-            ax.grid(alpha=0.3)
-        axes[0, k].set_title(f"{run.name}" + (f" ({fb['problem']})" if fb["problem"] else ""), fontsize=8)
-        axes[-1, k].set_xlabel("t [s]")
-    axes[0, 0].legend(fontsize=8)
-    fig.suptitle("Generalized-force residual M (nu_dot_measured - f(eta, nu, u)), body frame", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
-
-
-def plot_candidates(diag, path) -> Path:
-    """Validation RMS (noise sigmas) of every candidate, accepted ones highlighted."""
-    rows = [c for c in diag.report["candidates"] if "score" in c]
-    names = [c["name"] for c in rows]
-    vals = [c["validation_rms_noise_sigmas"] for c in rows]
-    colors = ["tab:green" if c["accepted"] else ("tab:gray" if c["name"] == "none" else "tab:orange") for c in rows]
-    fig, ax = plt.subplots(figsize=(7, 3.5))
-    ax.bar(names, vals, color=colors)
+def plot_steps(diag, path) -> Path:
+    """Validation cost per residual of the models along the forward selection, with every
+    fitted candidate of each step (green: chosen)."""
+    rep = diag.report
+    fig, ax = plt.subplots(figsize=(7.5, 3.8))
+    xs, labels = [0], ["given"]
+    ys = [rep["validation_cost_per_entry"]["given"]]
+    for st in rep["steps"]:
+        x = st["step"]
+        for c in st["candidates"]:
+            if "validation_cost_per_entry" in c:
+                col = "tab:green" if c["chosen"] else ("tab:olive" if c["accepted"] else "tab:gray")
+                ax.plot(x, c["validation_cost_per_entry"], "o", color=col, ms=6)
+                ax.annotate(f"{c['effect']}:{c['variant']}", (x, c["validation_cost_per_entry"]), fontsize=6,
+                            xytext=(4, 0), textcoords="offset points")
+        if st.get("after_cost_per_entry") is not None:
+            xs.append(x)
+            ys.append(st["after_cost_per_entry"])
+            labels.append(st["chosen"])
+    ax.plot(xs, ys, "-s", color="tab:blue", label="model after each step")
     ax.axhline(1.0, color="k", ls="--", lw=0.8, label="noise level")
     ax.set_yscale("log")
-    ax.set_ylabel("validation RMS [noise sigmas]")
-    for i, c in enumerate(rows):
-        ax.text(i, vals[i], f"dBIC {c['score']['delta_bic']:.0f}", ha="center", va="bottom", fontsize=7)
+    ax.set_xticks(range(0, len(rep["steps"]) + 1))
+    ax.set_xlabel("forward-selection step")
+    ax.set_ylabel("validation cost per residual\n[squared noise sigmas]")
     ax.legend(fontsize=8)
-    ax.set_title(f"Candidates (green: accepted); chosen: {diag.report['effect']}", fontsize=10)
-    plt.setp(ax.get_xticklabels(), rotation=20, fontsize=8)
+    ax.set_title(f"Diagnosis: {rep['effect']} ({rep['confidence']})", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -94,6 +141,5 @@ def plot_diagnosis(diag, out_dir) -> list[Path]:
     """All diagnosis plots into ``out_dir`` (created); returns the files."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    return [plot_output_residuals(diag, out / "residuals_over_time.png"),
-            plot_force_residuals(diag, out / "force_residuals.png"),
-            plot_candidates(diag, out / "candidates.png")]
+    return [plot_validation_runs(diag, out / "validation_runs.png"), plot_errors(diag, out / "errors_over_time.png"),
+            plot_steps(diag, out / "steps.png")]
