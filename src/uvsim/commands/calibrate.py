@@ -1,54 +1,120 @@
-"""``uvsim calibrate``: fit a vehicle's inertia, added mass and damping to a dataset.
+"""``uvsim calibrate``: fit a vehicle model to a dataset (docs/calibration.md).
 
-    uvsim calibrate --data DIR --vehicle NAME|FILE [--dof surge,...] [--seed S]
-                    [--population P --generations G] [--workers N] [--dask ADDR|local]
-                    [--checkpoint CKPT] [--resume CKPT] --out fitted.yaml --json report.json [--plots DIR]
+    uvsim calibrate --data DIR [--vehicle NAME|FILE] [--dof surge,...] [--free z_b,thruster_gain_*]
+                    [--fix NAME,...] [--bounds NAME=LO:HI,...] [--weights NAME=W,...] [--noise NAME=SIGMA,...]
+                    [--horizons 2,6] [--no-gyro-bias] [--seed S] [--population P --generations G]
+                    [--workers N] [--dask ADDR|local] [--checkpoint CKPT] [--resume CKPT] [--no-refine]
+                    --out fitted.yaml [--json report.json] [--plots DIR] [--progress]
 
-The method is seed 000's GA (Table 3 parameters, Table 4 settings) followed by a
-least-squares refinement (docs/calibration.md).
+Seed 000's GA per DOF for runs marked with one DOF, then one joint windowed
+prediction-error fit of every training run (marked and ``dof: mixed``).
 """
 from __future__ import annotations
 
 import json
+import logging
 import math
+import sys
 from pathlib import Path
 
 from uvsim.commands import parse_pairs
+from uvsim.errors import UvsimError
 
 ADDED_MASS_ROWS = ("X_udot", "Y_vdot", "Z_wdot", "K_pdot", "M_qdot", "N_rdot")
 
 
 def register(sub) -> None:
-    p = sub.add_parser("calibrate", help="fit inertia, added mass and damping to logged runs (seed 000 GA + "
-                                         "least-squares refinement)")
+    p = sub.add_parser("calibrate", help="fit a vehicle model to logged runs (seed 000 GA per DOF + joint "
+                                         "prediction-error fit of all runs)")
     p.add_argument("--data", required=True, help="dataset directory (manifest.yaml + runs)")
-    p.add_argument("--vehicle", default=None, help="starting vehicle: built-in name or YAML file "
-                                                    "(default: the manifest's vehicle)")
-    p.add_argument("--dof", default=None, help="comma-separated DOFs to fit (default: all with training runs)")
+    p.add_argument("--vehicle", default=None, help="starting vehicle: built-in name, YAML file, or NAME with "
+                                                    "NAME.yaml beside the manifest (default: the manifest's vehicle)")
+    p.add_argument("--dof", default=None, help="comma-separated DOFs to fit (default: all)")
+    p.add_argument("--free", default=None, metavar="NAME,...",
+                   help="also fit these parameters or families in the joint stage, e.g. z_b,thruster_gain_*")
+    p.add_argument("--fix", default=None, metavar="NAME,...", help="never fit these parameters or families")
+    p.add_argument("--bounds", default=None, metavar="NAME=LO:HI,...",
+                   help="search bounds (every stage), e.g. z_b=-0.05:0,thruster_gain_3=0.2:1.2")
+    p.add_argument("--weights", default=None, metavar="NAME=W,...",
+                   help="signal weights by group (position, depth, attitude, velocity, rates, acceleration) or "
+                        "channel (x..z, depth, roll, pitch, yaw, u..w, p..r, acc_x..acc_z), every stage; "
+                        "0 leaves a signal out")
+    p.add_argument("--noise", default=None, metavar="NAME=SIGMA,...",
+                   help="1-sigma noise level by group or channel (default: estimated from each run)")
+    p.add_argument("--horizons", default=None, metavar="H1,H2,...",
+                   help="window lengths (s) of the joint fit's continuation, 'whole' for whole runs (default 2)")
+    p.add_argument("--max-iter", type=int, default=20, help="Levenberg-Marquardt iterations per horizon")
+    p.add_argument("--no-gyro-bias", action="store_true", help="do not fit a gyro bias per run")
+    p.add_argument("--attitude-lag", default="auto", metavar="auto|SECONDS",
+                   help="time constant of the attitude filter's lag on logged Euler angles: 'auto' (default, "
+                        "estimated from the gyro), a number, or 0 for none")
+    p.add_argument("--no-screen", action="store_true",
+                   help="free every DOF's parameters for mixed runs, also those the data do not excite")
+    p.add_argument("--ga-channels", choices=("own", "all"), default="own",
+                   help="channels of each DOF's GA fitness: its own (seed 000, default) or all")
     p.add_argument("--seed", type=int, default=0, help="random seed (same seed -> identical result)")
     p.add_argument("--population", type=int, default=60, help="GA population per DOF (seed 000: 60)")
     p.add_argument("--generations", type=int, default=30, help="GA generations (seed 000: 30)")
-    p.add_argument("--margin", type=float, default=0.5, help="search range around initial values (0.5 = +-50%%)")
-    p.add_argument("--workers", type=int, default=1, help="local worker processes for the GA evaluations")
+    p.add_argument("--margin", type=float, default=0.5,
+                   help="search range of inertias, added masses and damping around their values (0.5 = +-50%%)")
+    p.add_argument("--workers", type=int, default=1, help="local worker processes (GA and joint fit)")
     p.add_argument("--dask", default=None, metavar="ADDRESS",
-                   help="dask.distributed scheduler address, or 'local' (needs uvsim[dask])")
-    p.add_argument("--checkpoint", default=None, help="checkpoint file written after every generation "
-                                                      "(default: <out>.ckpt)")
+                   help="dask.distributed scheduler address, or 'local' (GA evaluations; needs uvsim[dask])")
+    p.add_argument("--checkpoint", default=None, help="checkpoint file written after every GA generation and "
+                                                      "joint iteration (default: <out>.ckpt)")
     p.add_argument("--resume", default=None, metavar="CKPT", help="continue from a checkpoint")
-    p.add_argument("--no-refine", action="store_true", help="skip the least-squares refinement")
-    p.add_argument("--estimate-initial-velocity", action="store_true",
-                   help="fit each run's unknown initial velocity (DOF axis) in the refinement")
-    p.add_argument("--weights", default=None, metavar="NAME=W,...",
-                   help="signal weights by group (position, attitude, velocity, rates) or channel "
-                        "(x..z, roll, pitch, yaw, u..w, p..r); default: each DOF's own channels")
+    p.add_argument("--no-refine", action="store_true", help="skip the joint fit (GA only)")
     p.add_argument("--low-speed-exponent", type=float, default=0.0,
-                   help="extra run weight (amplitude/median)^-E favouring slow runs (default 0: manifest weights)")
+                   help="extra GA run weight (amplitude/median)^-E favouring slow runs (default 0: manifest weights)")
     p.add_argument("--out", required=True, help="fitted vehicle YAML (complete, loadable by every command)")
     p.add_argument("--json", default=None, help="report JSON")
     p.add_argument("--plots", default=None, help="directory for plots (measured vs simulated, error boxplots, "
                                                  "GA convergence)")
-    p.add_argument("--progress", action="store_true", help="show a progress bar per generation")
+    p.add_argument("--progress", action="store_true", help="progress bars (GA generations, joint iterations)")
     p.set_defaults(func=_run)
+
+
+def parse_bounds(text: str | None) -> dict | None:
+    """``"z_b=-0.05:0,X_u=-1:-0.01"`` -> ``{"z_b": (-0.05, 0.0), ...}``."""
+    if not text:
+        return None
+    out = {}
+    for item in text.split(","):
+        name, sep, rng = item.partition("=")
+        lo, colon, hi = rng.partition(":")
+        if not sep or not colon or not name.strip():
+            raise UvsimError(f"--bounds: expected NAME=LOW:HIGH pairs separated by commas, got {item!r}")
+        try:
+            out[name.strip()] = (float(lo), float(hi))
+        except ValueError:
+            raise UvsimError(f"--bounds: {name.strip()}: LOW and HIGH must be numbers, got {rng!r}") from None
+    return out
+
+
+def parse_horizons(text: str | None):
+    """``"2,6"`` -> ``(2.0, 6.0)``; ``whole`` -> None (whole runs)."""
+    if not text:
+        return (2.0,)
+    out = []
+    for item in text.split(","):
+        item = item.strip()
+        if item in ("whole", "none", "run"):
+            out.append(None)
+            continue
+        try:
+            out.append(float(item))
+        except ValueError:
+            raise UvsimError(f"--horizons: expected window lengths in s or 'whole', got {item!r}") from None
+    return tuple(out)
+
+
+def _lag_option(text: str):
+    if text == "auto":
+        return "auto"
+    try:
+        return float(text)
+    except ValueError:
+        raise UvsimError(f"--attitude-lag: expected 'auto' or a time constant in s, got {text!r}") from None
 
 
 def _fmt(v):
@@ -73,31 +139,47 @@ def jsonable(obj):
     return obj
 
 
-def save_fitted_vehicle(cal, path) -> Path:
-    """Write ``cal.vehicle_`` with each fitted value's previous value and
-    uncertainty beside it (added-mass rows annotated too)."""
-    from uvsim.vehicle import save_vehicle
-
-    rep = cal.report_
+def _notes(cal) -> dict:
+    """Per fitted parameter: its value, 1-sigma or why there is none, previous value."""
     from uvsim.calibration.params import EFFECTIVE_INERTIA
 
+    rep = cal.report_
     pair_of = {k: (d, pr) for d, pr in EFFECTIVE_INERTIA.items() for k in pr}
     notes = {}
     for k, v in cal.params_.items():
         sig = cal.uncertainty_.get(k)
         if sig is not None:
             s = f"+- {_fmt(sig)}"
-        else:
+        elif k in pair_of and k not in rep["free_parameters"]:
             d, (a, b) = pair_of[k]
             s = (f"only {a} + {b} = {rep['effective_inertia'][d]:.6g} +- "
                  f"{_fmt(rep['effective_inertia_uncertainty'].get(d))} is identifiable")
+        else:
+            s = "(GA value, not refined)"
         notes[k] = f"fitted {v:.6g} {s}; previous {_fmt(rep['initial_parameters'][k])}"
+    return notes
+
+
+def save_fitted_vehicle(cal, path) -> Path:
+    """Write ``cal.vehicle_`` with each fitted value's previous value and uncertainty
+    beside it (added-mass rows annotated too; parameters without a line of their own,
+    such as z_b or thruster gains, in the header)."""
+    from uvsim.vehicle import save_vehicle
+
+    rep = cal.report_
+    notes = _notes(cal)
     header = (f"Calibrated by `uvsim calibrate` from {rep['vehicle']} on {rep['dataset']}\n"
-              f"DOFs {', '.join(rep['dofs'])}; seed 000 GA (population {rep['settings']['population']}, "
-              f"{rep['settings']['generations']} generations, seed {rep['settings']['seed']}) + least squares\n"
-              f"validation RMSE {jsonable({k: round(v, 6) for k, v in rep['validation_rmse'].items()})}; "
-              "uncertainties are 1-sigma (Gauss-Newton, AR(1)-inflated)")
+              + (f"GA (seed 000) for {', '.join(rep['dofs'])}: population {rep['settings']['population']}, "
+                 f"{rep['settings']['generations']} generations, seed {rep['settings']['seed']}\n" if rep["dofs"] else "")
+              + (f"joint prediction-error fit of {len(rep['training_runs'])} runs, windows "
+                 f"{rep['settings']['horizons']} s\n" if rep["free_parameters"] else "")
+              + f"validation RMSE {jsonable({k: round(v, 6) for k, v in rep['validation_rmse'].items()})}; "
+                "uncertainties are 1-sigma (cluster-robust)")
     path = save_vehicle(cal.vehicle_, path, header=header, annotations=notes)
+    keys = {line.strip().split(":", 1)[0] for line in Path(path).read_text().splitlines() if ":" in line}
+    other = [f"{k}: {n}" for k, n in notes.items() if k not in keys and k not in ADDED_MASS_ROWS]
+    if other:  # no line of their own (z_b in r_b, thruster gains in the units): in the header
+        path = save_vehicle(cal.vehicle_, path, header=header + "\n" + "\n".join(other), annotations=notes)
     # added mass is written as a 6x6 matrix: annotate its diagonal rows
     lines = Path(path).read_text().splitlines()
     out, in_am, row = [], False, 0
@@ -116,6 +198,52 @@ def save_fitted_vehicle(cal, path) -> Path:
     return Path(path)
 
 
+def print_summary(cal, out=None) -> None:
+    """The summary table of a fitted Calibrator (docs/calibration.md)."""
+    out = sys.stdout if out is None else out
+    rep = cal.report_
+    free = set(rep["free_parameters"])
+    ident = rep["identifiability"]
+
+    def say(s=""):
+        print(s, file=out)
+
+    say(f"{'parameter':18s} {'initial':>11s} {'fitted':>11s} {'1-sigma':>10s}  flags")
+    for k, v in rep["parameters"].items():
+        flags = []
+        if k in rep["at_bounds"]:
+            flags.append("AT BOUND")
+        if k in rep["physical_limit"]:
+            flags.append("AT PHYSICAL LIMIT")
+        if k in ident.get("weakly_determined", []):
+            flags.append("weak")
+        if k not in free:
+            flags.append("GA only")
+        say(f"{k:18s} {rep['initial_parameters'][k]:11.5g} {v:11.5g} {_fmt(rep['uncertainty'][k]):>10s}  "
+            f"{', '.join(flags)}")
+    if ident.get("not_excited"):
+        say(f"not excited by the data (left at their values): {', '.join(ident['not_excited'])}")
+    for c in ident.get("effective_inertia", []):
+        say(f"identifiable: {c}")
+    if ident.get("not_identifiable"):
+        say("the data determine only: " + "; ".join(ident["identifiable_combinations"]))
+    for pair, r in ident.get("correlations", {}).items():
+        say(f"correlated: {pair} ({r:+.3f})")
+    if rep["gyro_bias"]:
+        say("gyro bias per run (rad/s, p q r):")
+        for name, b in rep["gyro_bias"].items():
+            say(f"  {name:28s} " + " ".join(f"{x:+.5f}" for x in b))
+    lag = rep["attitude_lag"]
+    if lag["tau"]:
+        say(f"attitude filter lag {lag['tau']:.3f} s ({lag['source']})")
+    for n in rep["notes"]:
+        say(f"note: {n}")
+    say(f"training RMSE {jsonable(rep['training_rmse'])}")
+    say(f"validation RMSE {jsonable(rep['validation_rmse'])} (initial {jsonable(rep['initial_validation_rmse'])})")
+    if rep["validation_fit_percent"]:
+        say("validation Fit %: " + ", ".join(f"{c} {v:.1f}" for c, v in rep["validation_fit_percent"].items()))
+
+
 def _run(args) -> int:
     from uvsim.calibration import Calibrator
     from uvsim.logs import read_dataset
@@ -125,10 +253,24 @@ def _run(args) -> int:
     ckpt = args.checkpoint or str(out.with_suffix(out.suffix + ".ckpt"))
     cal = Calibrator(dofs=args.dof, population=args.population, generations=args.generations, seed=args.seed,
                      margin=args.margin, workers=args.workers, dask=args.dask, checkpoint=ckpt, resume=args.resume,
-                     refine=not args.no_refine, estimate_initial_velocity=args.estimate_initial_velocity,
-                     signal_weights=parse_pairs(args.weights, "--weights"), low_speed_exponent=args.low_speed_exponent,
-                     progress=args.progress)
-    cal.fit(ds, args.vehicle)
+                     refine=not args.no_refine, free=args.free, fix=args.fix, bounds=parse_bounds(args.bounds),
+                     signal_weights=parse_pairs(args.weights, "--weights"), noise=parse_pairs(args.noise, "--noise"),
+                     horizons=parse_horizons(args.horizons), max_iter=args.max_iter, gyro_bias=not args.no_gyro_bias,
+                     screen=not args.no_screen, ga_channels=args.ga_channels,
+                     attitude_lag=_lag_option(args.attitude_lag),
+                     low_speed_exponent=args.low_speed_exponent, progress=args.progress)
+    logger = logging.getLogger("uvsim")
+    handler = None
+    if not logger.handlers:  # "resuming from ..." and other notes reach the user
+        handler = logging.StreamHandler(sys.stderr)
+        handler.setFormatter(logging.Formatter("%(message)s"))
+        logger.addHandler(handler)
+        logger.setLevel(logging.INFO)
+    try:
+        cal.fit(ds, args.vehicle)
+    finally:
+        if handler is not None:
+            logger.removeHandler(handler)
     rep = cal.report_
     out.parent.mkdir(parents=True, exist_ok=True)
     save_fitted_vehicle(cal, out)
@@ -139,14 +281,13 @@ def _run(args) -> int:
         from uvsim.plotting.calibration import plot_calibration
 
         plot_calibration(cal, ds, args.plots)
-    print(f"calibrated {', '.join(rep['dofs'])} of {rep['vehicle']}: {rep['evaluations']} GA evaluations, "
-          f"{rep['wall_seconds']:.1f} s")
-    print(f"{'parameter':10s} {'initial':>11s} {'fitted':>11s} {'1-sigma':>10s}")
-    for k, v in rep["parameters"].items():
-        print(f"{k:10s} {rep['initial_parameters'][k]:11.5g} {v:11.5g} {_fmt(rep['uncertainty'][k]):>10s}")
-    for d, a in rep["identifiability"].items():
-        if a["not_identifiable"]:
-            print(f"{d}: identifiable: {', '.join(a['identifiable_combinations'])}")
-    print(f"training RMSE {jsonable(rep['training_rmse'])}; validation RMSE {jsonable(rep['validation_rmse'])}")
+    stages = "; ".join(f"{s['horizon_s'] or 'whole-run'} s windows: {s['iterations']} iterations, {s['message']}"
+                       for s in rep["refinement"].get("stages", []))
+    print(f"calibrated {rep['vehicle']} on {len(rep['training_runs'])} training runs: "
+          + (f"GA ({', '.join(rep['dofs'])}) {rep['evaluations']} evaluations in {rep['ga_seconds']:.1f} s; "
+             if rep["dofs"] else "no GA (no run marked with a DOF); ")
+          + (f"joint fit of {len(rep['free_parameters'])} parameters in {rep['refine_seconds']:.1f} s ({stages})"
+             if rep["free_parameters"] else "no joint fit"))
+    print_summary(cal)
     print(f"-> {out}" + (f", {args.json}" if args.json else "") + (f", plots in {args.plots}" if args.plots else ""))
     return 0
