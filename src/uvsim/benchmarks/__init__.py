@@ -1,8 +1,9 @@
 """Benchmarks behind ``uvsim bench``.
 
 Each area has a module here exposing ``run(quick: bool = False) -> dict`` of
-``{json_key: value}`` and ``DESCRIPTIONS = {json_key: "text with unit"}``.  Results
-and the machine they were measured on go in docs/performance.md.
+``{json_key: value}`` and ``DESCRIPTIONS = {json_key: "text with unit"}``; a module
+with ``DEFAULT = False`` runs only when named (``--only``).  Results and the machine
+they were measured on go in docs/performance.md.
 """
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ MODULES = {
     "sam": "uvsim.benchmarks.sam",
     "calibration": "uvsim.benchmarks.calibration",
     "diagnosis": "uvsim.benchmarks.diagnosis",
+    "calibrate-realsensor": "uvsim.benchmarks.realsensor",
 }
 
 

@@ -18,6 +18,9 @@ logged angles in ``T``), lagged by ``tau``, must match the logged angles up to a
 constant offset and a linear drift per run and angle (the integration constant and
 the gyro bias).  The ``tau`` that minimizes the sum of squared differences over all
 runs and angles is found by a bounded scalar search (:func:`scipy.optimize.minimize_scalar`).
+The angles in ``T(theta)`` are themselves lagged; a second pass uses the logged angles
+with the first estimate's lag undone (``x = y + tau dy/dt``, ``dy/dt`` the lagged
+gyro-derived angle rate), which matters when the vehicle turns fast.
 """
 from __future__ import annotations
 
@@ -64,9 +67,10 @@ def body_rates_to_euler_rates(euler: np.ndarray, omega: np.ndarray) -> np.ndarra
     return np.stack([p + sp * tt * q + cp * tt * r, cp * q - sp * r, (sp * q + cp * r) / ct], 1)
 
 
-def _pieces(run):
+def _pieces(run, tau: float = 0.0):
     """(t, logged angles (n, k), native (n, k), gyro-integrated angles (n, k), angle
-    indices) of one run, or None when it logs no Euler angle or no full gyro."""
+    indices) of one run, or None when it logs no Euler angle or no full gyro; ``tau``:
+    a lag to undo in the angles used for ``T(theta)``."""
     if not (run.has_euler and run.has_rates):
         return None
     t = run.t
@@ -77,8 +81,12 @@ def _pieces(run):
     mask = run.euler_mask
     e = unwrap_angles(run.euler)
     e_full = np.where(np.isfinite(e), e, 0.0)  # a missing yaw does not enter roll/pitch rates (small angles)
-    edot = body_rates_to_euler_rates(e_full[ok], w[ok])
     tk = t[ok]
+    edot = body_rates_to_euler_rates(e_full[ok], w[ok])
+    if tau > 0:  # undo the lag of the angles in T(theta): x = y + tau dy/dt
+        e_full = e_full.copy()
+        e_full[ok] = e_full[ok] + tau * first_order_lag(tk, edot, tau)
+        edot = body_rates_to_euler_rates(e_full[ok], w[ok])
     g = np.concatenate([np.zeros((1, 3)), np.cumsum(0.5 * (edot[1:] + edot[:-1]) * np.diff(tk)[:, None], 0)])
     idx = [j for j in range(3) if mask[j]]
     native = np.stack([sample_kind(tk, e[ok, j]).native & np.isfinite(e[ok, j]) for j in idx], 1)
@@ -111,21 +119,22 @@ def estimate_attitude_lag(runs, *, max_lag: float = MAX_LAG_S) -> dict:
     """
     if not max_lag > 0:
         raise CalibrationError(f"max_lag must be > 0, got {max_lag!r}")
-    pieces, names = [], []
-    for r in runs:
-        pc = _pieces(r)
-        if pc is not None:
-            pieces.append(pc)
-            names.append(r.name)
-    if not pieces:
-        return {"tau": None, "per_run": {}, "rms_without": None, "rms_with": None, "runs_used": []}
-
     def best(pcs):
         res = minimize_scalar(lambda tau: _sse(tau, pcs), bounds=(0.0, max_lag), method="bounded",
                               options={"xatol": 1e-4})
         return float(res.x)
 
-    tau = best(pieces)
+    tau = 0.0
+    for _ in range(2):  # second pass: the angles in T(theta) with the first estimate's lag undone
+        pieces, names = [], []
+        for r in runs:
+            pc = _pieces(r, tau)
+            if pc is not None:
+                pieces.append(pc)
+                names.append(r.name)
+        if not pieces:
+            return {"tau": None, "per_run": {}, "rms_without": None, "rms_with": None, "runs_used": []}
+        tau = best(pieces)
     n = sum(int(p[2].sum()) for p in pieces)
     return {"tau": tau, "per_run": {nm: best([pc]) for nm, pc in zip(names, pieces)},
             "rms_without": float(np.sqrt(_sse(0.0, pieces) / n)), "rms_with": float(np.sqrt(_sse(tau, pieces) / n)),
