@@ -198,6 +198,16 @@ def save_fitted_vehicle(cal, path) -> Path:
     return Path(path)
 
 
+def _grouped_notes(notes) -> dict:
+    """``"run NAME: TEXT; details"`` notes grouped by TEXT -> [NAME, ...]."""
+    out: dict = {}
+    for n in notes:
+        head, sep, text = n.partition(": ")
+        name = head[4:] if sep and head.startswith("run ") else ""
+        out.setdefault(text.split(";")[0] if name else n, []).append(name or "-")
+    return out
+
+
 def print_summary(cal, out=None) -> None:
     """The summary table of a fitted Calibrator (docs/calibration.md)."""
     out = sys.stdout if out is None else out
@@ -236,8 +246,9 @@ def print_summary(cal, out=None) -> None:
     lag = rep["attitude_lag"]
     if lag["tau"]:
         say(f"attitude filter lag {lag['tau']:.3f} s ({lag['source']})")
-    for n in rep["notes"]:
-        say(f"note: {n}")
+    for text, runs in _grouped_notes(rep["notes"]).items():
+        say(f"note: {text} ({len(runs)} run{'s' if len(runs) > 1 else ''}: {', '.join(runs[:3])}"
+            f"{', ...' if len(runs) > 3 else ''})")
     say(f"training RMSE {jsonable(rep['training_rmse'])}")
     say(f"validation RMSE {jsonable(rep['validation_rmse'])} (initial {jsonable(rep['initial_validation_rmse'])})")
     if rep["validation_fit_percent"]:
