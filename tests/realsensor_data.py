@@ -57,8 +57,9 @@ def _lag(x, dt, tau):
 
 def make_dataset(path, *, truth: dict, seed: int = 0, n_train: int = 4, n_val: int = 1, duration: float = 8.0,
                  rate: float = 50.0, dofs=("heave", "roll", "pitch", "yaw"), lag: float = 0.1, accelerometer=True,
-                 depth_mode: str = "held") -> Path:
-    """Write a dataset (module docstring) with truth parameters ``truth`` into ``path``."""
+                 depth_mode: str = "held", dof: str = "mixed") -> Path:
+    """Write a dataset (module docstring) with truth parameters ``truth`` into ``path``;
+    ``dof``: the manifest's dof of every run."""
     rng = np.random.default_rng(seed)
     path = Path(path)
     model = uvsim.load_vehicle("bluerov2_heavy")
@@ -102,7 +103,7 @@ def make_dataset(path, *, truth: dict, seed: int = 0, n_train: int = 4, n_val: i
             depth = np.full(t.size, np.nan)
             depth[idx] = native
         cols["depth"] = depth
-        runs.append(Run(name=name, path=None, data=pd.DataFrame(cols), dof="mixed",
+        runs.append(Run(name=name, path=None, data=pd.DataFrame(cols), dof=dof,
                         split="train" if i < n_train else "validation"))
     write_dataset(path, runs, vehicle="myrov", description="calibration test: mixed telegraph runs, real sensors")
     doc = model.to_dict()
