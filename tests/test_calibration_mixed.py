@@ -91,6 +91,13 @@ def test_summary_table(cli_run, capsys):
     assert "attitude filter lag" in text and "validation Fit %" in text
 
 
+def test_vehicle_name_beside_the_manifest(mixed):
+    cal = Calibrator(max_iter=1, screen=False, fix="*_*dot,*_u*,*_v*,*_w*,*_p*,*_q*,*_r*", free="z_b").fit(mixed, "myrov")
+    assert cal.initial_vehicle_.source.endswith("myrov.yaml") and cal.report_["free_parameters"] == ["z_b"]
+    with pytest.raises(uvsim.errors.VehicleError, match="unknown vehicle 'yourrov'"):
+        Calibrator().fit(mixed, "yourrov")
+
+
 def test_workers_identical_to_serial(mixed):
     kw = dict(free="z_b", max_iter=4)
     a = Calibrator(**kw).fit(mixed)

@@ -42,7 +42,7 @@ from uvsim.calibration.selection import check_bounds, expand_names, joint_candid
 from uvsim.errors import CalibrationError
 from uvsim.estimation.lag import estimate_attitude_lag
 from uvsim.fitting.parameters import default_bounds
-from uvsim.logs import Dataset, read_dataset
+from uvsim.logs import MANIFEST, Dataset, read_dataset
 from uvsim.measurements import CHANNEL_GROUP, measurements_for
 from uvsim.vehicle import load_vehicle
 
@@ -73,7 +73,7 @@ def resolve_vehicle(vehicle, ds: Dataset):
         if ds.vehicle is None:
             raise CalibrationError(f"{ds.path}: no vehicle given and the manifest names none")
         return load_vehicle(ds.vehicle_file or ds.vehicle)
-    if isinstance(vehicle, (str, Path)) and not Path(vehicle).is_file():
+    if isinstance(vehicle, (str, Path)) and not Path(vehicle).is_file() and (ds.path / MANIFEST).is_file():
         beside = Dataset(ds.path, str(vehicle), "", []).vehicle_file
         if beside is not None and beside.is_file():
             return load_vehicle(beside)

@@ -214,6 +214,7 @@ def print_summary(cal, out=None) -> None:
     rep = cal.report_
     free = set(rep["free_parameters"])
     ident = rep["identifiability"]
+    held = {c.split(" + ")[0] for c in ident.get("effective_inertia", [])}
 
     def say(s=""):
         print(s, file=out)
@@ -227,7 +228,9 @@ def print_summary(cal, out=None) -> None:
             flags.append("AT PHYSICAL LIMIT")
         if k in ident.get("weakly_determined", []):
             flags.append("weak")
-        if k not in free:
+        if k in held:
+            flags.append("held at the vehicle's value (its sum with the added inertia is fitted)")
+        elif k not in free:
             flags.append("GA only")
         say(f"{k:18s} {rep['initial_parameters'][k]:11.5g} {v:11.5g} {_fmt(rep['uncertainty'][k]):>10s}  "
             f"{', '.join(flags)}")
