@@ -33,7 +33,7 @@ def mixed(tmp_path_factory):
 def cli_run(mixed, tmp_path_factory):
     out = tmp_path_factory.mktemp("out")
     args = ["calibrate", "--data", str(mixed), "--free", "z_b,thruster_gain_6", "--out", str(out / "fitted.yaml"),
-            "--json", str(out / "report.json")]
+            "--json", str(out / "report.json"), "--plots", str(out / "plots")]
     return main(args), out
 
 
@@ -62,6 +62,18 @@ def test_mixed_only_dataset_calibrates_from_the_command_line(cli_run, mixed, cap
     np.testing.assert_allclose(fitted.sensors["pressure"], [-0.15, 0.0, 0.0])
     text = (out / "fitted.yaml").read_text()
     assert "# z_b: fitted" in text and "# thruster_gain_6: fitted" in text
+    plots = out / "plots"
+    assert (plots / "channel_errors.png").is_file() and len(list((plots / "runs").glob("*.png"))) == 5
+    assert not (plots / "ga_convergence.png").exists() and not (plots / "error_boxplots.png").exists()
+
+
+def test_weights_reach_the_joint_stage(mixed):
+    kw = dict(free="z_b", max_iter=1, screen=False)
+    full = Calibrator(**kw).fit(mixed)
+    no_depth = Calibrator(signal_weights={"depth": 0}, **kw).fit(mixed)
+    n_depth = sum(int(m.groups["depth"].valid.sum()) for name, m in full.evaluation_["meas"].items()
+                  if name in full.report_["training_runs"])
+    assert full.fit_.n_residuals - no_depth.fit_.n_residuals == n_depth
 
 
 def test_surge_and_sway_not_excited_stay_fixed(cli_run):
