@@ -45,7 +45,7 @@ DESCRIPTIONS = {
 def _scenarios():
     try:
         from uvsim import scenarios
-    except ModuleNotFoundError as exc:
+    except ImportError as exc:
         from uvsim.errors import UvsimError
 
         raise UvsimError("the realsensor benchmark needs the scenario generator uvsim.scenarios") from exc
