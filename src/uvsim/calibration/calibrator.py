@@ -35,10 +35,9 @@ from uvsim.calibration.evaluation import DEFAULT_BATCH_ROWS, BatchEvaluator, Das
 from uvsim.calibration.fitness import used_channels
 from uvsim.calibration.ga import GASettings, fingerprint, run_ga
 from uvsim.calibration.joint import JointCheckpoint, joint_checkpoint_path, run_joint
-from uvsim.calibration.params import (DOF_PARAMETERS, EFFECTIVE_INERTIA, LINEAR_DAMPING, QUADRATIC_DAMPING,
-                                      default_channel_weights, parse_dofs)
-from uvsim.calibration.report import evaluate_runs, pooled, run_entry
-from uvsim.calibration.selection import check_bounds, expand_names, joint_candidates
+from uvsim.calibration.params import DOF_PARAMETERS, default_channel_weights, parse_dofs
+from uvsim.calibration.report import build_report, evaluate_runs, identifiability_report
+from uvsim.calibration.selection import check_bounds, effective_inertia_start, expand_names, joint_candidates
 from uvsim.errors import CalibrationError
 from uvsim.estimation.lag import estimate_attitude_lag
 from uvsim.fitting.parameters import default_bounds
@@ -47,8 +46,6 @@ from uvsim.measurements import CHANNEL_GROUP, measurements_for
 from uvsim.vehicle import load_vehicle
 
 log = logging.getLogger("uvsim")
-#: 1-sigma above this fraction of the value: reported as "weakly_determined".
-WEAK_RELATIVE_SIGMA = 0.25
 DEFAULT_HORIZONS = (2.0,)
 #: An estimated attitude lag shorter than this many sample intervals is not used.
 LAG_MIN_SAMPLES = 1.5
@@ -78,38 +75,6 @@ def resolve_vehicle(vehicle, ds: Dataset):
         if beside is not None and beside.is_file():
             return load_vehicle(beside)
     return load_vehicle(vehicle)
-
-
-def effective_inertia_start(ga_values: Mapping, base: Mapping, extra, fixed, bounds_of, explicit: Mapping):
-    """Start values and bounds of the joint stage for the rotational DOFs.
-
-    Unless freed, a rigid-body moment of inertia (``I_xx``) stays at the vehicle's value
-    in the joint stage; the data determine only its sum with the added inertia
-    (``I_xx + K_pdot``).  The GA split that sum arbitrarily, so the joint stage starts the
-    added inertia at ``GA sum - I_xx (vehicle)`` and, unless bounds were given for it,
-    bounds it by the GA's range of the sum minus the fixed ``I_xx`` (not below 0): the
-    search range of the effective inertia is kept.  Returns (start values {name: value},
-    bounds function name -> (low, high))."""
-    start, joint = {}, {}
-    for a, b in (EFFECTIVE_INERTIA[d] for d in ("roll", "pitch", "yaw")):
-        if a in extra or a in fixed or b in fixed:
-            continue
-        if a in ga_values and b in ga_values:
-            s = ga_values[a] + ga_values[b] - base[a]
-            if s < 0:
-                raise CalibrationError(
-                    f"the GA's effective inertia {a} + {b} = {ga_values[a] + ga_values[b]:.4g} is below the vehicle's "
-                    f"{a} = {base[a]:.4g}: the rigid-body inertia cannot be right; free it (--free {a})")
-            start[a], start[b] = float(base[a]), float(s)
-        joint[b] = None
-    def joint_bounds(k):
-        if k in joint and k not in explicit:
-            pair = next(p for p in EFFECTIVE_INERTIA.values() if p[1] == k)
-            (la, ha), (lb, hb) = bounds_of(pair[0]), bounds_of(k)
-            return max(la + lb - base[pair[0]], 0.0), ha + hb - base[pair[0]]
-        return bounds_of(k)
-
-    return start, joint_bounds
 
 
 def _combine_weights(default: Mapping, user: Mapping | None) -> dict:
@@ -359,9 +324,9 @@ class Calibrator:
         self.vehicle_ = veh.with_parameters(params, name=f"{veh.name}_calibrated")
         self.dofs_ = ga_dofs
         self._train_runs = runs
-        self.identifiability_ = self._identifiability()
-        self.report_ = self._report(ds, runs, problems, ga, joint_bounds if self.refine else bounds_of, t0, t_ga,
-                                    t_ref)
+        self.identifiability_ = identifiability_report(self)
+        self.report_ = build_report(self, ds, runs, problems, ga, joint_bounds if self.refine else bounds_of, t0,
+                                    t_ga, t_ref)
         self.wall_seconds_ = self.report_["wall_seconds"]
         return self
 
@@ -439,38 +404,6 @@ class Calibrator:
                          workers=self._workers(), checkpoint=ck, progress=self.progress)
 
     # ------------------------------------------------------------------ results
-    def _identifiability(self) -> dict:
-        res = self.fit_
-        if res is None:
-            return {"not_excited": self.screen_["not_excited"]}
-        out = dict(res.identifiability)
-        out["weakly_determined"] = [k for k, s in res.std.items()
-                                    if s is not None and s > WEAK_RELATIVE_SIGMA * abs(res.values[k])]
-        out["at_bound"] = list(res.at_bounds)
-        out["physical_limit"] = list(res.physical_limit)
-        out["not_excited"] = list(self.screen_["not_excited"])
-        out["excitation_relative_sigma"] = dict(self.screen_["relative_sigma"])
-        eff = []
-        for d, (a, b) in EFFECTIVE_INERTIA.items():
-            if b in res.values and a not in res.values:
-                eff.append(f"{a} + {b} ({a} fixed at {self.vehicle_.parameters()[a]:.6g})")
-        out["effective_inertia"] = eff
-        return out
-
-    def _effective_inertia_sigma(self) -> dict:
-        res = self.fit_
-        out = {}
-        for d, (a, b) in EFFECTIVE_INERTIA.items():
-            if res is None or not ({a, b} & set(res.names)):
-                out[d] = None
-                continue
-            v = np.zeros(len(res.names))
-            for k in (a, b):
-                if k in res.names:
-                    v[res.names.index(k)] = 1.0
-            out[d] = float(np.sqrt(max(v @ res.covariance @ v, 0.0)))
-        return out
-
     def predict(self, runs) -> dict:
         """Open-loop evaluation of ``runs`` with the fitted vehicle
         (:func:`uvsim.calibration.report.evaluate_runs`; gyro biases of training runs
@@ -484,66 +417,3 @@ class Calibrator:
     def _check_fitted(self):
         if not hasattr(self, "vehicle_"):
             raise CalibrationError("this Calibrator is not fitted yet; call fit(dataset, vehicle) first")
-
-    def _report(self, ds, runs, problems, ga, bounds_of, t0, t_ga, t_ref) -> dict:
-        meas = self._meas(ds.runs, self.signal_weights)
-        gb = self.fit_.gyro_bias if self.fit_ is not None else None
-        fitted = evaluate_runs(self.vehicle_, ds.runs, meas, gb, initial_velocity=self.initial_velocity)
-        initial = evaluate_runs(self.initial_vehicle_, ds.runs, meas, None, initial_velocity=self.initial_velocity)
-        self.evaluation_ = {"fitted": fitted, "initial": initial, "meas": {r.name: m for r, m in zip(ds.runs, meas)}}
-        per_run = {r.name: run_entry(r, fitted[r.name], initial[r.name]) for r in ds.runs}
-        val, val_fit = pooled(fitted, ds.runs, "validation")
-        tr, tr_fit = pooled(fitted, ds.runs, "train")
-        val0, val0_fit = pooled(initial, ds.runs, "validation")
-        tr0, _ = pooled(initial, ds.runs, "train")
-        p = self.vehicle_.parameters()
-        p0 = self.initial_vehicle_.parameters()
-        res = self.fit_
-        settings = self._settings()
-        noise = {r.name: m.describe() for r, m in zip(ds.runs, meas)}
-        return {
-            "vehicle": self.initial_vehicle_.name,
-            "dataset": str(ds.path),
-            "dofs": list(problems),
-            "parameters": dict(self.params_),
-            "uncertainty": dict(self.uncertainty_),
-            "initial_parameters": {k: float(p0[k]) for k in self.params_},
-            "ga_parameters": dict(self.ga_params_),
-            "free_parameters": [] if res is None else list(res.names),
-            "bounds": {k: [float(x) for x in bounds_of(k)] for k in self.params_},
-            "at_bounds": [] if res is None else list(res.at_bounds),
-            "physical_limit": [] if res is None else list(res.physical_limit),
-            "effective_inertia": {d: p[a] + p[b] for d, (a, b) in EFFECTIVE_INERTIA.items()},
-            "effective_inertia_uncertainty": self._effective_inertia_sigma(),
-            "linear_damping": {d: p[k] for d, k in LINEAR_DAMPING.items()},
-            "quadratic_damping": {d: p[k] for d, k in QUADRATIC_DAMPING.items()},
-            "gyro_bias": {} if res is None else dict(res.gyro_bias),
-            "validation_rmse": val, "validation_fit_percent": val_fit,
-            "training_rmse": tr, "training_fit_percent": tr_fit,
-            "initial_validation_rmse": val0, "initial_validation_fit_percent": val0_fit,
-            "initial_training_rmse": tr0,
-            "per_run": per_run,
-            "identifiability": self.identifiability_,
-            "refinement": {} if res is None else {"stages": res.stages, "cost": res.cost,
-                                                  "n_residuals": res.n_residuals},
-            "signal_scales": noise,
-            "noise": noise,
-            "attitude_lag": self.lag_,
-            "notes": sorted({n for m in meas for n in m.notes}),
-            "run_weights": {r.name: float(self._ga_run_weights.get(r.name, r.weight)) for r in runs},
-            "training_runs": [r.name for r in runs],
-            "evaluations": int(ga["evaluations"]),
-            "generations_run": int(ga["generations_run"]),
-            "ga_seconds": float(ga["wall_s"]),
-            "refine_seconds": float(t_ref - t_ga),
-            "wall_seconds": float(time.perf_counter() - t0),
-            "settings": {**settings.__dict__, "margin": self.margin, "workers": self.workers, "dask": self.dask,
-                         "batch_rows": self.batch_rows, "low_speed_exponent": self.low_speed_exponent,
-                         "signal_weights": dict(self.signal_weights or {}), "noise": dict(self.noise or {}),
-                         "ga_channels": self.ga_channels, "free": self.free, "fix": self.fix,
-                         "bounds": {k: list(v) for k, v in (self.bounds or {}).items()},
-                         "refine": self.refine, "horizons": self._horizons(), "max_iter": self.max_iter,
-                         "gyro_bias": self.gyro_bias, "screen": self.screen, "attitude_lag": self.attitude_lag,
-                         "initial_velocity": self.initial_velocity},
-            "logbook": {d: [dict(rec) for rec in lb] for d, lb in ga["logbooks"].items()},
-        }

@@ -25,7 +25,7 @@ from typing import Iterable, Mapping, Sequence
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from uvsim.calibration.params import DOF_PARAMETERS, check_sign
+from uvsim.calibration.params import DOF_PARAMETERS, EFFECTIVE_INERTIA, check_sign
 from uvsim.errors import CalibrationError
 
 #: Rigid-body moments of inertia: fixed in the joint stage unless freed (decoupled data
@@ -116,3 +116,35 @@ def excitation(space, S: np.ndarray) -> dict[str, float]:
         sig = p.scale / np.sqrt(info) if info > 0 else np.inf
         out[p.name] = float(sig / max(abs(p.start), 1e-12))
     return out
+
+
+def effective_inertia_start(ga_values: Mapping, base: Mapping, extra, fixed, bounds_of, explicit: Mapping):
+    """Start values and bounds of the joint stage for the rotational DOFs.
+
+    Unless freed, a rigid-body moment of inertia (``I_xx``) stays at the vehicle's value
+    in the joint stage; the data determine only its sum with the added inertia
+    (``I_xx + K_pdot``).  The GA split that sum arbitrarily, so the joint stage starts the
+    added inertia at ``GA sum - I_xx (vehicle)`` and, unless bounds were given for it,
+    bounds it by the GA's range of the sum minus the fixed ``I_xx`` (not below 0): the
+    search range of the effective inertia is kept.  Returns (start values {name: value},
+    bounds function name -> (low, high))."""
+    start, joint = {}, {}
+    for a, b in (EFFECTIVE_INERTIA[d] for d in ("roll", "pitch", "yaw")):
+        if a in extra or a in fixed or b in fixed:
+            continue
+        if a in ga_values and b in ga_values:
+            s = ga_values[a] + ga_values[b] - base[a]
+            if s < 0:
+                raise CalibrationError(
+                    f"the GA's effective inertia {a} + {b} = {ga_values[a] + ga_values[b]:.4g} is below the vehicle's "
+                    f"{a} = {base[a]:.4g}: the rigid-body inertia cannot be right; free it (--free {a})")
+            start[a], start[b] = float(base[a]), float(s)
+        joint[b] = None
+    def joint_bounds(k):
+        if k in joint and k not in explicit:
+            pair = next(p for p in EFFECTIVE_INERTIA.values() if p[1] == k)
+            (la, ha), (lb, hb) = bounds_of(pair[0]), bounds_of(k)
+            return max(la + lb - base[pair[0]], 0.0), ha + hb - base[pair[0]]
+        return bounds_of(k)
+
+    return start, joint_bounds
