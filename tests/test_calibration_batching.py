@@ -5,7 +5,7 @@ import pytest
 
 import uvsim
 from calibration_data import tank_runs
-from uvsim.calibration import prepare_runs, residuals, simulate_dataset
+from uvsim.calibration import prepare_runs, simulate_dataset
 from uvsim.calibration.batching import initial_state
 from uvsim.errors import CalibrationError
 from uvsim.logs import Run
@@ -63,13 +63,3 @@ def test_mixed_input_kinds_rejected_and_empty():
         prepare_runs([r, Run(name="force", path=None, data=f)])
     with pytest.raises(CalibrationError, match="no runs"):
         prepare_runs([])
-
-
-def test_residuals_truth_vs_initial():
-    runs, _ = tank_runs(dofs=("heave",))
-    good = residuals("bluerov2_heavy", runs)
-    bad = residuals("bluerov2_heavy_initial", runs)
-    assert good["fitness"] < bad["fitness"]
-    assert set(good["per_run"]) == {r.name for r in runs}
-    assert good["vector"].ndim == 1 and good["vector"].size == bad["vector"].size
-    assert good["per_run"][runs[0].name]["position_m"] < bad["per_run"][runs[0].name]["position_m"] + 1e-12

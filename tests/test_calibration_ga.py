@@ -41,7 +41,7 @@ def test_workers_identical_to_serial(serial):
 
 
 def test_refinement_with_workers_identical_to_serial():
-    kw = dict(dofs="surge,yaw", population=8, generations=2, seed=5, max_nfev=6)
+    kw = dict(dofs="surge,yaw", population=8, generations=2, seed=5, max_iter=6)
     a = Calibrator(**kw).fit(_runs(), "bluerov2_heavy_initial")
     b = Calibrator(workers=2, **kw).fit(_runs(), "bluerov2_heavy_initial")
     assert a.params_ == b.params_ and a.uncertainty_ == b.uncertainty_
@@ -95,7 +95,7 @@ def test_bad_settings_and_inputs(tmp_path):
     with pytest.raises(CalibrationError, match="positive damping"):
         _fit(bounds={"X_u": (-0.3, 0.1)})
     with pytest.raises(CalibrationError, match="unknown signal"):
-        _fit(signal_weights={"depth": 1.0})
+        _fit(signal_weights={"dept": 1.0})
     with pytest.raises(CalibrationError, match="does not exist"):
         _fit(resume=tmp_path / "nope.ckpt")
     bad = tmp_path / "bad.ckpt"

@@ -401,7 +401,7 @@ def _fitted_loadable(t: Path) -> None:
     rep = json.loads((t / "out" / "r.json").read_text())
     assert rep["status"]["ok"] and not rep["settings"]["refine"]
     assert veh.parameters()["X_u"] == pytest.approx(rep["parameters"]["X_u"])
-    assert "no uncertainty (no refinement)" in (t / "out" / "fit.yaml").read_text()
+    assert "(GA value, not refined)" in (t / "out" / "fit.yaml").read_text()
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c.id for c in CASES])

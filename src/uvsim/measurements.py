@@ -15,7 +15,9 @@ depth          depth               ``z + (R r_p)_z``: depth of the pressure sens
 attitude       qw..qz, or any of   full attitude: compared as the rotation vector of
                roll, pitch, yaw    ``q_meas^-1 (x) q_pred`` (3 components); partial
                                    Euler angles (e.g. roll and pitch of a magnetometer-
-                                   free IMU): each logged angle, wrapped difference
+                                   free IMU): each logged angle, wrapped difference;
+                                   optionally through an attitude filter's first-order
+                                   lag (``attitude_lag``, below)
 velocity       u, v, w             ``v + omega x r_d``: velocity of the DVL at r_d
 rates          p, q, r             ``omega + b``: gyro with a constant bias ``b`` per run
                                    (a nuisance parameter the fits estimate)
@@ -31,15 +33,24 @@ divided by ``sigma`` and multiplied by ``sqrt(weight)``, so metres, radians, rad
 m/s^2 add up and a correct model leaves about 1 per entry.  A slow sensor logged on a
 faster grid by holding or interpolating its value counts only at its native samples
 (:func:`uvsim.estimation.noise.sample_kind`); :attr:`RunMeasurements.notes` says so.
+
+Attitude filter lag: angles reported by an attitude filter (EKF, complementary
+filter) trail the motion.  With ``attitude_lag = tau > 0`` the predicted Euler angles
+pass through the first-order lag of :func:`uvsim.estimation.lag.first_order_lag`
+(in quaternion mode the lagged angles are turned back into a quaternion), started
+from the logged attitude at the first row, or at every window start of a windowed
+fit (:meth:`RunMeasurements.for_windows`); ``tau`` can be estimated from the gyro
+(:func:`uvsim.estimation.lag.estimate_attitude_lag`).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Mapping
 
 import numpy as np
 
 from uvsim.errors import CalibrationError
+from uvsim.estimation.lag import first_order_lag
 from uvsim.estimation.noise import SampleKind, noise_sigma, sample_kind
 from uvsim.kinematics import euler_to_quat, quat_conjugate, quat_multiply, quat_to_euler, quat_to_rotation, unwrap_angles
 from uvsim.logs import ACCEL_COLUMNS, DEPTH_COLUMN, EULER_COLUMNS, POSITION_COLUMNS, RATE_COLUMNS, VELOCITY_COLUMNS
@@ -58,6 +69,9 @@ UNITS = {"position": "m", "depth": "m", "attitude": "rad", "velocity": "m/s", "r
 CHANNEL_GROUP = {c: g for g, cs in GROUPS.items() for c in cs}
 #: Default standard gravity if the vehicle gives none, m/s^2 (Fossen 2021).
 G_DEFAULT = 9.81
+#: Half-width (s) of the straight-line fit that gives the logged attitude where the
+#: attitude lag restarts (a few filter-output samples; the lagged signal is smooth).
+LAG_RESTART_HALF_S = 0.1
 
 
 def wrap(a):
@@ -125,6 +139,12 @@ class RunMeasurements:
     weights: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)
     run_weight: float = 1.0
+    #: time constant (s) of the attitude filter's first-order lag (0: none)
+    attitude_lag: float = 0.0
+    #: rows where the lag filter restarts from the logged attitude (window starts of a
+    #: windowed fit, :meth:`for_windows`); None: once, at the first row
+    restart_rows: np.ndarray | None = None
+    _restart_cache: tuple | None = field(default=None, repr=False, compare=False)
 
     # ------------------------------------------------------------------ structure
     @property
@@ -151,6 +171,50 @@ class RunMeasurements:
 
     def n_used(self) -> int:
         return int(sum(self.used(g).sum() for g in self.groups))
+
+    def for_windows(self, starts) -> "RunMeasurements":
+        """This model for a windowed fit whose windows start at rows ``starts``: the
+        attitude lag restarts at each window start from the logged attitude there (the
+        filter's output is what was logged), so a window's prediction depends on its own
+        start state only.  Returns self when there is no lag."""
+        if not (self.attitude_lag > 0 and "attitude" in self.groups):
+            return self
+        return replace(self, restart_rows=np.asarray(starts, int))
+
+    def _logged_euler_at(self, rows: np.ndarray) -> np.ndarray:
+        """Logged Euler angles (R, 3) at ``rows``, each from a straight-line fit over the
+        valid samples within :data:`LAG_RESTART_HALF_S` (NaN where none / not logged)."""
+        grp = self.groups["attitude"]
+        e = quat_to_euler(grp.values) if grp.mode == "quaternion" else np.asarray(grp.values, float)
+        e = unwrap_angles(np.where(grp.valid, e, np.nan))
+        out = np.full((len(rows), 3), np.nan)
+        for j in range(3):
+            ok = grp.valid[:, j] & np.isfinite(e[:, j])
+            if not grp.logged[j] or ok.sum() < 2:
+                continue
+            tv, xv = self.t[ok], e[ok, j]
+            for i, r in enumerate(rows):
+                sel = np.abs(tv - self.t[r]) <= LAG_RESTART_HALF_S
+                if sel.sum() >= 2:
+                    out[i, j] = np.polyfit(tv[sel] - self.t[r], xv[sel], 1)[-1]
+        return out
+
+    def _lagged_euler(self, euler: np.ndarray) -> np.ndarray:
+        """Predicted Euler angles (..., n, 3) through the attitude filter's lag, restarted
+        at :attr:`restart_rows` from the logged attitude (module docstring)."""
+        rows = np.array([0] if self.restart_rows is None else self.restart_rows, int)
+        key = tuple(rows.tolist())
+        if self._restart_cache is None or self._restart_cache[0] != key:
+            self._restart_cache = (key, self._logged_euler_at(rows))
+        start = self._restart_cache[1]
+        bounds = list(rows) + [self.n]
+        out = np.empty_like(euler)
+        for i, (a, b) in enumerate(zip(bounds[:-1], bounds[1:])):
+            x = unwrap_angles(euler[..., a:b, :], axis=-2)
+            y0 = np.where(np.isfinite(start[i]), start[i], x[..., 0, :])
+            y0 = x[..., 0, :] + wrap(y0 - x[..., 0, :])  # on the prediction's branch
+            out[..., a:b, :] = first_order_lag(self.t[a:b], x, self.attitude_lag, y0)
+        return out
 
     # ------------------------------------------------------------------ prediction
     def predict(self, y: np.ndarray, nu_dot: np.ndarray | None = None,
@@ -181,7 +245,11 @@ class RunMeasurements:
                     z = z + np.einsum("...j,j->...", rot()[..., 2, :], r)
                 out[g] = z[..., None]
             elif g == "attitude":
-                out[g] = q if grp.mode == "quaternion" else quat_to_euler(q)
+                if self.attitude_lag > 0:
+                    e = self._lagged_euler(quat_to_euler(q))
+                    out[g] = euler_to_quat(e) if grp.mode == "quaternion" else e
+                else:
+                    out[g] = q if grp.mode == "quaternion" else quat_to_euler(q)
             elif g == "velocity":
                 v = nu[..., :3]
                 r = self.sensors.get("dvl")
@@ -284,7 +352,7 @@ def _noise_for(group: str, values: np.ndarray, native: np.ndarray) -> float:
 
 def measurements_for(run, vehicle=None, *, noise: Mapping[str, float] | None = None,
                      weights: Mapping[str, float] | None = None, run_weight: float | None = None,
-                     sensors: Mapping[str, np.ndarray] | None = None) -> RunMeasurements:
+                     sensors: Mapping[str, np.ndarray] | None = None, attitude_lag: float = 0.0) -> RunMeasurements:
     """The measurement model of ``run`` (a :class:`uvsim.logs.Run`).
 
     Parameters
@@ -297,7 +365,15 @@ def measurements_for(run, vehicle=None, *, noise: Mapping[str, float] | None = N
     weights : weights by group or channel (default 1; 0 leaves a channel out of fits).
     run_weight : the run's weight (default: ``run.weight`` from the manifest).
     sensors : sensor positions overriding the vehicle's.
+    attitude_lag : time constant (s) of the attitude filter's first-order lag
+        (module docstring; 0: none).
     """
+    try:
+        attitude_lag = float(attitude_lag)
+    except (TypeError, ValueError):
+        attitude_lag = float("nan")
+    if not (np.isfinite(attitude_lag) and attitude_lag >= 0):
+        raise CalibrationError(f"attitude_lag: expected a time constant >= 0 s, got {attitude_lag!r}")
     noise = dict(noise or {})
     known = set(GROUPS) | set(CHANNEL_GROUP)
     for what, d in (("noise", noise), ("weights", weights or {})):
@@ -366,4 +442,4 @@ def measurements_for(run, vehicle=None, *, noise: Mapping[str, float] | None = N
     if run.has_acceleration:
         build("acceleration", run.acceleration, [True, True, True])
     return RunMeasurements(run.name, t, groups, sens, g, dict(weights or {}), notes,
-                           float(run.weight if run_weight is None else run_weight))
+                           float(run.weight if run_weight is None else run_weight), attitude_lag)

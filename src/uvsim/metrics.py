@@ -38,9 +38,10 @@ Angles as channels (roll, pitch, yaw) are compared with wrapped differences
 For fitting, :func:`residual_components` gives per-group error components
 (position and velocity differences, the rotation vector of the attitude error
 ``q_meas^-1 (x) q_pred``, rate differences) and :func:`normalized_residuals`
-turns them into one vector, each group divided by a scale (its measured spread
-or a stated noise level, :func:`signal_scales`) and multiplied by the square
-root of a per-group weight, so metres, radians and rad/s can be summed.
+turns them into one vector, each group divided by a scale (e.g. a stated noise
+level) and multiplied by the square root of a per-group weight, so metres, radians
+and rad/s can be summed.  Calibration compares runs through the measurement models
+instead (:func:`measurement_metrics`, :mod:`uvsim.measurements`).
 """
 from __future__ import annotations
 
@@ -275,55 +276,6 @@ def pooled_rmse(pairs: Iterable[tuple[Mapping, Mapping]]) -> dict[str, float]:
 
 
 # ----------------------------------------------------------------------------- normalization
-def signal_scales(measured_runs: Iterable[Mapping[str, np.ndarray]],
-                  noise: Mapping[str, float] | None = None) -> dict[str, float]:
-    """One scale per signal group, used to make groups summable.
-
-    ``noise`` (e.g. ``{"position": 0.002, "attitude": 0.005}``, in m, rad,
-    m/s, rad/s) wins where given; otherwise the measured spread: the root mean
-    square over runs and logged channels of each channel's deviation from its
-    run mean (attitude: of the rotation vector relative to the run's first
-    valid attitude).  Raises :class:`CalibrationError` if a group has no spread
-    at all and no noise level."""
-    noise = dict(noise or {})
-    unknown = set(noise) - set(GROUPS)
-    if unknown:
-        raise CalibrationError(f"noise levels given for unknown signal group(s) {sorted(unknown)}; "
-                               f"expected some of {list(GROUPS)}")
-    ss: dict[str, float] = {}
-    nn: dict[str, int] = {}
-    for measured in measured_runs:
-        for g in present_groups(measured):
-            a = np.asarray(measured[_SIGNAL_KEY[g]], float)
-            if g == "attitude":
-                ok = np.isfinite(a).all(axis=-1)
-                if not ok.any():
-                    continue
-                q0 = a[int(np.argmax(ok))]
-                a = np.where(ok[:, None], rotation_vector_error(q0, a), np.nan)
-            a = a[:, np.isfinite(a).any(axis=0)]  # logged axes only (a depth-only run has no x, y)
-            if a.size == 0:
-                continue
-            dev = a - np.nanmean(a, axis=0)
-            ok = np.isfinite(dev)
-            ss[g] = ss.get(g, 0.0) + float(np.sum(dev[ok] ** 2))
-            nn[g] = nn.get(g, 0) + int(ok.sum())
-    out = {}
-    for g in GROUPS:
-        if g in noise:
-            v = float(noise[g])
-            if not np.isfinite(v) or v <= 0:
-                raise CalibrationError(f"noise level for {g!r} must be a positive number, got {noise[g]!r}")
-            out[g] = v
-        elif g in nn:
-            s = float(np.sqrt(ss[g] / max(nn[g], 1)))
-            if not s > 0:
-                raise CalibrationError(
-                    f"signal {g!r} has no spread in the data (constant); give its noise level to normalize it")
-            out[g] = s
-    return out
-
-
 def component_weights(group: str, weights: Mapping[str, float] | None) -> np.ndarray:
     """Weights (3,) of a group's components: ``weights[group]`` (default 1) times
     ``weights[channel]`` (default 1) for each of its channels (e.g. ``{"attitude": 2,
@@ -332,24 +284,6 @@ def component_weights(group: str, weights: Mapping[str, float] | None) -> np.nda
     weights = weights or {}
     g = float(weights.get(group, 1.0))
     return np.array([g * float(weights.get(c, 1.0)) for c in GROUPS[group]])
-
-
-def check_weights(weights: Mapping[str, float] | None, where: str = "signal_weights") -> dict:
-    """Validate a weight mapping (keys: groups or channels; values >= 0)."""
-    weights = dict(weights or {})
-    known = set(GROUPS) | {c for cs in GROUPS.values() for c in cs}
-    bad = sorted(set(weights) - known)
-    if bad:
-        raise CalibrationError(f"{where}: unknown signal(s) {bad}; expected groups {list(GROUPS)} or channels "
-                               f"{[c for cs in GROUPS.values() for c in cs]}")
-    for k, v in weights.items():
-        try:
-            ok = float(v) >= 0 and np.isfinite(float(v))
-        except (TypeError, ValueError):
-            ok = False
-        if not ok:
-            raise CalibrationError(f"{where}: weight of {k!r} must be a non-negative number, got {v!r}")
-    return {k: float(v) for k, v in weights.items()}
 
 
 def normalized_residuals(measured: Mapping[str, np.ndarray], predicted: Mapping[str, np.ndarray],
@@ -384,33 +318,6 @@ def normalized_residuals(measured: Mapping[str, np.ndarray], predicted: Mapping[
             r = np.where(bad, fill, r)
         parts.append(r)
     return np.concatenate(parts) if parts else np.zeros(0)
-
-
-def weighted_abs_error(measured: Mapping[str, np.ndarray], predicted: Mapping[str, np.ndarray],
-                       scales: Mapping[str, float], weights: Mapping[str, float] | None = None) -> np.ndarray:
-    """Mean absolute normalized error of one run, for every batch row of ``predicted``.
-
-    Seed 000's fitness ("sum of absolute differences between the simulated and
-    real data", sec. 4.4 ii) divided by the number of valid samples: for each
-    present group, ``sum_valid w_c |component_c| / scales[g] / n_valid`` (``w_c``
-    from :func:`component_weights`, ``n_valid`` the number of valid samples),
-    summed over groups.  ``predicted`` arrays may have leading batch axes
-    (P, n, k); returns shape (P,) (``inf`` for rows whose simulation diverged)."""
-    weights = dict(weights or {})
-    comps = residual_components(measured, predicted)
-    total = 0.0
-    for g, e in comps.items():
-        m = np.asarray(measured[_SIGNAL_KEY[g]])
-        valid = np.isfinite(m).all(axis=-1, keepdims=True) if g == "attitude" else np.isfinite(m)
-        w = component_weights(g, weights)
-        valid = np.broadcast_to(valid, m.shape[:-1] + (e.shape[-1],)) & (w > 0)
-        if not valid.any():
-            continue
-        n = max(int(valid.any(axis=-1).sum()), 1)
-        a = np.where(valid, np.abs(e) * w, 0.0)
-        total = total + a.sum(axis=(-2, -1)) / scales[g] / n
-    total = np.asarray(total, float)
-    return np.where(np.isfinite(total), total, np.inf)
 
 
 # ----------------------------------------------------------------------------- measurement models

@@ -3,8 +3,8 @@
 Each area has a module here exposing ``run(quick: bool = False) -> dict`` of
 ``{json_key: value}`` and ``DESCRIPTIONS = {json_key: "text with unit"}`` (a module
 whose problem sizes change with ``--quick`` also has ``describe(quick) -> dict``, so the
-labels say what was measured).  Results
-and the machine they were measured on go in docs/performance.md.
+labels say what was measured); a module with ``DEFAULT = False`` runs only when named
+(``--only``).  Results and the machine they were measured on go in docs/performance.md.
 """
 from __future__ import annotations
 
@@ -17,6 +17,7 @@ MODULES = {
     "sam": "uvsim.benchmarks.sam",
     "calibration": "uvsim.benchmarks.calibration",
     "diagnosis": "uvsim.benchmarks.diagnosis",
+    "calibrate-realsensor": "uvsim.benchmarks.realsensor",
 }
 
 

@@ -5,8 +5,8 @@ at 50 Hz (700 samples), PWM inputs, generated with :mod:`uvsim.synthetic` from
 ``bluerov2_heavy`` (Table 5) and fitted from ``bluerov2_heavy_initial`` (Table 2),
 GA evaluations on 2 local worker processes (``workers=2``).  The figure is the
 wall time of the GA (all generations, including the worker start-up); the
-least-squares refinement (not part of the paper's method) is timed separately
-and the whole fit as ``calibration_total_s``.  ``quick=True`` runs 5
+joint prediction-error fit after it (not part of the paper's method, 2 workers) is
+timed separately and the whole fit as ``calibration_total_s``.  ``quick=True`` runs 5
 generations of 20 individuals instead.
 """
 from __future__ import annotations
@@ -24,9 +24,9 @@ def describe(quick: bool = False) -> dict:
     return {
         "paper_calibration_s": f"{what} (6 DOFs x 8 runs x {pop} individuals x {gens} generations, "
                                "14-s runs at 50 Hz) on 2 worker processes, wall seconds of the GA",
-        "paper_calibration_refine_s": "uvsim's least-squares refinement after that GA (per-DOF + joint, 2 workers), "
+        "paper_calibration_refine_s": "uvsim's joint windowed prediction-error fit after that GA (2 workers), "
                                       "wall seconds",
-        "calibration_total_s": "whole Calibrator.fit of that setup: GA + refinement + report, wall seconds",
+        "calibration_total_s": "whole Calibrator.fit of that setup: GA + joint fit + report, wall seconds",
         "paper_calibration_evaluations": "fitness evaluations (individual x DOF) the GA made (unchanged offspring "
                                          "are not re-evaluated), count",
     }

@@ -15,8 +15,8 @@ built from what it measured (partial initial state, issue 7):
   positions / attitude at the start, :func:`uvsim.estimation.derivatives`) or a
   value given per run (e.g. estimated with the parameters by the refinement).
 
-:func:`simulate_dataset` and :func:`residuals` are the general entry points used
-by calibration and diagnosis.
+:func:`simulate_dataset` and :func:`simulate_rows` are the entry points used by
+calibration (the GA) and diagnosis.
 """
 from __future__ import annotations
 
@@ -26,13 +26,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from uvsim.errors import CalibrationError, SimulationError
-from uvsim.metrics import (
-    normalized_residuals,
-    run_metrics,
-    signals_from_run,
-    signals_from_states,
-    weighted_abs_error,
-)
+from uvsim.metrics import signals_from_run, signals_from_states
 from uvsim.simulate import INITIAL_WINDOW_S, initial_state_from_run, simulate_batch
 from uvsim.vehicle import load_vehicle
 
@@ -82,17 +76,19 @@ class RunBatch:
                         [self.measured[i] for i in idx], None if self.voltage is None else self.voltage[idx])
 
 
-def initial_state(run, *, initial_velocity: str = "zero", window_s: float = INITIAL_WINDOW_S):
+def initial_state(run, *, initial_velocity: str = "zero", window_s: float = INITIAL_WINDOW_S, sensors=None):
     """(pos0 (3,), q0 (4,), nu0 (6,), nu0_known (6,) bool) of one run, with the start
-    smoothed over :data:`INITIAL_WINDOW_S` (:func:`uvsim.simulate.initial_state_from_run`)."""
+    smoothed over :data:`INITIAL_WINDOW_S` (:func:`uvsim.simulate.initial_state_from_run`;
+    ``sensors``: sensor positions, for the depth of a pressure sensor)."""
     try:
-        return initial_state_from_run(run, initial_velocity=initial_velocity, window_s=window_s)
+        return initial_state_from_run(run, initial_velocity=initial_velocity, window_s=window_s, sensors=sensors)
     except SimulationError as exc:
         raise CalibrationError(str(exc)) from None
 
 
-def prepare_runs(runs: Sequence, *, initial_velocity: str = "zero") -> RunBatch:
-    """Pad ``runs`` (:class:`uvsim.logs.Run`) into a :class:`RunBatch`.
+def prepare_runs(runs: Sequence, *, initial_velocity: str = "zero", sensors=None) -> RunBatch:
+    """Pad ``runs`` (:class:`uvsim.logs.Run`) into a :class:`RunBatch` (``sensors``: the
+    vehicle's sensor positions, used for the initial depth of a pressure sensor).
 
     All runs must share one input kind and input count (they are simulated in
     one call); raises :class:`CalibrationError` otherwise or for an empty list."""
@@ -120,14 +116,14 @@ def prepare_runs(runs: Sequence, *, initial_velocity: str = "zero") -> RunBatch:
         if V is not None and r.voltage is not None:
             V[i, :n] = r.voltage
             V[i, n:] = r.voltage[-1]
-        p, q, nu, kn = initial_state(r, initial_velocity=initial_velocity)
+        p, q, nu, kn = initial_state(r, initial_velocity=initial_velocity, sensors=sensors)
         P0.append(p), Q0.append(q), N0.append(nu), K0.append(kn)
     return RunBatch(runs, T, U, lengths, kind, np.array(P0), np.array(Q0), np.array(N0), np.array(K0),
                     [signals_from_run(r) for r in runs], V)
 
 
 def simulate_rows(vehicle, batch: RunBatch, run_index: np.ndarray, overrides: Mapping[str, np.ndarray] | None = None,
-                  nu0: np.ndarray | None = None, model=None) -> np.ndarray:
+                  nu0: np.ndarray | None = None, model=None, acceleration: bool = False):
     """Simulate rows: row ``j`` is run ``run_index[j]`` with parameter values
     ``overrides[name][j]``.
 
@@ -138,19 +134,21 @@ def simulate_rows(vehicle, batch: RunBatch, run_index: np.ndarray, overrides: Ma
     run_index : (N,) int, which run each row simulates.
     overrides : name -> float or (N,) array.
     nu0 : optional (N, 6) initial velocities replacing the batch's.
+    acceleration : also return the accelerations ``nu_dot`` (N, L, 6) (accelerometer models).
 
     Returns
     -------
     y : (N, L, n_y) states (NaN rows for diverged simulations); only the first
-    ``batch.lengths[run_index[j]]`` samples of row j are meaningful.
+    ``batch.lengths[run_index[j]]`` samples of row j are meaningful; ``(y, nu_dot)``
+    with ``acceleration=True``.
     """
     idx = np.asarray(run_index, int)
     res = simulate_batch(vehicle, batch.t[idx], batch.inputs[idx], input_kind=batch.input_kind,
                          pos0=batch.pos0[idx], q0=batch.q0[idx],
                          nu0=batch.nu0[idx] if nu0 is None else nu0,
-                         overrides=overrides, on_blowup="nan", model=model,
+                         overrides=overrides, on_blowup="nan", model=model, return_acceleration=acceleration,
                          voltage=None if batch.voltage is None else batch.voltage[idx])
-    return res.y
+    return (res.y, res.nu_dot) if acceleration else res.y
 
 
 def _with_effects(vehicle, effects):
@@ -195,31 +193,3 @@ def as_batch(runs, *, initial_velocity: str = "zero") -> RunBatch:
     if hasattr(runs, "runs") and not isinstance(runs, (list, tuple)):
         runs = runs.runs
     return prepare_runs(runs, initial_velocity=initial_velocity)
-
-
-def residuals(vehicle, runs, overrides: Mapping[str, float] | None = None, effects=None, *,
-              scales: Mapping[str, float] | None = None, weights: Mapping[str, float] | None = None,
-              predicted: list | None = None, initial_velocity: str = "zero") -> dict:
-    """Residuals and metrics of ``runs`` under one parameter set.
-
-    Returns
-    -------
-    dict with
-      ``per_run``: {run name: :func:`uvsim.metrics.run_metrics` output};
-      ``vector``: concatenated normalized residuals (:func:`uvsim.metrics.normalized_residuals`,
-      scales from ``scales`` or the measured spread, run weights from the manifest);
-      ``fitness``: seed 000's weighted mean absolute normalized error summed over runs;
-      ``predicted``: the simulated signals (as :func:`simulate_dataset`).
-    """
-    from uvsim.metrics import signal_scales
-
-    batch = as_batch(runs, initial_velocity=initial_velocity)
-    pred = predicted if predicted is not None else simulate_dataset(vehicle, batch, overrides, effects)
-    scales = dict(scales) if scales is not None else signal_scales(batch.measured)
-    per_run, vec, fit = {}, [], 0.0
-    for r, m, p in zip(batch.runs, batch.measured, pred):
-        per_run[r.name] = run_metrics(m, p)
-        vec.append(normalized_residuals(m, p, scales, weights, run_weight=r.weight, fill=1e3))
-        fit += r.weight * float(weighted_abs_error(m, p, scales, weights))
-    return {"per_run": per_run, "vector": np.concatenate(vec), "fitness": fit, "predicted": pred,
-            "scales": scales}

@@ -1,51 +1,55 @@
-"""``Calibrator``: seed 000's GA calibration plus refinement, as one estimator.
+"""``Calibrator``: seed 000's GA per DOF, then one joint fit of every training run.
 
 >>> from uvsim.calibration import Calibrator
->>> cal = Calibrator(dofs="surge,yaw", population=60, generations=30, seed=1).fit(
-...     "path/to/dataset", "bluerov2_heavy_initial")               # doctest: +SKIP
+>>> cal = Calibrator(population=60, generations=30, seed=1, free="z_b").fit(
+...     "path/to/dataset")                                          # doctest: +SKIP
 >>> cal.params_["X_udot"], cal.uncertainty_["X_udot"]            # doctest: +SKIP
 >>> cal.report_["validation_rmse"]                                 # doctest: +SKIP
 
-Fit = for every DOF: build the :class:`DofProblem` (Table 3 parameters, bounds
-around the initial values, signal scales from the DOF's training runs), run the
-GA (:func:`uvsim.calibration.ga.run_ga`) for all DOFs in lock step, refine each
-DOF's best individual by least squares (:func:`uvsim.calibration.refine.refine_dof`),
-assemble the fitted vehicle and evaluate it on the training and validation runs.
+Fit (docs/calibration.md):
+
+1. **GA** (global stage, seed 000 sec. 4.4, Tables 3-4): for every DOF with training runs
+   marked with it (``dof: surge`` ... in the manifest), its Table 3 parameters on its
+   own runs (:func:`uvsim.calibration.ga.run_ga`, fitness
+   :mod:`uvsim.calibration.fitness`).  Skipped when no run is marked (``dof: mixed``).
+2. **Joint stage**: one windowed prediction-error fit (:func:`uvsim.fitting.fit`) of
+   every training run (marked and mixed), from the GA's values (or the vehicle's),
+   freeing the Table 3 parameters (rigid-body inertias fixed unless freed) of the GA's
+   DOFs and, for mixed runs, every DOF's that the data excite
+   (:mod:`uvsim.calibration.selection`), plus ``free`` minus ``fix``
+   (:mod:`uvsim.calibration.joint`).
+3. **Report**: open-loop metrics of every run for the initial and the fitted vehicle
+   (:mod:`uvsim.calibration.report`), uncertainties, identifiability.
 """
 from __future__ import annotations
 
+import logging
 import time
 from pathlib import Path
 from typing import Mapping
 
 import numpy as np
 
-from uvsim.calibration.batching import prepare_runs, simulate_dataset
+from uvsim.calibration.batching import prepare_runs
 from uvsim.calibration.evaluation import DEFAULT_BATCH_ROWS, BatchEvaluator, DaskMap, DofProblem, ProcessMap, SerialMap
+from uvsim.calibration.fitness import used_channels
 from uvsim.calibration.ga import GASettings, fingerprint, run_ga
-from uvsim.calibration.params import (
-    DOF_PARAMETERS,
-    EFFECTIVE_INERTIA,
-    LINEAR_DAMPING,
-    QUADRATIC_DAMPING,
-    parameter_bounds,
-    default_channel_weights,
-    parse_dofs,
-)
-from uvsim.calibration.refine import identifiability, joint_residuals, refine_dof, refine_joint
+from uvsim.calibration.joint import JointCheckpoint, joint_checkpoint_path, run_joint
+from uvsim.calibration.params import DOF_PARAMETERS, default_channel_weights, parse_dofs
+from uvsim.calibration.report import build_report, evaluate_runs, identifiability_report
+from uvsim.calibration.selection import check_bounds, effective_inertia_start, expand_names, joint_candidates
 from uvsim.errors import CalibrationError
-from uvsim.logs import Dataset, read_dataset
-from uvsim.metrics import channel_mask, check_weights, component_weights, pooled_rmse, run_metrics, signal_scales
+from uvsim.estimation.lag import estimate_attitude_lag
+from uvsim.fitting.parameters import default_bounds
+from uvsim.logs import MANIFEST, Dataset, read_dataset
+from uvsim.measurements import CHANNEL_GROUP, measurements_for
 from uvsim.plausibility import check_runs, parse_allow
 from uvsim.vehicle import load_vehicle
 
-
-#: The joint refinement's Jacobian copies are evaluated in this many chunks (spread
-#: over the workers); a constant, so that serial and parallel runs compute the same
-#: batches and give identical results.
-JOINT_CHUNKS = 2
-#: 1-sigma above this fraction of the value: reported as "weakly_determined".
-WEAK_RELATIVE_SIGMA = 0.25
+log = logging.getLogger("uvsim")
+DEFAULT_HORIZONS = (2.0,)
+#: An estimated attitude lag shorter than this many sample intervals is not used.
+LAG_MIN_SAMPLES = 1.5
 
 
 def _as_dataset(data) -> Dataset:
@@ -59,103 +63,125 @@ def _as_dataset(data) -> Dataset:
     return Dataset(path=Path("."), vehicle=None, description="runs given in memory", runs=runs)
 
 
-def _resolve_vehicle(vehicle, ds: Dataset):
+def resolve_vehicle(vehicle, ds: Dataset):
+    """The starting vehicle: ``vehicle`` (a Vehicle, a file, a built-in name, or a name
+    with ``NAME.yaml`` beside the manifest, which wins over a built-in as for the
+    manifest's own ``vehicle:``) or else the manifest's."""
     if vehicle is None:
         if ds.vehicle is None:
             raise CalibrationError(f"{ds.path}: no vehicle given and the manifest names none")
-        vehicle = ds.vehicle_file or ds.vehicle
+        return load_vehicle(ds.vehicle_file or ds.vehicle)
+    if isinstance(vehicle, (str, Path)) and not Path(vehicle).is_file() and (ds.path / MANIFEST).is_file():
+        beside = Dataset(ds.path, str(vehicle), "", []).vehicle_file
+        if beside is not None and beside.is_file():
+            return load_vehicle(beside)
     return load_vehicle(vehicle)
 
 
-def _group_amplitude(measured, scales) -> float:
-    """RMS over logged groups of (the run's spread / group scale): how much the run moves."""
-    sc = signal_scales([measured])
-    vals = [sc[g] / scales[g] for g in sc if g in scales]
+def _combine_weights(default: Mapping, user: Mapping | None) -> dict:
+    """Channel weights default[c] x user[group(c)] x user[c]."""
+    user = dict(user or {})
+    return {c: float(default.get(c, 1.0)) * float(user.get(g, 1.0)) * float(user.get(c, 1.0))
+            for c, g in CHANNEL_GROUP.items()}
+
+
+def _amplitude(meas) -> float:
+    """RMS over the used channels of (spread / noise): how much a run moves."""
+    vals = []
+    for g, grp in meas.groups.items():
+        w = meas.channel_weights(g)
+        for j in np.flatnonzero(grp.logged & (w > 0)):
+            x = grp.values[grp.valid[:, j], j] if grp.mode != "quaternion" else None
+            if x is not None and x.size > 1:
+                vals.append(np.std(x) / grp.sigma[j])
     return float(np.sqrt(np.mean(np.square(vals)))) if vals else 1.0
 
 
 class Calibrator:
-    """Calibrate a vehicle's inertia, added mass and damping to logged runs.
+    """Calibrate a vehicle to logged runs (module docstring).
 
     Parameters
     ----------
-    dofs : "surge,yaw" or a list; default: every DOF with training runs.
+    dofs : "surge,yaw" or a list: the DOFs to fit (GA of the runs marked with them;
+        the joint stage uses those runs, the unmarked / mixed ones, and the Table 3
+        parameters of these DOFs only).  Default: every DOF.
     population, generations, tournament, crossover, mutation : seed 000 Table 4
         (60, 30, 5, 0.5, 0.25).
     mutation_indpb, mutation_sigma, seeded_fraction, seeded_sigma : GA details the
         paper does not give (see :class:`uvsim.calibration.ga.GASettings`).
     seed : random seed; the same seed gives the identical result (also with workers).
-    margin : default relative search range around each initial value (0.5 = +-50 %).
-    bounds : {name: (low, high)} explicit bounds.
-    signal_weights : weights by signal group ("position", "attitude", "velocity",
-        "rates") and/or channel ("x", ..., "yaw", "u", ..., "r"), used for every DOF.
-        Default: each DOF uses only its own channels (:data:`DOF_CHANNELS`, e.g.
-        x and u for surge, roll and p for roll).
-    noise : {group: 1-sigma noise} used as normalization scale instead of the
-        measured spread.
-    low_speed_exponent : run weight = manifest weight x (amplitude / median
-        amplitude) ** -low_speed_exponent; 0 (default) uses the manifest weights
-        only (seed 000: "weights ... to improve the low-speed movements").
-    refine : run the least-squares refinement after the GA (default True).
-    merge_inertia : "auto" | "always" | "never" (see :mod:`uvsim.calibration.refine`).
-    estimate_initial_velocity : fit each run's unknown initial velocity (DOF axis) in
-        the refinement.
-    initial_velocity : "zero" | "differentiate" for unknown initial velocities.
-    workers : local processes for the GA evaluations (1 = serial).
-    dask : dask.distributed scheduler address or "local".
-    batch_rows : largest number of trajectories per batched simulation.
-    checkpoint : file written after every generation; resume : checkpoint to continue.
-    progress : tqdm bar per generation.
+    margin : default relative search range of inertias, added masses and damping
+        (0.5 = +-50 %); other families: :func:`uvsim.fitting.parameters.default_bounds`.
+    bounds : {name: (low, high)} explicit bounds (every stage).
+    free : names or families (``"z_b,thruster_gain_*"``) freed in the joint stage in
+        addition to the default set; fix : names or families never fitted.
+    signal_weights : weights by group (position, depth, attitude, velocity, rates,
+        acceleration) or channel; 0 leaves a signal out of every stage.  They multiply
+        the GA's per-DOF channel selection (``ga_channels``).
+    noise : 1-sigma noise levels by group or channel (default: estimated per run).
+    ga_channels : "own" (each DOF's GA looks at its own channels,
+        :data:`uvsim.calibration.params.DOF_CHANNELS`; seed 000) or "all".
+    low_speed_exponent : GA run weight = manifest weight x (amplitude / median
+        amplitude) ** -low_speed_exponent; 0 (default): the manifest weights.
+    refine : run the joint stage (default True).
+    horizons : window lengths of the joint stage's continuation, s (None: whole runs).
+    max_iter : Levenberg-Marquardt iterations per continuation stage.
+    gyro_bias : fit a constant gyro bias per run (joint stage; the GA removes each run's
+        median rate residual).
+    screen : free mixed runs' candidates only if the data excite them.
+    attitude_lag : time constant (s) of the attitude filter that logged the Euler angles
+        (a first-order lag in their measurement model, :mod:`uvsim.estimation.lag`), or
+        "auto" (default): estimated from the training runs' gyro and angles, used when
+        longer than 1.5 sample intervals; 0: none.
+    initial_velocity : "zero" | "differentiate" for the GA's and the open-loop
+        evaluation's unknown initial velocities (the joint stage estimates them).
+    workers : local processes (GA evaluations and joint stage; results do not depend on it).
+    dask : dask.distributed scheduler address or "local" for the GA evaluations.
+    batch_rows : largest number of trajectories per batched GA simulation.
+    checkpoint : file written after every GA generation (the joint stage writes
+        ``<checkpoint>.joint``); resume : checkpoint to continue from.
+    progress : tqdm bars (GA generations, joint iterations).
     effects : extra force terms added to the vehicle (dicts or ForceTerm objects).
-    max_nfev : least-squares function-evaluation limit per DOF and sweep.
-    refine_sweeps : Jacobi sweeps of the per-DOF refinement (the DOFs of a sweep run
-        in parallel on the workers): each DOF is refined with the other DOFs' values
-        from the previous sweep, because the "decoupled" runs
-        are not fully decoupled (e.g. a positively buoyant vehicle rises during a
-        surge run, so the surge trajectory depends on the heave parameters through
-        the Coriolis / Munk terms).  The GA itself is per DOF, as in seed 000.
-    joint : after the sweeps, refine all DOFs' parameters together on every logged
-        channel of all training runs (:func:`uvsim.calibration.refine.refine_joint`).
-    joint_weights : signal weights of the joint fit (default: all channels 1).
     allow : names of plausibility checks (:mod:`uvsim.plausibility`) that may fail; every
         other check of the runs against the vehicle raises before the fit.
 
     Attributes (after :meth:`fit`)
     ------------------------------
-    params_ : {name: fitted value} of every fitted parameter.
-    uncertainty_ : {name: 1-sigma or None (not separately identifiable)}.
-    ga_params_ : GA best values before refinement.
-    vehicle_ : the fitted :class:`uvsim.vehicle.Vehicle`.
-    initial_vehicle_ : the starting vehicle.
+    params_ : {name: fitted value} (GA and joint stage).
+    uncertainty_ : {name: 1-sigma (joint stage) or None}.
+    ga_params_ : GA best values.
+    fit_ : the joint stage's :class:`uvsim.fitting.FitResult` (None without it).
+    vehicle_, initial_vehicle_ : fitted and starting :class:`uvsim.vehicle.Vehicle`.
     logbook_ : {dof: deap.tools.Logbook}.
-    identifiability_ : {dof: identifiability analysis}.
-    report_ : the JSON-ready report (keys of issue 5).
+    identifiability_ : the joint stage's identifiability analysis.
+    report_ : the JSON-ready report (docs/calibration.md).
     evaluations_, wall_seconds_ : GA fitness evaluations and total fit time.
     """
 
     def __init__(self, *, dofs=None, population: int = 60, generations: int = 30, seed: int = 0,
                  tournament: int = 5, crossover: float = 0.5, mutation: float = 0.25, mutation_indpb: float = 0.5,
                  mutation_sigma: float = 0.1, seeded_fraction: float = 0.1, seeded_sigma: float = 0.02,
-                 margin: float = 0.5, bounds: Mapping | None = None, signal_weights: Mapping | None = None,
-                 noise: Mapping | None = None, low_speed_exponent: float = 0.0, refine: bool = True,
-                 merge_inertia: str = "auto", estimate_initial_velocity: bool = False,
-                 initial_velocity: str = "zero", workers: int = 1, dask: str | None = None,
-                 batch_rows: int = DEFAULT_BATCH_ROWS, checkpoint=None, resume=None, progress: bool = False,
-                 effects=None, max_nfev: int = 20, refine_sweeps: int = 1, joint: bool = True,
-                 joint_weights: Mapping | None = None, allow=()):
+                 margin: float = 0.5, bounds: Mapping | None = None, free=None, fix=None,
+                 signal_weights: Mapping | None = None, noise: Mapping | None = None, ga_channels: str = "own",
+                 low_speed_exponent: float = 0.0, refine: bool = True, horizons=DEFAULT_HORIZONS,
+                 max_iter: int = 20, gyro_bias: bool = True, screen: bool = True, attitude_lag="auto",
+                 initial_velocity: str = "zero",
+                 workers: int = 1, dask: str | None = None, batch_rows: int = DEFAULT_BATCH_ROWS, checkpoint=None,
+                 resume=None, progress: bool = False, effects=None, allow=()):
         self.dofs = dofs
         self.population, self.generations, self.seed = population, generations, seed
         self.tournament, self.crossover, self.mutation = tournament, crossover, mutation
         self.mutation_indpb, self.mutation_sigma = mutation_indpb, mutation_sigma
         self.seeded_fraction, self.seeded_sigma = seeded_fraction, seeded_sigma
-        self.margin, self.bounds = margin, bounds
-        self.signal_weights, self.noise, self.low_speed_exponent = signal_weights, noise, low_speed_exponent
-        self.refine, self.merge_inertia = refine, merge_inertia
-        self.estimate_initial_velocity, self.initial_velocity = estimate_initial_velocity, initial_velocity
+        self.margin, self.bounds, self.free, self.fix = margin, bounds, free, fix
+        self.signal_weights, self.noise, self.ga_channels = signal_weights, noise, ga_channels
+        self.low_speed_exponent, self.refine = low_speed_exponent, refine
+        self.horizons, self.max_iter, self.gyro_bias, self.screen = horizons, max_iter, gyro_bias, screen
+        self.attitude_lag = attitude_lag
+        self.initial_velocity = initial_velocity
         self.workers, self.dask, self.batch_rows = workers, dask, batch_rows
         self.checkpoint, self.resume, self.progress = checkpoint, resume, progress
-        self.effects, self.max_nfev, self.refine_sweeps = effects, max_nfev, refine_sweeps
-        self.joint, self.joint_weights = joint, joint_weights
+        self.effects = effects
         self.allow = allow
 
     # ------------------------------------------------------------------ helpers
@@ -172,260 +198,227 @@ class Calibrator:
                           mutation_sigma=float(self.mutation_sigma), seeded_fraction=float(self.seeded_fraction),
                           seeded_sigma=float(self.seeded_sigma), seed=int(self.seed))
 
+    def _workers(self) -> int:
+        w = 1 if self.workers is None else int(self.workers)
+        if w < 1:
+            raise CalibrationError(f"workers must be >= 1, got {self.workers}")
+        return w
+
     def _hook(self, evaluator):
         if self.dask:
             return DaskMap(evaluator, self.dask, workers=self.workers if self.workers > 1 else None)
-        if self.workers is None or int(self.workers) <= 1:
-            if self.workers is not None and int(self.workers) < 1:
-                raise CalibrationError(f"workers must be >= 1, got {self.workers}")
-            return SerialMap()
-        return ProcessMap(evaluator, int(self.workers))
+        return SerialMap() if self._workers() == 1 else ProcessMap(evaluator, self._workers())
+
+    def _horizons(self) -> list:
+        hs = [self.horizons] if isinstance(self.horizons, (int, float)) or self.horizons is None else self.horizons
+        out = []
+        for h in hs:
+            if h is not None and not (isinstance(h, (int, float)) and np.isfinite(h) and h > 0):
+                raise CalibrationError(f"horizons: expected positive window lengths in s (or None for whole runs), "
+                                       f"got {h!r}")
+            out.append(None if h is None else float(h))
+        if not out:
+            raise CalibrationError("horizons: give at least one window length")
+        return out
+
+    def _lag(self, runs) -> dict:
+        """The attitude lag to use (``attitude_lag``) and how it was obtained."""
+        if isinstance(self.attitude_lag, str):
+            if self.attitude_lag != "auto":
+                raise CalibrationError(f"attitude_lag {self.attitude_lag!r}: expected 'auto' or a time constant in s")
+            est = estimate_attitude_lag(runs)
+            dt = float(np.median([np.median(np.diff(r.t)) for r in runs]))
+            tau = est["tau"] if est["tau"] is not None and est["tau"] > LAG_MIN_SAMPLES * dt else 0.0
+            return {**est, "tau": float(tau), "estimated_tau": est["tau"],
+                    "source": "estimated from the gyro and the logged angles"}
+        tau = float(self.attitude_lag)
+        if not (np.isfinite(tau) and tau >= 0):
+            raise CalibrationError(f"attitude_lag: expected a time constant >= 0 s or 'auto', got {tau!r}")
+        return {"tau": tau, "source": "given"}
+
+    def _meas(self, runs, weights=None, **kw) -> list:
+        return [measurements_for(r, self.initial_vehicle_, noise=self.noise, weights=weights,
+                                 attitude_lag=self.lag_["tau"], **kw) for r in runs]
 
     # ------------------------------------------------------------------ fit
     def fit(self, dataset, vehicle=None) -> "Calibrator":
         """Fit to ``dataset`` (a :class:`uvsim.logs.Dataset`, a dataset directory or a
         list of Runs) starting from ``vehicle`` (name, file or Vehicle; default the
-        manifest's vehicle).  Returns self."""
+        manifest's vehicle, also a file beside the manifest).  Returns self."""
         t0 = time.perf_counter()
         ds = _as_dataset(dataset)
-        veh = _resolve_vehicle(vehicle, ds)
+        veh = resolve_vehicle(vehicle, ds)
         check_runs(ds.runs, veh, parse_allow(self.allow, "allow"))  # units, sampling, PWM range
         if self.effects:
             veh = veh.with_effects(list(self.effects))
         self.initial_vehicle_ = veh
+        if not 0 < float(self.margin) < 1:
+            raise CalibrationError(f"margin {self.margin!r}: expected a fraction between 0 and 1 (0.5 = +-50 %)")
+        if self.ga_channels not in ("own", "all"):
+            raise CalibrationError(f"ga_channels {self.ga_channels!r}: expected 'own' or 'all'")
+        horizons = self._horizons()
+        base = veh.parameters()
         train = [r for r in ds.runs if r.split == "train"]
         present = [d for d in DOF_PARAMETERS if any(r.dof == d for r in train)]
         if self.dofs is None:
-            dofs = present
-            if not dofs:
-                raise CalibrationError(f"{ds.path}: no training run is marked with a dof "
-                                       f"({', '.join(DOF_PARAMETERS)}); nothing to calibrate")
+            dofs, ga_dofs = list(DOF_PARAMETERS), present
         else:
             dofs = parse_dofs(self.dofs)
             missing = [d for d in dofs if d not in present]
-            if missing:
+            if missing and not any(r.dof in (None, "mixed") for r in train):
                 raise CalibrationError(f"{ds.path}: no training runs for dof(s) {missing} "
                                        f"(training runs exist for: {present or 'none'})")
-        user_weights = check_weights(self.signal_weights) if self.signal_weights is not None else None
-        runs = [r for d in dofs for r in train if r.dof == d]
-        batch = prepare_runs(runs, initial_velocity=self.initial_velocity)
-        base = veh.parameters()
-        problems = {}
-        for d in dofs:
-            idx = np.array([i for i, r in enumerate(runs) if r.dof == d])
-            measured = [batch.measured[i] for i in idx]
-            scales = signal_scales(measured, self.noise)
-            w = np.array([runs[i].weight for i in idx], float)
-            if self.low_speed_exponent:
-                amp = np.array([_group_amplitude(m, scales) for m in measured])
-                w = w * (amp / np.median(amp)) ** (-float(self.low_speed_exponent))
-            names = DOF_PARAMETERS[d]
-            b = parameter_bounds(names, base, margin=self.margin, bounds=self.bounds)
-            sw = user_weights if user_weights is not None else default_channel_weights(d)
-            used = [g for g in scales if np.any(component_weights(g, sw) > 0)
-                    and any(np.any(channel_mask(m).get(g, np.zeros(3, bool)) & (component_weights(g, sw) > 0))
-                            for m in measured)]
-            if not used:
-                raise CalibrationError(
-                    f"dof {d}: its training runs log none of the signals the fitness uses "
-                    f"({[k for k, v in sw.items() if v > 0]}); logged: "
-                    f"{sorted({g for m in measured for g in channel_mask(m)})}; set signal_weights")
-            problems[d] = DofProblem(d, names, b[:, 0], b[:, 1], np.array([base[k] for k in names]), idx, w,
-                                     scales, sw)
-        evaluator = BatchEvaluator(veh, batch, problems, self.batch_rows)
-        settings = self._settings()
-        problem_key = fingerprint({
-            "vehicle": veh.to_dict(), "runs": [(r.name, r.dof, r.weight, float(np.nansum(r.data.to_numpy())))
-                                               for r in runs],
-            "scales": {d: p.scales for d, p in problems.items()}, "bounds": {d: p.lower.tolist() + p.upper.tolist()
-                                                                             for d, p in problems.items()},
-            "weights": {d: p.run_weights.tolist() for d, p in problems.items()},
-            "signal_weights": self.signal_weights, "initial_velocity": self.initial_velocity})
-        hook = self._hook(evaluator)
-        try:
-            ga = run_ga(problems, evaluator, hook, settings, checkpoint=self.checkpoint, resume=self.resume,
-                        progress=self.progress, problem_key=problem_key)
-            t_ga = time.perf_counter()
-            ga_values = {}
-            for d in dofs:
-                ga_values.update(dict(zip(problems[d].names, map(float, problems[d].decode(ga["best"][d])))))
-            params, unc, ident, refine_info, eff_sigma = self._refine(hook, evaluator, dofs, ga_values)
-        finally:
-            hook.close()
+            ga_dofs = [d for d in dofs if d in present]
+        runs = [r for r in train if r.dof in dofs or r.dof in (None, "mixed")]
+        if not runs:
+            raise CalibrationError(f"{ds.path}: no training runs (split: train) to calibrate with")
+        if self.resume is not None and not Path(self.resume).is_file() \
+                and not joint_checkpoint_path(self.resume).is_file():
+            raise CalibrationError(f"checkpoint {self.resume} does not exist")
+        self.lag_ = self._lag(runs)
+        bounds = check_bounds(self.bounds, base)
+        fixed = expand_names(self.fix, list(base), "fix")
+        extra = expand_names(self.free, list(base), "free")
+        both = sorted(set(fixed) & set(extra))
+        if both:
+            raise CalibrationError(f"parameter(s) {both} are both freed and fixed")
+
+        fitted = {k for d in dofs for k in DOF_PARAMETERS[d]} | set(extra)
+        idle = sorted(k for k in bounds if k not in fitted or k in fixed)
+        if idle:
+            raise CalibrationError(f"bounds given for {idle}, which no stage fits; free them (free=..., --free) "
+                                   "or drop their bounds")
+
+        def bounds_of(k):  # explicit, else the default family bounds around the vehicle's value
+            return bounds[k] if k in bounds else default_bounds(k, float(base[k]), float(self.margin))
+
+        # ---------------------------------------------------------------- GA stage
+        ga_dofs = [d for d in ga_dofs if any(k not in fixed for k in DOF_PARAMETERS[d])]
+        ga = {"best": {}, "logbooks": {}, "evaluations": 0, "generations_run": 0, "wall_s": 0.0}
+        ga_values, problems = {}, {}
+        self._ga_run_weights = {}
+        if not self.refine and not ga_dofs:
+            raise CalibrationError(f"{ds.path}: nothing to calibrate: no training run is marked with a DOF "
+                                   f"({', '.join(DOF_PARAMETERS)}) for the GA, and refine=False (--no-refine) skips "
+                                   "the joint fit that calibrates mixed runs")
+        if ga_dofs:
+            ga, ga_values, problems = self._run_ga(veh, train, ga_dofs, fixed, bounds_of, base)
+        t_ga = time.perf_counter()
+        # ---------------------------------------------------------------- joint stage
+        fit_res, screen = None, {"relative_sigma": {}, "not_excited": [], "threshold": None}
+        params = dict(ga_values)
+        meas = self._meas(runs, self.signal_weights)
+        if self.refine:
+            start, joint_bounds = effective_inertia_start(params, base, extra, fixed, bounds_of, bounds)
+            params.update(start)
+            start_veh = veh.with_parameters(params) if params else veh
+            fit_res, screen = self._run_joint(ds, start_veh, runs, meas, dofs, ga_dofs, fixed, extra, joint_bounds,
+                                              horizons)
         t_ref = time.perf_counter()
+        unc: dict = {k: None for k in params}
+        if fit_res is not None:
+            params.update(fit_res.values)
+            unc.update({k: fit_res.std.get(k) for k in fit_res.values})
         self.ga_params_ = ga_values
         self.params_ = params
         self.uncertainty_ = unc
-        self.identifiability_ = ident
+        self.fit_ = fit_res
+        self.screen_ = screen
         self.logbook_ = ga["logbooks"]
         self.evaluations_ = ga["evaluations"]
         self.vehicle_ = veh.with_parameters(params, name=f"{veh.name}_calibrated")
-        self.dofs_ = dofs
+        self.dofs_ = ga_dofs
         self._train_runs = runs
-        self.report_ = self._report(ds, dofs, problems, ga, ga_values, refine_info, eff_sigma, t0, t_ga, t_ref)
+        self.identifiability_ = identifiability_report(self)
+        self.report_ = build_report(self, ds, runs, problems, ga, joint_bounds if self.refine else bounds_of, t0,
+                                    t_ga, t_ref)
         self.wall_seconds_ = self.report_["wall_seconds"]
         return self
 
-    def _refine(self, hook, evaluator, dofs, ga_values):
-        """Jacobi sweeps of per-DOF refinements (in the workers when there are any):
-        in each sweep every DOF is refined with the other DOFs' values of the previous sweep."""
-        params = dict(ga_values)
-        unc: dict = {k: None for k in params}
-        ident, refine_info, eff_sigma = {}, {}, {}
-        merge = {d: self.merge_inertia for d in dofs}
-        for sweep in range(int(self.refine_sweeps) if self.refine else 0):
-            args = [(d, dict(params), merge[d], self.estimate_initial_velocity, self.max_nfev) for d in dofs]
-            results = hook.run_tasks(evaluator, _refine_task, args)
-            for d, ref in zip(dofs, results):
-                merge[d] = "always" if ref["merged"] else "never"
-                params.update(ref["values"])
-                unc.update(ref["uncertainty"])
-                eff_sigma[d] = ref["effective_inertia_sigma"]
-                refine_info[d] = {k: ref[k] for k in ("merged", "initial_velocity", "cost", "nfev", "message",
-                                                     "residual_rms")}
-                refine_info[d]["sweeps"] = sweep + 1
-        if self.refine and self.joint and len(dofs) > 1:
-            all_measured = [evaluator.batch.measured[i] for p in evaluator.problems.values() for i in p.run_index]
-            jw = check_weights(self.joint_weights, "joint_weights") if self.joint_weights is not None else None
-            merged = {d: (refine_info[d]["merged"] if d in refine_info else None) for d in dofs}
-            jscales = signal_scales(all_measured, self.noise)
-            n_chunks = JOINT_CHUNKS
+    def _run_ga(self, veh, train, ga_dofs, fixed, bounds_of, base):
+        uw = self.signal_weights
+        runs = [r for d in ga_dofs for r in train if r.dof == d]
+        batch = prepare_runs(runs, initial_velocity=self.initial_velocity, sensors=veh.sensors)
+        meas, problems = [], {}
+        for d in ga_dofs:
+            w = _combine_weights(default_channel_weights(d) if self.ga_channels == "own" else {}, uw)
+            idx = np.array([i for i, r in enumerate(runs) if r.dof == d])
+            ms = self._meas([runs[i] for i in idx], w, run_weight=1.0)
+            meas += ms
+            if not any(used_channels(m) for m in ms):
+                raise CalibrationError(
+                    f"dof {d}: its training runs log none of the signals its GA fitness uses "
+                    f"({sorted(c for c, v in w.items() if v > 0)}); logged: "
+                    f"{sorted({c for m in ms for g in m.groups.values() for c, ok in zip(g.channels, g.logged) if ok})}"
+                    f"; set signal_weights (--weights) or ga_channels='all'")
+            rw = np.array([runs[i].weight for i in idx], float)
+            if self.low_speed_exponent:
+                amp = np.array([_amplitude(m) for m in ms])
+                rw = rw * (amp / np.median(amp)) ** (-float(self.low_speed_exponent))
+            names = tuple(k for k in DOF_PARAMETERS[d] if k not in fixed)
+            b = np.array([bounds_of(k) for k in names], float)
+            init = np.array([base[k] for k in names])
+            bad = [f"{k}: ({lo:g}, {hi:g}) do not contain the start value {v:g}"
+                   for k, (lo, hi), v in zip(names, b, init) if not lo <= v <= hi]
+            if bad:
+                raise CalibrationError("bounds for " + "; ".join(bad))
+            problems[d] = DofProblem(d, names, b[:, 0], b[:, 1], init, idx, rw, w)
+        self._ga_run_weights = {runs[i].name: float(w) for p in problems.values()
+                                for i, w in zip(p.run_index, p.run_weights)}
+        evaluator = BatchEvaluator(veh, batch, problems, meas, self.batch_rows, gyro_bias=self.gyro_bias)
+        key = fingerprint({
+            "vehicle": veh.to_dict(), "runs": [(r.name, r.dof, r.weight, float(np.nansum(r.data.to_numpy())))
+                                               for r in runs],
+            "bounds": {d: p.lower.tolist() + p.upper.tolist() for d, p in problems.items()},
+            "weights": {d: p.run_weights.tolist() for d, p in problems.items()},
+            "signal_weights": {d: p.signal_weights for d, p in problems.items()}, "noise": self.noise,
+            "gyro_bias": self.gyro_bias, "initial_velocity": self.initial_velocity, "lag": self.lag_["tau"]})
+        hook = self._hook(evaluator)
+        try:
+            ga = run_ga(problems, evaluator, hook, self._settings(), checkpoint=self.checkpoint,
+                        resume=self.resume if self.resume is not None and Path(self.resume).is_file() else None,
+                        progress=self.progress, problem_key=key)
+        finally:
+            hook.close()
+        values = {}
+        for d, p in problems.items():
+            values.update(dict(zip(p.names, map(float, p.decode(ga["best"][d])))))
+        return ga, values, problems
 
-            def evaluate(cols, base, X):
-                chunks = [c for c in np.array_split(X, min(n_chunks, len(X))) if len(c)]
-                out = hook.run_tasks(evaluator, _joint_task, [(cols, base, jscales, jw, c) for c in chunks])
-                return np.vstack(out)
+    def _run_joint(self, ds, start_veh, runs, meas, dofs, ga_dofs, fixed, extra, bounds_of, horizons):
+        params = start_veh.parameters()
+        keep = list(dict.fromkeys([k for k in joint_candidates(ga_dofs) if k not in fixed] + list(extra)))
+        mixed = any(r.dof not in ga_dofs for r in runs)
+        screen = [k for k in joint_candidates(dofs) if k not in fixed and k not in keep] if mixed else []
+        if not self.screen:
+            keep, screen = keep + screen, []
+        names = keep + screen
+        key = fingerprint({
+            "vehicle": start_veh.to_dict(), "runs": [(r.name, float(np.nansum(r.data.to_numpy()))) for r in runs],
+            "keep": keep, "screen": screen, "bounds": {k: list(bounds_of(k)) for k in names},
+            "horizons": horizons, "max_iter": self.max_iter, "gyro_bias": self.gyro_bias, "lag": self.lag_["tau"],
+            "weights": self.signal_weights, "noise": self.noise, "initial_velocity": self.initial_velocity})
+        ck_path = self.checkpoint if self.checkpoint is not None else self.resume
+        ck = None
+        if ck_path is not None or self.resume is not None:
+            ck = JointCheckpoint(None if ck_path is None else joint_checkpoint_path(ck_path), key,
+                                 resume=None if self.resume is None else joint_checkpoint_path(self.resume))
+        return run_joint(start_veh, runs, meas, params, keep=keep, screen=screen,
+                         bounds={k: bounds_of(k) for k in names}, horizons=horizons, max_iter=int(self.max_iter),
+                         gyro_bias=bool(self.gyro_bias), initial_velocity=self.initial_velocity,
+                         workers=self._workers(), checkpoint=ck, progress=self.progress)
 
-            ref = refine_joint(evaluator.vehicle, evaluator.batch, evaluator.problems, params, merged, jscales,
-                               weights=jw, max_nfev=self.max_nfev, evaluate=evaluate)
-            params.update(ref["values"])
-            unc.update(ref["uncertainty"])
-            eff_sigma.update(ref["effective_inertia_sigma"])
-            refine_info["joint"] = {k: ref[k] for k in ("cost", "nfev", "message", "residual_rms",
-                                                        "residual_autocorrelation", "variance_inflation")}
-        results = hook.run_tasks(evaluator, _ident_task, [(d, dict(params)) for d in dofs])
-        ident = dict(zip(dofs, results))
-        for d in dofs:  # what the data determine only loosely, and fits stopped by a bound
-            prob = evaluator.problems[d]
-            weak, at_bound = [], []
-            for k, lo, hi in zip(prob.names, prob.lower, prob.upper):
-                sg = unc.get(k)
-                if sg is not None and sg > WEAK_RELATIVE_SIGMA * abs(params[k]):
-                    weak.append(k)
-                if min(abs(params[k] - lo), abs(params[k] - hi)) <= 1e-6 * (hi - lo):
-                    at_bound.append(k)
-            ident[d]["weakly_determined"] = weak
-            ident[d]["at_bound"] = at_bound
-        return params, unc, ident, refine_info, eff_sigma
-
-    # ------------------------------------------------------------------ evaluation
-    def predict(self, runs) -> list[dict]:
-        """Simulated signals of ``runs`` with the fitted vehicle (:func:`simulate_dataset`)."""
+    # ------------------------------------------------------------------ results
+    def predict(self, runs) -> dict:
+        """Open-loop evaluation of ``runs`` with the fitted vehicle
+        (:func:`uvsim.calibration.report.evaluate_runs`; gyro biases of training runs
+        from the joint stage)."""
         self._check_fitted()
-        return simulate_dataset(self.vehicle_, runs, initial_velocity=self.initial_velocity)
+        runs = list(runs)
+        meas = self._meas(runs)
+        gb = self.fit_.gyro_bias if self.fit_ is not None else None
+        return evaluate_runs(self.vehicle_, runs, meas, gb, initial_velocity=self.initial_velocity)
 
     def _check_fitted(self):
         if not hasattr(self, "vehicle_"):
             raise CalibrationError("this Calibrator is not fitted yet; call fit(dataset, vehicle) first")
-
-    def _evaluate(self, vehicle, runs) -> dict:
-        """{run name: run_metrics} for runs (grouped by input kind for batching)."""
-        out = {}
-        groups: dict = {}
-        for r in runs:
-            groups.setdefault((r.input_kind, r.inputs.shape[1]), []).append(r)
-        for grp in groups.values():
-            batch = prepare_runs(grp, initial_velocity=self.initial_velocity)
-            pred = simulate_dataset(vehicle, batch)
-            for r, m, p in zip(grp, batch.measured, pred):
-                out[r.name] = (m, p)
-        return out
-
-    def _report(self, ds, dofs, problems, ga, ga_values, refine_info, eff_sigma, t0, t_ga, t_ref) -> dict:
-        fitted = self._evaluate(self.vehicle_, ds.runs)
-        initial = self._evaluate(self.initial_vehicle_, ds.runs)
-
-        def pooled(pairs, split):
-            sel = [pairs[r.name] for r in ds.runs if r.split == split]
-            return pooled_rmse(sel) if sel else {}
-
-        per_run = {}
-        for r in ds.runs:
-            m = run_metrics(*fitted[r.name])
-            m0 = run_metrics(*initial[r.name])
-            per_run[r.name] = {
-                "dof": r.dof, "split": r.split, "weight": r.weight,
-                "rmse": {k: v for k, v in m.items() if k not in ("channels", "groups")},
-                "nrmse": {c: v["nrmse"] for c, v in m["channels"].items()},
-                "fit_percent": {**{c: v["fit_percent"] for c, v in m["channels"].items()},
-                                **{g: v["fit_percent"] for g, v in m["groups"].items()}},
-                "initial_rmse": {k: v for k, v in m0.items() if k not in ("channels", "groups")},
-                "channels": m["channels"],
-            }
-        p = self.vehicle_.parameters()
-        eff = {d: p[a] + p[b] for d, (a, b) in EFFECTIVE_INERTIA.items()}
-        settings = self._settings()
-        return {
-            "vehicle": self.initial_vehicle_.name,
-            "dataset": str(ds.path),
-            "dofs": dofs,
-            "parameters": dict(self.params_),
-            "uncertainty": dict(self.uncertainty_),
-            "initial_parameters": {k: float(self.initial_vehicle_.parameters()[k]) for k in self.params_},
-            "ga_parameters": dict(ga_values),
-            "bounds": {k: [float(lo), float(hi)] for d in dofs
-                       for k, lo, hi in zip(problems[d].names, problems[d].lower, problems[d].upper)},
-            "effective_inertia": eff,
-            "effective_inertia_uncertainty": {d: eff_sigma.get(d) for d in dofs},
-            "linear_damping": {d: p[k] for d, k in LINEAR_DAMPING.items()},
-            "quadratic_damping": {d: p[k] for d, k in QUADRATIC_DAMPING.items()},
-            "validation_rmse": pooled(fitted, "validation"),
-            "training_rmse": pooled(fitted, "train"),
-            "initial_validation_rmse": pooled(initial, "validation"),
-            "initial_training_rmse": pooled(initial, "train"),
-            "per_run": per_run,
-            "identifiability": self.identifiability_,
-            "refinement": refine_info,
-            "signal_scales": {d: problems[d].scales for d in dofs},
-            "run_weights": {self._train_runs[int(i)].name: float(w) for d in dofs
-                            for i, w in zip(problems[d].run_index, problems[d].run_weights)},
-            "evaluations": int(ga["evaluations"]),
-            "generations_run": int(ga["generations_run"]),
-            "ga_seconds": float(ga["wall_s"]),
-            "refine_seconds": float(t_ref - t_ga),
-            "wall_seconds": float(time.perf_counter() - t0),
-            "settings": {**settings.__dict__, "margin": self.margin, "workers": self.workers, "dask": self.dask,
-                         "batch_rows": self.batch_rows, "low_speed_exponent": self.low_speed_exponent,
-                         "signal_weights": {d: problems[d].signal_weights for d in dofs},
-                         "noise": dict(self.noise or {}),
-                         "refine": self.refine, "merge_inertia": self.merge_inertia,
-                         "refine_sweeps": self.refine_sweeps, "max_nfev": self.max_nfev, "joint": self.joint,
-                         "initial_velocity": self.initial_velocity,
-                         "estimate_initial_velocity": self.estimate_initial_velocity},
-            "logbook": {d: [dict(rec) for rec in lb] for d, lb in ga["logbooks"].items()},
-        }
-
-
-def _vehicle_for(evaluator, dof, params):
-    names = evaluator.problems[dof].names
-    return evaluator.vehicle.with_parameters({k: v for k, v in params.items() if k not in names})
-
-
-def _refine_task(evaluator, dof, params, merge, estimate_iv, max_nfev):
-    """One DOF's refinement (runs in a worker): the other DOFs at ``params``."""
-    prob = evaluator.problems[dof]
-    veh_d = _vehicle_for(evaluator, dof, params)
-    start = {k: params[k] for k in prob.names}
-    a = identifiability(veh_d, evaluator.batch, prob, start) if merge == "auto" else None
-    return refine_dof(veh_d, evaluator.batch, prob, start, merge_inertia=merge,
-                      estimate_initial_velocity=estimate_iv, max_nfev=max_nfev, ident=a)
-
-
-def _ident_task(evaluator, dof, params):
-    prob = evaluator.problems[dof]
-    return identifiability(_vehicle_for(evaluator, dof, params), evaluator.batch, prob,
-                           {k: params[k] for k in prob.names})
-
-
-def _joint_task(evaluator, cols, base, scales, weights, X):
-    return joint_residuals(evaluator.vehicle, evaluator.batch, evaluator.problems, cols, base, scales, weights, X)

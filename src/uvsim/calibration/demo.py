@@ -3,7 +3,7 @@
 ``run(out_dir, dataset)`` calibrates the six DOFs of the shipped synthetic tank
 dataset from ``bluerov2_heavy_initial`` (seed 000 Table 2) with a *reduced* GA
 (:data:`DEMO_SETTINGS`, so that ``make demo`` stays well under two minutes) plus
-the least-squares refinement, and prints seed 000 Table 5's columns (initial,
+the joint prediction-error fit, and prints seed 000 Table 5's columns (initial,
 fitted, difference %) next to the truth that generated the data.
 ``examples/paper_workflow.py`` runs the same with the paper's full GA setting.
 """
@@ -15,7 +15,7 @@ from pathlib import Path
 from uvsim.calibration.params import DOF_PARAMETERS, EFFECTIVE_INERTIA
 
 #: Reduced GA for the demo (paper: population 60, 30 generations).
-DEMO_SETTINGS = dict(population=20, generations=8, seed=0, workers=2, max_nfev=15)
+DEMO_SETTINGS = dict(population=20, generations=8, seed=0, workers=2, max_iter=15)
 
 
 def table5_rows(cal, truth: dict | None = None) -> list[dict]:
@@ -81,13 +81,13 @@ def run(out_dir, dataset, settings: dict | None = None) -> None:
 
     s = {**DEMO_SETTINGS, **(settings or {})}
     out = Path(out_dir)
-    print(f"calibration (seed 000 GA + least squares) of {len(dataset.runs)} runs from bluerov2_heavy_initial "
+    print(f"calibration (seed 000 GA + joint fit) of {len(dataset.runs)} runs from bluerov2_heavy_initial "
           f"(Table 2): REDUCED GA for the demo, population {s['population']} x {s['generations']} generations "
           f"(the paper: 60 x 30; run examples/paper_workflow.py for that), {s.get('workers', 1)} workers ...")
     cal = Calibrator(**s).fit(dataset, "bluerov2_heavy_initial")
     rep = cal.report_
     truth = (dataset.meta.get("truth") or {}).get("parameters")
-    print(f"{rep['evaluations']} GA evaluations in {rep['ga_seconds']:.1f} s, refinement {rep['refine_seconds']:.1f} s")
+    print(f"{rep['evaluations']} GA evaluations in {rep['ga_seconds']:.1f} s, joint fit {rep['refine_seconds']:.1f} s")
     print(format_table5(cal, truth))
     print(f"RMSE on the validation runs: initial {jsonable(rep['initial_validation_rmse'])}")
     print(f"                             fitted  {jsonable(rep['validation_rmse'])}")

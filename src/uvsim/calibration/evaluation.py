@@ -1,7 +1,7 @@
 """Batched fitness evaluation of GA individuals and DEAP map hooks.
 
 :class:`DofProblem` describes one DOF's fit (its training runs, parameter
-names and bounds, signal scales and weights).  :class:`BatchEvaluator` turns a
+names and bounds, run weights).  :class:`BatchEvaluator` turns a
 list of individuals - possibly of several DOFs at once - into one
 :func:`uvsim.simulate_batch` call per *block* of rows (one row = one individual x
 one run of its DOF) and returns each individual's fitness.
@@ -27,8 +27,8 @@ from typing import Sequence
 import numpy as np
 
 from uvsim.calibration.batching import RunBatch, simulate_rows
+from uvsim.calibration.fitness import abs_error_fitness
 from uvsim.errors import CalibrationError
-from uvsim.metrics import signals_from_states, weighted_abs_error
 
 #: Default largest number of simulated trajectories per batched call.  Batched
 #: RK4 reaches ~90 % of its peak vehicle-steps/s from ~500 rows on (core_api.md).
@@ -47,8 +47,8 @@ class DofProblem:
     initial : (p,) initial values.
     run_index : (R,) indices of this DOF's training runs in the evaluator's batch.
     run_weights : (R,) fitness weight of each run (manifest weight x low-speed factor).
-    scales : signal group -> normalization scale.
-    signal_weights : signal group -> weight.
+    signal_weights : channel -> weight of the DOF's fitness (also in its runs' measurement
+        models).
     """
 
     dof: str
@@ -58,7 +58,6 @@ class DofProblem:
     initial: np.ndarray
     run_index: np.ndarray
     run_weights: np.ndarray
-    scales: dict
     signal_weights: dict
 
     def decode(self, genes: np.ndarray) -> np.ndarray:
@@ -71,22 +70,30 @@ class DofProblem:
 
 class BatchEvaluator:
     """Fitness of individuals (seed 000 sec. 4.4 ii): for each of the DOF's runs,
-    the mean absolute normalized difference between measured and simulated
-    signals (:func:`uvsim.metrics.weighted_abs_error`), times the run's weight,
-    summed over runs.  Lower is better; a diverged simulation scores ``inf``.
+    the noise-normalized mean absolute error of its logged channels through their
+    measurement models (:func:`uvsim.calibration.fitness.abs_error_fitness`), times
+    the run's weight, summed over runs.  Lower is better; a diverged simulation scores
+    ``inf``.
 
     Parameters
     ----------
     vehicle : Vehicle whose non-fitted parameters are used.
     batch : all training runs of all DOFs (:class:`RunBatch`).
     problems : dof -> :class:`DofProblem`.
+    meas : per run of ``batch``, its :class:`uvsim.measurements.RunMeasurements` (with
+        the weights of its DOF's fitness).
     batch_rows : largest rows per simulated block.
+    gyro_bias : remove each gyro channel's median residual (a sensor offset).
     """
 
-    def __init__(self, vehicle, batch: RunBatch, problems: dict, batch_rows: int = DEFAULT_BATCH_ROWS):
+    def __init__(self, vehicle, batch: RunBatch, problems: dict, meas: list, batch_rows: int = DEFAULT_BATCH_ROWS,
+                 gyro_bias: bool = True):
         self.vehicle = vehicle
         self.batch = batch
         self.problems = problems
+        self.meas = list(meas)
+        self.gyro_bias = bool(gyro_bias)
+        self.acceleration = any(m.needs_acceleration for m in self.meas)
         self.batch_rows = int(batch_rows)
         if self.batch_rows < 1:
             raise CalibrationError(f"batch_rows must be >= 1, got {batch_rows}")
@@ -131,15 +138,17 @@ class BatchEvaluator:
         run_idx = np.asarray(run_idx, int)
         owner = np.asarray(owner, int)
         overrides = {k: np.asarray(v, float) for k, v in values.items()}
-        y = simulate_rows(self.vehicle, self.batch, run_idx, overrides)
+        out = simulate_rows(self.vehicle, self.batch, run_idx, overrides, acceleration=self.acceleration)
+        y, acc = out if self.acceleration else (out, None)
         fit = np.zeros(len(block))
         for r in np.unique(run_idx):
             rows = np.flatnonzero(run_idx == r)
             n = self.batch.lengths[r]
-            pred = signals_from_states(y[rows, :n])
+            with np.errstate(all="ignore"):
+                pred = self.meas[r].predict(y[rows, :n], None if acc is None else acc[rows, :n])
+                e = abs_error_fitness(self.meas[r], pred, gyro_bias=self.gyro_bias)
             prob = self.problems[block[owner[rows[0]]][0]]
             w = float(prob.run_weights[np.flatnonzero(prob.run_index == r)[0]])
-            e = weighted_abs_error(self.batch.measured[r], pred, prob.scales, prob.signal_weights)
             np.add.at(fit, owner[rows], w * e)
         return [(float(f),) for f in fit]
 

@@ -34,22 +34,37 @@ LINEAR_DAMPING = {"surge": "X_u", "sway": "Y_v", "heave": "Z_w", "roll": "K_p", 
 QUADRATIC_DAMPING = {"surge": "X_uu", "sway": "Y_vv", "heave": "Z_ww", "roll": "K_pp", "pitch": "M_qq",
                      "yaw": "N_rr"}
 DEFAULT_MARGIN = 0.5
-#: Channels each DOF's fitness looks at by default (seed 000 sec. 4.4: each DOF is
+#: Channels each DOF's GA fitness looks at by default (seed 000 sec. 4.4: each DOF is
 #: optimized on its own motion; positions for the linear DOFs, angles for the
-#: rotational ones; plus the matching velocity / rate where logged).  Other channels
-#: of the same runs depend on parameters of other DOFs (e.g. the depth drift of a
-#: positively buoyant vehicle during a surge run), which would bias the fit.
+#: rotational ones; plus the matching depth, velocity / rate and accelerometer axis
+#: where logged).  Other channels of the same runs depend on parameters of other DOFs
+#: (e.g. the depth drift of a positively buoyant vehicle during a surge run), which
+#: would bias the per-DOF fit; the joint stage uses every channel.
 DOF_CHANNELS = {
-    "surge": ("x", "u"), "sway": ("y", "v"), "heave": ("z", "w"),
+    "surge": ("x", "u", "acc_x"), "sway": ("y", "v", "acc_y"), "heave": ("z", "depth", "w", "acc_z"),
     "roll": ("roll", "p"), "pitch": ("pitch", "q"), "yaw": ("yaw", "r"),
 }
+#: Parameters whose sign is fixed (paper sign): damping <= 0; inertia and added mass > 0.
+SIGNED_NEGATIVE = tuple(LINEAR_DAMPING.values()) + tuple(QUADRATIC_DAMPING.values())
 
 
 def default_channel_weights(dof: str) -> dict:
-    """Weights selecting :data:`DOF_CHANNELS` [dof] (1) and nothing else (0)."""
-    from uvsim.metrics import GROUPS
+    """Weights selecting :data:`DOF_CHANNELS` [dof] (1) and nothing else (0), by channel
+    (:data:`uvsim.measurements.CHANNEL_GROUP`)."""
+    from uvsim.measurements import CHANNEL_GROUP
 
-    return {c: (1.0 if c in DOF_CHANNELS[dof] else 0.0) for cs in GROUPS.values() for c in cs}
+    return {c: (1.0 if c in DOF_CHANNELS[dof] else 0.0) for c in CHANNEL_GROUP}
+
+
+def check_sign(name: str, lo: float, hi: float) -> None:
+    """Raise :class:`CalibrationError` for bounds that allow a wrong-signed damping
+    coefficient (paper sign: <= 0) or a non-positive inertia / added mass."""
+    if name in SIGNED_NEGATIVE and hi > 0:
+        raise CalibrationError(f"bounds for {name}: ({lo:g}, {hi:g}) allow a positive damping coefficient "
+                               "(paper sign: damping is <= 0)")
+    if lo <= 0 and (name in EFFECTIVE_INERTIA["roll"] + EFFECTIVE_INERTIA["pitch"] + EFFECTIVE_INERTIA["yaw"]
+                    or name in ("m", "X_udot", "Y_vdot", "Z_wdot")):
+        raise CalibrationError(f"bounds for {name}: ({lo:g}, {hi:g}) allow a non-positive inertia/added mass")
 
 
 def parse_dofs(dofs) -> list[str]:
@@ -95,11 +110,6 @@ def parameter_bounds(names: Sequence[str], initial: Mapping[str, float], *, marg
             raise CalibrationError(f"bounds for {k}: need finite low < high, got ({lo}, {hi})")
         if not lo <= v <= hi:
             raise CalibrationError(f"bounds for {k}: ({lo}, {hi}) do not contain the initial value {v}")
-        if k in LINEAR_DAMPING.values() or k in QUADRATIC_DAMPING.values():
-            if hi > 0:
-                raise CalibrationError(f"bounds for {k}: ({lo}, {hi}) allow a positive damping coefficient "
-                                       "(paper sign: damping is <= 0)")
-        elif lo <= 0 and (k.startswith("I_") or k.endswith("dot")):
-            raise CalibrationError(f"bounds for {k}: ({lo}, {hi}) allow a non-positive inertia/added mass")
+        check_sign(k, lo, hi)
         out.append((lo, hi))
     return np.array(out, float).reshape(-1, 2)

@@ -22,7 +22,8 @@ def register(sub) -> None:
                    help="(diagnose) JSON-lines file of finished scenarios; an interrupted benchmark resumes from it")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--quick", action="store_true", help="smaller problems (a smoke test, not the recorded figures)")
-    p.add_argument("--only", default=None, help="comma-separated areas (core, hydro, sam, calibration)")
+    p.add_argument("--only", default=None, help="comma-separated areas (core, hydro, sam, calibration, diagnosis; "
+                                                 "calibrate-realsensor runs only when named)")
     p.set_defaults(func=_run)
 
 
@@ -39,6 +40,8 @@ def _run(args) -> int:
         if unknown:
             raise UvsimError(f"--only: unknown area(s) {unknown}; available: {', '.join(mods)}")
         mods = {a: mods[a] for a in want}
+    else:
+        mods = {a: m for a, m in mods.items() if getattr(m, "DEFAULT", True)}
     results: dict = {}
     desc: dict = {}
     for area, mod in mods.items():

@@ -1,50 +1,73 @@
-"""``uvsim calibrate``: fit a vehicle's inertia, added mass and damping to a dataset.
+"""``uvsim calibrate``: fit a vehicle model to a dataset (docs/calibration.md).
 
-    uvsim calibrate --data DIR --vehicle NAME|FILE [--dof surge,...] [--seed S]
-                    [--population P --generations G] [--workers N] [--dask ADDR|local]
-                    [--checkpoint CKPT] [--resume CKPT] --out fitted.yaml --json report.json [--plots DIR]
+    uvsim calibrate --data DIR [--vehicle NAME|FILE] [--dof surge,...] [--free z_b,thruster_gain_*]
+                    [--fix NAME,...] [--bounds NAME=LO:HI,...] [--weights NAME=W,...] [--noise NAME=SIGMA,...]
+                    [--horizons 2,6] [--no-gyro-bias] [--seed S] [--population P --generations G]
+                    [--workers N] [--dask ADDR|local] [--checkpoint CKPT] [--resume CKPT] [--no-refine]
+                    --out fitted.yaml [--json report.json] [--plots DIR] [--progress]
 
-The method is seed 000's GA (Table 3 parameters, Table 4 settings) followed by a
-least-squares refinement (docs/calibration.md).
+Seed 000's GA per DOF for runs marked with one DOF, then one joint windowed
+prediction-error fit of every training run (marked and ``dof: mixed``).
 """
 from __future__ import annotations
 
 import json
+import logging
 import math
+import sys
 from pathlib import Path
 
 from uvsim.commands import parse_pairs
-from uvsim.commands.checks import (add_allow_argument, add_progress_arguments, bound_hits, calibration_problems,
-                                   check_outputs, check_runs_at_door, fail_if, say, want_progress)
+from uvsim.commands.checks import (add_allow_argument, add_progress_arguments, calibration_problems, check_outputs,
+                                   check_runs_at_door, fail_if, say, want_progress)
+from uvsim.errors import UvsimError
 
 ADDED_MASS_ROWS = ("X_udot", "Y_vdot", "Z_wdot", "K_pdot", "M_qdot", "N_rdot")
 
 
 def register(sub) -> None:
-    p = sub.add_parser("calibrate", help="fit inertia, added mass and damping to logged runs (seed 000 GA + "
-                                         "least-squares refinement)")
+    p = sub.add_parser("calibrate", help="fit a vehicle model to logged runs (seed 000 GA per DOF + joint "
+                                         "prediction-error fit of all runs)")
     p.add_argument("--data", required=True, help="dataset directory (manifest.yaml + runs)")
-    p.add_argument("--vehicle", default=None, help="starting vehicle: built-in name or YAML file "
-                                                    "(default: the manifest's vehicle)")
-    p.add_argument("--dof", default=None, help="comma-separated DOFs to fit (default: all with training runs)")
+    p.add_argument("--vehicle", default=None, help="starting vehicle: built-in name, YAML file, or NAME with "
+                                                    "NAME.yaml beside the manifest (default: the manifest's vehicle)")
+    p.add_argument("--dof", default=None, help="comma-separated DOFs to fit (default: all)")
+    p.add_argument("--free", default=None, metavar="NAME,...",
+                   help="also fit these parameters or families in the joint stage, e.g. z_b,thruster_gain_*")
+    p.add_argument("--fix", default=None, metavar="NAME,...", help="never fit these parameters or families")
+    p.add_argument("--bounds", default=None, metavar="NAME=LO:HI,...",
+                   help="search bounds (every stage), e.g. z_b=-0.05:0,thruster_gain_3=0.2:1.2")
+    p.add_argument("--weights", default=None, metavar="NAME=W,...",
+                   help="signal weights by group (position, depth, attitude, velocity, rates, acceleration) or "
+                        "channel (x..z, depth, roll, pitch, yaw, u..w, p..r, acc_x..acc_z), every stage; "
+                        "0 leaves a signal out")
+    p.add_argument("--noise", default=None, metavar="NAME=SIGMA,...",
+                   help="1-sigma noise level by group or channel (default: estimated from each run)")
+    p.add_argument("--horizons", default=None, metavar="H1,H2,...",
+                   help="window lengths (s) of the joint fit's continuation, 'whole' for whole runs (default 2)")
+    p.add_argument("--max-iter", type=int, default=20, help="Levenberg-Marquardt iterations per horizon")
+    p.add_argument("--no-gyro-bias", action="store_true", help="do not fit a gyro bias per run")
+    p.add_argument("--attitude-lag", default="auto", metavar="auto|SECONDS",
+                   help="time constant of the attitude filter's lag on logged Euler angles: 'auto' (default, "
+                        "estimated from the gyro), a number, or 0 for none")
+    p.add_argument("--no-screen", action="store_true",
+                   help="free every DOF's parameters for mixed runs, also those the data do not excite")
+    p.add_argument("--ga-channels", choices=("own", "all"), default="own",
+                   help="channels of each DOF's GA fitness: its own (seed 000, default) or all")
     p.add_argument("--seed", type=int, default=0, help="random seed (same seed -> identical result)")
     p.add_argument("--population", type=int, default=60, help="GA population per DOF (seed 000: 60)")
     p.add_argument("--generations", type=int, default=30, help="GA generations (seed 000: 30)")
-    p.add_argument("--margin", type=float, default=0.5, help="search range around initial values (0.5 = +-50%%)")
-    p.add_argument("--workers", type=int, default=1, help="local worker processes for the GA evaluations")
+    p.add_argument("--margin", type=float, default=0.5,
+                   help="search range of inertias, added masses and damping around their values (0.5 = +-50%%)")
+    p.add_argument("--workers", type=int, default=1, help="local worker processes (GA and joint fit)")
     p.add_argument("--dask", default=None, metavar="ADDRESS",
-                   help="dask.distributed scheduler address, or 'local' (needs uvsim[dask])")
-    p.add_argument("--checkpoint", default=None, help="checkpoint file written after every generation "
-                                                      "(default: <out>.ckpt)")
+                   help="dask.distributed scheduler address, or 'local' (GA evaluations; needs uvsim[dask])")
+    p.add_argument("--checkpoint", default=None, help="checkpoint file written after every GA generation and "
+                                                      "joint iteration (default: <out>.ckpt)")
     p.add_argument("--resume", default=None, metavar="CKPT", help="continue from a checkpoint")
-    p.add_argument("--no-refine", action="store_true", help="skip the least-squares refinement")
-    p.add_argument("--estimate-initial-velocity", action="store_true",
-                   help="fit each run's unknown initial velocity (DOF axis) in the refinement")
-    p.add_argument("--weights", default=None, metavar="NAME=W,...",
-                   help="signal weights by group (position, attitude, velocity, rates) or channel "
-                        "(x..z, roll, pitch, yaw, u..w, p..r); default: each DOF's own channels")
+    p.add_argument("--no-refine", action="store_true", help="skip the joint fit (GA only)")
     p.add_argument("--low-speed-exponent", type=float, default=0.0,
-                   help="extra run weight (amplitude/median)^-E favouring slow runs (default 0: manifest weights)")
+                   help="extra GA run weight (amplitude/median)^-E favouring slow runs (default 0: manifest weights)")
     p.add_argument("--out", required=True, help="fitted vehicle YAML (complete, loadable by every command)")
     p.add_argument("--json", default=None, help="report JSON")
     p.add_argument("--plots", default=None, help="directory for plots (measured vs simulated, error boxplots, "
@@ -52,6 +75,49 @@ def register(sub) -> None:
     add_allow_argument(p)
     add_progress_arguments(p)
     p.set_defaults(func=_run)
+
+
+def parse_bounds(text: str | None) -> dict | None:
+    """``"z_b=-0.05:0,X_u=-1:-0.01"`` -> ``{"z_b": (-0.05, 0.0), ...}``."""
+    if not text:
+        return None
+    out = {}
+    for item in text.split(","):
+        name, sep, rng = item.partition("=")
+        lo, colon, hi = rng.partition(":")
+        if not sep or not colon or not name.strip():
+            raise UvsimError(f"--bounds: expected NAME=LOW:HIGH pairs separated by commas, got {item!r}")
+        try:
+            out[name.strip()] = (float(lo), float(hi))
+        except ValueError:
+            raise UvsimError(f"--bounds: {name.strip()}: LOW and HIGH must be numbers, got {rng!r}") from None
+    return out
+
+
+def parse_horizons(text: str | None):
+    """``"2,6"`` -> ``(2.0, 6.0)``; ``whole`` -> None (whole runs)."""
+    if not text:
+        return (2.0,)
+    out = []
+    for item in text.split(","):
+        item = item.strip()
+        if item in ("whole", "none", "run"):
+            out.append(None)
+            continue
+        try:
+            out.append(float(item))
+        except ValueError:
+            raise UvsimError(f"--horizons: expected window lengths in s or 'whole', got {item!r}") from None
+    return tuple(out)
+
+
+def _lag_option(text: str):
+    if text == "auto":
+        return "auto"
+    try:
+        return float(text)
+    except ValueError:
+        raise UvsimError(f"--attitude-lag: expected 'auto' or a time constant in s, got {text!r}") from None
 
 
 def _fmt(v):
@@ -76,33 +142,47 @@ def jsonable(obj):
     return obj
 
 
-def save_fitted_vehicle(cal, path) -> Path:
-    """Write ``cal.vehicle_`` with each fitted value's previous value and
-    uncertainty beside it (added-mass rows annotated too)."""
-    from uvsim.vehicle import save_vehicle
-
-    rep = cal.report_
+def _notes(cal) -> dict:
+    """Per fitted parameter: its value, 1-sigma or why there is none, previous value."""
     from uvsim.calibration.params import EFFECTIVE_INERTIA
 
+    rep = cal.report_
     pair_of = {k: (d, pr) for d, pr in EFFECTIVE_INERTIA.items() for k in pr}
     notes = {}
     for k, v in cal.params_.items():
         sig = cal.uncertainty_.get(k)
         if sig is not None:
             s = f"+- {_fmt(sig)}"
-        elif k not in pair_of or rep["effective_inertia_uncertainty"].get(pair_of[k][0]) is None:
-            s = "no uncertainty (no refinement)" if not rep["settings"]["refine"] else "uncertainty not determined"
-        else:
+        elif k in pair_of and k not in rep["free_parameters"]:
             d, (a, b) = pair_of[k]
             s = (f"only {a} + {b} = {rep['effective_inertia'][d]:.6g} +- "
                  f"{_fmt(rep['effective_inertia_uncertainty'].get(d))} is identifiable")
+        else:
+            s = "(GA value, not refined)"
         notes[k] = f"fitted {v:.6g} {s}; previous {_fmt(rep['initial_parameters'][k])}"
+    return notes
+
+
+def save_fitted_vehicle(cal, path) -> Path:
+    """Write ``cal.vehicle_`` with each fitted value's previous value and uncertainty
+    beside it (added-mass rows annotated too; parameters without a line of their own,
+    such as z_b or thruster gains, in the header)."""
+    from uvsim.vehicle import save_vehicle
+
+    rep = cal.report_
+    notes = _notes(cal)
     header = (f"Calibrated by `uvsim calibrate` from {rep['vehicle']} on {rep['dataset']}\n"
-              f"DOFs {', '.join(rep['dofs'])}; seed 000 GA (population {rep['settings']['population']}, "
-              f"{rep['settings']['generations']} generations, seed {rep['settings']['seed']}) + least squares\n"
-              f"validation RMSE {jsonable({k: round(v, 6) for k, v in rep['validation_rmse'].items()})}; "
-              "uncertainties are 1-sigma (Gauss-Newton, AR(1)-inflated)")
+              + (f"GA (seed 000) for {', '.join(rep['dofs'])}: population {rep['settings']['population']}, "
+                 f"{rep['settings']['generations']} generations, seed {rep['settings']['seed']}\n" if rep["dofs"] else "")
+              + (f"joint prediction-error fit of {len(rep['training_runs'])} runs, windows "
+                 f"{rep['settings']['horizons']} s\n" if rep["free_parameters"] else "")
+              + f"validation RMSE {jsonable({k: round(v, 6) for k, v in rep['validation_rmse'].items()})}; "
+                "uncertainties are 1-sigma (cluster-robust)")
     path = save_vehicle(cal.vehicle_, path, header=header, annotations=notes)
+    keys = {line.strip().split(":", 1)[0] for line in Path(path).read_text().splitlines() if ":" in line}
+    other = [f"{k}: {n}" for k, n in notes.items() if k not in keys and k not in ADDED_MASS_ROWS]
+    if other:  # no line of their own (z_b in r_b, thruster gains in the units): in the header
+        path = save_vehicle(cal.vehicle_, path, header=header + "\n" + "\n".join(other), annotations=notes)
     # added mass is written as a 6x6 matrix: annotate its diagonal rows
     lines = Path(path).read_text().splitlines()
     out, in_am, row = [], False, 0
@@ -121,36 +201,108 @@ def save_fitted_vehicle(cal, path) -> Path:
     return Path(path)
 
 
+def _grouped_notes(notes) -> dict:
+    """``"run NAME: TEXT; details"`` notes grouped by TEXT -> [NAME, ...]."""
+    out: dict = {}
+    for n in notes:
+        head, sep, text = n.partition(": ")
+        name = head[4:] if sep and head.startswith("run ") else ""
+        out.setdefault(text.split(";")[0] if name else n, []).append(name or "-")
+    return out
+
+
+def print_summary(cal, out=None) -> None:
+    """The summary table of a fitted Calibrator (docs/calibration.md)."""
+    out = sys.stdout if out is None else out
+    rep = cal.report_
+    free = set(rep["free_parameters"])
+    ident = rep["identifiability"]
+    held = {c.split(" + ")[0] for c in ident.get("effective_inertia", [])}
+
+    def say(s=""):
+        print(s, file=out)
+
+    say(f"{'parameter':18s} {'initial':>11s} {'fitted':>11s} {'1-sigma':>10s}  flags")
+    for k, v in rep["parameters"].items():
+        flags = []
+        if k in rep["at_bounds"]:
+            flags.append("AT BOUND")
+        if k in rep["physical_limit"]:
+            flags.append("AT PHYSICAL LIMIT")
+        if k in ident.get("weakly_determined", []):
+            flags.append("weak")
+        if k in held:
+            flags.append("held at the vehicle's value (its sum with the added inertia is fitted)")
+        elif k not in free:
+            flags.append("GA only")
+        say(f"{k:18s} {rep['initial_parameters'][k]:11.5g} {v:11.5g} {_fmt(rep['uncertainty'][k]):>10s}  "
+            f"{', '.join(flags)}")
+    if ident.get("not_excited"):
+        say(f"not excited by the data (left at their values): {', '.join(ident['not_excited'])}")
+    for c in ident.get("effective_inertia", []):
+        say(f"identifiable: {c}")
+    if ident.get("not_identifiable"):
+        say("the data determine only: " + "; ".join(ident["identifiable_combinations"]))
+    for pair, r in ident.get("correlations", {}).items():
+        say(f"correlated: {pair} ({r:+.3f})")
+    if rep["gyro_bias"]:
+        say("gyro bias per run (rad/s, p q r):")
+        for name, b in rep["gyro_bias"].items():
+            say(f"  {name:28s} " + " ".join(f"{x:+.5f}" for x in b))
+    lag = rep["attitude_lag"]
+    if lag["tau"]:
+        say(f"attitude filter lag {lag['tau']:.3f} s ({lag['source']})")
+    for text, runs in _grouped_notes(rep["notes"]).items():
+        say(f"note: {text} ({len(runs)} run{'s' if len(runs) > 1 else ''}: {', '.join(runs[:3])}"
+            f"{', ...' if len(runs) > 3 else ''})")
+    say(f"training RMSE {jsonable(rep['training_rmse'])}")
+    say(f"validation RMSE {jsonable(rep['validation_rmse'])} (initial {jsonable(rep['initial_validation_rmse'])})")
+    if rep["validation_fit_percent"]:
+        say("validation Fit %: " + ", ".join(f"{c} {v:.1f}" for c, v in rep["validation_fit_percent"].items()))
+
+
 def _run(args) -> int:
     from uvsim.calibration import Calibrator
-    from uvsim.checkpoint import Checkpoint
+    from uvsim.calibration.calibrator import resolve_vehicle
     from uvsim.logs import read_dataset
     from uvsim.plausibility import parse_allow
-    from uvsim.vehicle import load_vehicle
 
     out = Path(args.out)
     ckpt = args.checkpoint or str(out.with_suffix(out.suffix + ".ckpt"))
-    weights = parse_pairs(args.weights, "--weights")
+    weights, noise = parse_pairs(args.weights, "--weights"), parse_pairs(args.noise, "--noise")
+    bounds, horizons, lag = parse_bounds(args.bounds), parse_horizons(args.horizons), _lag_option(args.attitude_lag)
     check_outputs({"--out": out, "--json": args.json, "--checkpoint": ckpt}, {"--plots": args.plots})
     if args.resume:
-        Checkpoint(args.resume, kind="ga", key="").read()  # exists and is a checkpoint, before any work
-    ds = read_dataset(args.data)
-    if args.vehicle is None and ds.vehicle is None:
-        from uvsim.errors import CalibrationError
+        from uvsim.calibration.joint import joint_checkpoint_path
 
-        raise CalibrationError(f"{ds.path}: no --vehicle given and the manifest names none")
-    veh = load_vehicle(args.vehicle if args.vehicle is not None else (ds.vehicle_file or ds.vehicle))
+        if not (Path(args.resume).is_file() or joint_checkpoint_path(args.resume).is_file()):
+            raise UvsimError(f"--resume: neither the checkpoint {args.resume} nor its joint-stage file "
+                             f"{joint_checkpoint_path(args.resume)} exists")
+    ds = read_dataset(args.data)
+    veh = resolve_vehicle(args.vehicle, ds)
     notes = check_runs_at_door("calibrate", ds.runs, veh, args.allow)
     cal = Calibrator(dofs=args.dof, population=args.population, generations=args.generations, seed=args.seed,
                      margin=args.margin, workers=args.workers, dask=args.dask, checkpoint=ckpt, resume=args.resume,
-                     refine=not args.no_refine, estimate_initial_velocity=args.estimate_initial_velocity,
-                     signal_weights=weights, low_speed_exponent=args.low_speed_exponent,
-                     progress=want_progress(args), allow=parse_allow(args.allow))
+                     refine=not args.no_refine, free=args.free, fix=args.fix, bounds=bounds,
+                     signal_weights=weights, noise=noise, horizons=horizons, max_iter=args.max_iter,
+                     gyro_bias=not args.no_gyro_bias, screen=not args.no_screen, ga_channels=args.ga_channels,
+                     attitude_lag=lag, low_speed_exponent=args.low_speed_exponent, progress=want_progress(args),
+                     allow=parse_allow(args.allow))
+    logger = logging.getLogger("uvsim")
+    handler = None
+    if not logger.handlers:  # "resuming from ..." and other notes reach the user
+        handler = logging.StreamHandler(sys.stderr)
+        handler.setFormatter(logging.Formatter("%(message)s"))
+        logger.addHandler(handler)
+        logger.setLevel(logging.INFO)
     try:
         cal.fit(ds, veh)
     except KeyboardInterrupt:
         _say_resume(ckpt)
         raise
+    finally:
+        if handler is not None:
+            logger.removeHandler(handler)
     rep = cal.report_
     rep["input_notes"] = notes
     problems = calibration_problems(rep, ds)
@@ -171,33 +323,29 @@ def _run(args) -> int:
         from uvsim.plotting.calibration import plot_calibration
 
         plot_calibration(cal, ds, args.plots)
-    hits = bound_hits(rep)
-    print(f"calibrated {', '.join(rep['dofs'])} of {rep['vehicle']}: {rep['evaluations']} GA evaluations, "
-          f"{rep['wall_seconds']:.1f} s")
-    print(f"{'parameter':10s} {'initial':>11s} {'fitted':>11s} {'1-sigma':>10s}")
-    for k, v in rep["parameters"].items():
-        flag = f"  ON {hits[k].upper()} BOUND" if k in hits else ""
-        print(f"{k:10s} {rep['initial_parameters'][k]:11.5g} {v:11.5g} {_fmt(rep['uncertainty'][k]):>10s}{flag}")
-    if hits:
-        print(f"{len(hits)} parameter(s) ended on a search bound (+-{100 * args.margin:g} % of the initial value): "
-              f"{', '.join(hits)}. The fit would have gone further; their 1-sigma assumes an interior optimum "
-              "and does not hold. Widen --margin or check the data and the starting vehicle.")
-    for d, a in rep["identifiability"].items():
-        if a["not_identifiable"]:
-            print(f"{d}: identifiable: {', '.join(a['identifiable_combinations'])}")
-    print(f"training RMSE {jsonable(rep['training_rmse'])}; validation RMSE {jsonable(rep['validation_rmse'])}")
+    stages = "; ".join(f"{s['horizon_s'] or 'whole-run'} s windows: {s['iterations']} iterations, {s['message']}"
+                       for s in rep["refinement"].get("stages", []))
+    print(f"calibrated {rep['vehicle']} on {len(rep['training_runs'])} training runs: "
+          + (f"GA ({', '.join(rep['dofs'])}) {rep['evaluations']} evaluations in {rep['ga_seconds']:.1f} s; "
+             if rep["dofs"] else "no GA (no run marked with a DOF); ")
+          + (f"joint fit of {len(rep['free_parameters'])} parameters in {rep['refine_seconds']:.1f} s ({stages})"
+             if rep["free_parameters"] else "no joint fit"))
+    print_summary(cal)
     print(f"-> {out}" + (f", {args.json}" if args.json else "") + (f", plots in {args.plots}" if args.plots else ""))
     return 0
 
 
 def _say_resume(ckpt) -> None:
-    """After an interrupt: where the GA state is and how to continue."""
+    """After an interrupt: what the checkpoints hold and how to continue."""
+    from uvsim.calibration.joint import joint_checkpoint_path
     from uvsim.checkpoint import Checkpoint
-    from uvsim.errors import UvsimError
 
     try:
         env = Checkpoint(ckpt, kind="ga", key="").read()
+        held = f"{ckpt} holds the GA after {env['progress']}"
     except UvsimError:
-        say("calibrate", "interrupted before the first GA generation was checkpointed; start again")
-        return
-    say("calibrate", f"interrupted; {ckpt} holds the GA after {env['progress']}; continue with --resume {ckpt}")
+        held = "no GA generation was checkpointed yet"
+    joint = joint_checkpoint_path(ckpt)
+    if Path(joint).is_file():
+        held += f" and {joint} the joint fit's progress"
+    say("calibrate", f"interrupted; {held}; continue with --resume {ckpt}")

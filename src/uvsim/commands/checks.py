@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import math
 import sys
+
+import numpy as np
 from typing import Iterable, Mapping
 
 from uvsim.errors import ResultCheckError
@@ -69,17 +71,30 @@ def check_runs_at_door(command: str, runs, vehicle, allow_text: str | None) -> l
 
 
 def _spread(runs) -> dict[str, float]:
-    """{group_unit key: spread of the measured signal} over ``runs`` (empty if none)."""
-    from uvsim.metrics import GROUP_UNITS, signal_scales, signals_from_run
-    from uvsim.errors import UvsimError
+    """{group_unit key: spread of the measured signal} over ``runs``: the RMS, over runs and
+    logged channels, of each channel's deviation from its run mean (angles unwrapped)."""
+    from uvsim.kinematics import quat_to_euler, unwrap_angles
+    from uvsim.measurements import GROUPS
+    from uvsim.metrics import UNIT_SUFFIX
 
-    if not runs:
-        return {}
-    try:
-        sc = signal_scales([signals_from_run(r) for r in runs])
-    except UvsimError:  # a group without spread: no exploding check for it
-        return {}
-    return {f"{g}_{GROUP_UNITS[g]}": float(v) for g, v in sc.items() if g in GROUP_UNITS}
+    ss: dict[str, float] = {}
+    nn: dict[str, int] = {}
+    for run in runs:
+        for g in run.signals():
+            if g == "attitude":
+                a = run.euler if not run.has_quaternion else quat_to_euler(run.quaternion)
+                a = unwrap_angles(a)
+            else:
+                cols = [c for c in GROUPS[g] if c in run.data.columns]
+                a = run.data[cols].to_numpy(float)
+            a = a[:, np.isfinite(a).any(axis=0)]
+            if a.size == 0:
+                continue
+            dev = a - np.nanmean(a, axis=0)
+            ok = np.isfinite(dev)
+            ss[g] = ss.get(g, 0.0) + float(np.sum(dev[ok] ** 2))
+            nn[g] = nn.get(g, 0) + int(ok.sum())
+    return {f"{g}_{UNIT_SUFFIX[g]}": float(np.sqrt(ss[g] / nn[g])) for g in ss if nn[g] and g in UNIT_SUFFIX}
 
 
 def rmse_problems(rmse: Mapping[str, float], runs, what: str) -> list[str]:

@@ -94,7 +94,8 @@ def build_problems(vehicle, runs, meas, space: ParameterSpace, horizon, z_ref, *
 
 def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence = DEFAULT_HORIZONS,
         max_iter: int = 20, gyro_bias: bool = True, noise=None, weights=None, initial_velocity: str = "zero",
-        z0=None, progress=None, workers: int = 1, ftol: float = 1e-6) -> FitResult:
+        z0=None, progress=None, workers: int = 1, ftol: float = 1e-6, checkpoint=None,
+        on_iteration=None) -> FitResult:
     """Fit ``space``'s free parameters of ``vehicle`` to ``runs`` (module docstring).
 
     Parameters
@@ -110,6 +111,14 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
     progress : callable(message) for stage / iteration reports.
     workers : processes for the simulations (results do not depend on it).
     ftol : a stage stops when an iteration lowers the cost by less than this fraction.
+    checkpoint : optional store of the fit's progress, any object with ``load()``
+        (the saved state or None) and ``save(state, progress="...")``: saved after every
+        accepted Levenberg-Marquardt step and every finished stage; a fit given a
+        checkpoint with a saved state continues from it (finished stages are not
+        redone) and gives the result of an uninterrupted fit.  The caller makes sure
+        the state belongs to the same problem (e.g. by a fingerprint).
+    on_iteration : callable(stage index, iteration, cost) after every accepted step
+        (e.g. a progress bar).
     """
     runs = list(runs)
     if not runs:
@@ -118,22 +127,50 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
         meas = [measurements_for(r, vehicle, noise=noise, weights=weights) for r in runs]
     say = progress or (lambda msg: None)
     z = space.z0 if z0 is None else np.asarray(z0, float)
-    stages = []
+    horizons = list(horizons)
+    saved = checkpoint.load() if checkpoint is not None else None
+    stages = [] if saved is None else list(saved["stages"])
+    first = 0 if saved is None else int(saved["stage"])
+    if saved is not None:
+        z = np.array(saved["z"], float)
     res = None
     problems = []
-    for H in horizons:
+    if saved is not None and first == len(horizons):  # every stage finished: the final linearization only
+        problems, order = build_problems(vehicle, runs, meas, space, horizons[-1], np.array(saved["z_start"]),
+                                         gyro_bias=gyro_bias, initial_velocity=initial_velocity)
+        res = solve(problems, z, saved["nus"], max_iter=0, workers=workers)
+    for si, H in enumerate(horizons):
+        if si < first:
+            continue
         t0 = time.perf_counter()
+        z_start = z
         problems, order = build_problems(vehicle, runs, meas, space, H, z, gyro_bias=gyro_bias,
                                          initial_velocity=initial_velocity)
         label = "whole runs" if H is None else f"{H:g} s windows"
         say(f"fitting {space.p} parameter(s) on {len(runs)} run(s), {label}")
-        res = solve(problems, z, max_iter=max_iter, workers=workers, ftol=ftol,
-                    progress=lambda it, c, label=label: say(f"  {label}: iteration {it}, cost {c:.6g}"))
+
+        def on_step(st, si=si, z_start=z_start, label=label):
+            if checkpoint is not None:
+                checkpoint.save({"stage": si, "z": z_start, "stages": stages, "solver": st},
+                                progress=f"stage {si + 1} of {len(horizons)} ({label}), iteration {st['iteration']}")
+
+        def on_it(it, c, si=si, label=label):
+            say(f"  {label}: iteration {it}, cost {c:.6g}")
+            if on_iteration is not None:
+                on_iteration(si, it, c)
+
+        st0 = saved["solver"] if saved is not None and si == first else None
+        res = solve(problems, z, max_iter=max_iter, workers=workers, ftol=ftol, progress=on_it, state=st0,
+                    on_step=on_step)
         z = res["z"]
         stages.append({"horizon_s": H, "iterations": res["iterations"], "cost": float(res["cost"]),
                        "message": res["message"], "windows": int(sum(p.lay.W for p in problems)),
                        "simulated_parameter_sets": int(res["evaluations"]),
                        "seconds": float(time.perf_counter() - t0)})
+        if checkpoint is not None:
+            checkpoint.save({"stage": si + 1, "z": z, "z_start": z_start, "nus": res["nus"], "stages": stages,
+                             "solver": None},
+                            progress=f"stage {si + 1} of {len(horizons)} ({label}) finished")
     blocks = res["blocks"]
     cov = covariance(blocks) if space.p else None
     sc = space.scale

@@ -102,8 +102,11 @@ class NodeModel:
         euler = e_ref.copy()
         if run.has_attitude:
             e_log = unwrap_angles(run.euler)
+            lag = float(getattr(self.meas, "attitude_lag", 0.0))
             for j in np.flatnonzero(run.euler_mask):
-                v, _ = local_fit(t, e_log[:, j], t0, h)
+                v, s = local_fit(t, e_log[:, j], t0, h)
+                if lag > 0:  # a lagged attitude filter: x = y + tau dy/dt undoes the lag
+                    v = v + lag * s
                 ok = np.isfinite(v)
                 euler[ok, j] = v[ok]
                 kind[ok, 3 + j] = "measured"

@@ -168,10 +168,12 @@ class WindowedProblem:
         kinds = {(r.input_kind, r.inputs.shape[1]) for r in runs}
         if len(kinds) != 1:
             raise CalibrationError(f"runs mix input kinds/counts: {sorted(kinds)}; fit them in separate groups")
-        self.vehicle, self.runs, self.meas, self.space = vehicle, list(runs), list(meas), space
+        self.vehicle, self.runs, self.space = vehicle, list(runs), space
         self.input_kind = runs[0].input_kind
         self.horizon = horizon
         self.lay = layout(self.runs, horizon)
+        # window starts restart a lagged attitude model from the logged attitude
+        self.meas = [m.for_windows([s for s, _ in b]) for m, b in zip(meas, self.lay.bounds)]
         self.nodes = [NodeModel(r, m) for r, m in zip(self.runs, self.meas)]
         self.free = np.array([nm.free for nm in self.nodes])             # (R, 12)
         self.bias_runs = np.array([gyro_bias and m.has_gyro for m in self.meas])

@@ -305,7 +305,8 @@ class PoolEvaluator(SerialEvaluator):
 
 
 def solve(prob, z0: np.ndarray, nus0: list | None = None, *, max_iter: int = 20,
-          ftol: float = 1e-6, xtol: float = 1e-7, progress=None, workers: int = 1) -> dict:
+          ftol: float = 1e-6, xtol: float = 1e-7, progress=None, workers: int = 1, state: dict | None = None,
+          on_step=None) -> dict:
     """Levenberg-Marquardt from (z0, nus0) (module docstring).
 
     ``prob`` is a :class:`WindowedProblem` or a list of them sharing one parameter space
@@ -315,34 +316,48 @@ def solve(prob, z0: np.ndarray, nus0: list | None = None, *, max_iter: int = 20,
     (:class:`RunNormal` per run at the solution, with window scores), ``iterations``,
     ``evaluations`` (parameter sets simulated per run chunk), ``message``, ``history``
     (cost per accepted step), ``seconds``.  Runs with one BLAS thread per process (small
-    matrix products; see :mod:`uvsim.fitting.objective`)."""
+    matrix products; see :mod:`uvsim.fitting.objective`).
+
+    Resumable: ``on_step(state)`` is called after every accepted step that does not end
+    the iterations, with a dict of everything the iteration depends on (``z``, ``nus``,
+    the damping, counters); ``solve(..., state=that)`` continues from it and gives the
+    result an uninterrupted call would have given (the linearization at a point is
+    deterministic; rejected steps after the saved one are repeated identically)."""
     probs = _problems(prob)
     ev = PoolEvaluator(probs, int(workers)) if workers and int(workers) > 1 and len(probs) > 1 \
         else SerialEvaluator(probs)
     try:
         with threadpool_limits(1, "blas"):
-            return _solve(probs, ev, z0, nus0, max_iter=max_iter, ftol=ftol, xtol=xtol, progress=progress)
+            return _solve(probs, ev, z0, nus0, max_iter=max_iter, ftol=ftol, xtol=xtol, progress=progress,
+                          state=state, on_step=on_step)
     finally:
         ev.close()
 
 
-def _solve(probs, ev, z0, nus0, *, max_iter, ftol, xtol, progress):
+def _solve(probs, ev, z0, nus0, *, max_iter, ftol, xtol, progress, state=None, on_step=None):
     t0 = time.perf_counter()
     space = probs[0].space
     lo, hi = space.z_lower, space.z_upper
-    z = np.clip(np.asarray(z0, float), lo, hi)
-    if nus0 is None:
-        nus0 = [n for p in probs for n in p.zero_nuisance()]
-    nus = [np.array(n, float) for n in nus0]
-    n_sets = 1 + z.size + max(int(p.free.any(axis=0).sum()) for p in probs)
-    blocks = ev.linearize(z, nus)
-    cost = _cost(blocks)
-    history = [cost]
-    lam, nu_f = 1e-3, 2.0
-    evals = n_sets
+    n_sets = 1 + space.p + max(int(p.free.any(axis=0).sum()) for p in probs)
+    if state is None:
+        z = np.clip(np.asarray(z0, float), lo, hi)
+        if nus0 is None:
+            nus0 = [n for p in probs for n in p.zero_nuisance()]
+        nus = [np.array(n, float) for n in nus0]
+        blocks = ev.linearize(z, nus)
+        cost = _cost(blocks)
+        history = [cost]
+        lam, nu_f = 1e-3, 2.0
+        evals = n_sets
+        it0 = 0
+    else:  # continue after the accepted step ``state`` describes (see solve)
+        z, nus = np.array(state["z"], float), [np.array(n, float) for n in state["nus"]]
+        cost, history, lam, nu_f = state["cost"], list(state["history"]), state["lam"], state["nu_f"]
+        evals, it0 = state["evaluations"], state["iteration"]
+        blocks = ev.linearize(z, nus)
     message = "maximum number of iterations reached"
-    it = 0
-    for it in range(1, max_iter + 1):
+    it = it0
+    for it in range(it0 + 1, max_iter + 1):
         dz, dnus = _step(blocks, lam, z, lo, hi)
         z_new = z + dz
         nus_new = [a + b for a, b in zip(nus, dnus)]
@@ -364,6 +379,9 @@ def _solve(probs, ev, z0, nus0, *, max_iter, ftol, xtol, progress):
                 break
             blocks = ev.linearize(z, nus)
             evals += n_sets
+            if on_step is not None:
+                on_step({"z": z.copy(), "nus": [n.copy() for n in nus], "cost": cost, "history": list(history),
+                         "lam": lam, "nu_f": nu_f, "evaluations": evals, "iteration": it})
         else:
             lam *= nu_f
             nu_f *= 2.0

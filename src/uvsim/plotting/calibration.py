@@ -1,11 +1,15 @@
 """Calibration plots (matplotlib, Agg backend; only imported when plots are asked for).
 
-* ``runs/<run>.png``: measured vs simulated (initial and fitted vehicle) for each
-  logged channel of every run;
-* ``error_boxplots.png``: error distributions per run, grouped by DOF, as seed 000
-  Fig. 6 (position error of linear DOFs, m) and Fig. 7 (orientation error of
-  rotational DOFs, rad) - for the validation runs when there are any;
-* ``ga_convergence.png``: best and mean fitness per generation and DOF (logbook).
+* ``runs/<run>.png``: every logged channel of a run (its native samples) with the
+  open-loop predictions of the initial and the fitted vehicle (through the measurement
+  models: depth at the pressure sensor, lagged attitude, specific force, gyro with its
+  bias);
+* ``channel_errors.png``: per channel, the distribution of the fitted model's error in
+  noise sigmas over the validation runs (all runs when none is marked validation);
+* ``error_boxplots.png``: for runs marked with a DOF, the error of the DOF's own
+  coordinate per run, as seed 000 Fig. 6 (linear DOFs, m) and Fig. 7 (rotational
+  DOFs, rad);
+* ``ga_convergence.png``: best and mean GA fitness per generation and DOF (when a GA ran).
 """
 from __future__ import annotations
 
@@ -14,49 +18,50 @@ from pathlib import Path
 import matplotlib.pyplot as plt  # the package __init__ selects the Agg backend
 import numpy as np  # noqa: E402
 
-from uvsim.kinematics import quat_to_euler  # noqa: E402
+from uvsim.kinematics import quat_to_euler, unwrap_angles  # noqa: E402
+from uvsim.measurements import UNITS  # noqa: E402
 
 LINEAR = ("surge", "sway", "heave")
 ROTATIONAL = ("roll", "pitch", "yaw")
-_AXIS = {"surge": 0, "sway": 1, "heave": 2, "roll": 0, "pitch": 1, "yaw": 2}
+#: The coordinate of each DOF in seed 000's error plots, in order of preference.
+OWN_CHANNEL = {"surge": ("x",), "sway": ("y",), "heave": ("z", "depth"), "roll": ("roll",), "pitch": ("pitch",),
+               "yaw": ("yaw",)}
 
 
-def _channels(measured, predicted):
-    """[(label, t-index-aligned measured, predicted)] for the logged channels."""
+def _series(meas, pred) -> list:
+    """[(channel, unit, valid (n,), measured (n,), predicted (n,), error (n,), sigma)]
+    of every logged channel (angles unwrapped, the prediction on the measured branch)."""
     out = []
-    if "position" in measured:
-        for j, c in enumerate("xyz"):
-            if np.isfinite(measured["position"][:, j]).any():
-                out.append((f"{c} (m)", measured["position"][:, j], predicted["position"][:, j]))
-    if "quaternion" in measured:
-        em = quat_to_euler(measured["quaternion"])
-        ep = quat_to_euler(predicted["quaternion"])
-        ok = np.isfinite(em).all(axis=1)
-        em[ok] = np.unwrap(em[ok], axis=0)
-        ep = em - ((em - ep + np.pi) % (2 * np.pi) - np.pi)
-        for j, c in enumerate(("roll", "pitch", "yaw")):
-            out.append((f"{c} (rad)", em[:, j], ep[:, j]))
-    for key, names, unit in (("velocity", "uvw", "m/s"), ("rates", "pqr", "rad/s")):
-        if key in measured:
-            for j, c in enumerate(names):
-                if np.isfinite(measured[key][:, j]).any():
-                    out.append((f"{c} ({unit})", measured[key][:, j], predicted[key][:, j]))
+    res = meas.residuals(pred)
+    for g, grp in meas.groups.items():
+        y = np.asarray(grp.values, float)
+        if g == "attitude":
+            y = quat_to_euler(y) if grp.mode == "quaternion" else y
+            y = unwrap_angles(np.where(grp.valid, y, np.nan))
+        for j, c in enumerate(grp.channels):
+            if not grp.logged[j]:
+                continue
+            e = res[g][:, j]
+            if g == "attitude" and grp.mode == "quaternion":  # rotation-vector component
+                e = np.where(grp.valid[:, j], e, np.nan)
+            out.append((c, UNITS[g], grp.valid[:, j], y[:, j], y[:, j] - e, e, float(grp.sigma[j])))
     return out
 
 
-def plot_runs(runs, measured, fitted, initial, out_dir) -> list[Path]:
+def plot_runs(runs, meas, fitted, initial, out_dir) -> list[Path]:
+    """One figure per run: measured vs initial vs fitted model, every logged channel."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = []
-    for run, m, pf, pi in zip(runs, measured, fitted, initial):
-        chans = _channels(m, pf)
-        chans_i = _channels(m, pi)
-        fig, axes = plt.subplots(len(chans), 1, figsize=(7, 1.8 * len(chans) + 0.6), sharex=True, squeeze=False)
-        for ax, (label, y, yf), (_, _, yi) in zip(axes[:, 0], chans, chans_i):
-            ax.plot(run.t, y, ".", ms=2, color="0.4", label="measured")
-            ax.plot(run.t, yi, "--", lw=1, color="tab:orange", label="initial model")
-            ax.plot(run.t, yf, "-", lw=1.2, color="tab:blue", label="fitted model")
-            ax.set_ylabel(label)
+    for run, m in zip(runs, meas):
+        fit = _series(m, fitted[run.name]["pred"])
+        ini = _series(m, initial[run.name]["pred"])
+        fig, axes = plt.subplots(len(fit), 1, figsize=(7, 1.7 * len(fit) + 0.6), sharex=True, squeeze=False)
+        for ax, (c, unit, ok, y, yf, _, _), (_, _, _, _, yi, _, _) in zip(axes[:, 0], fit, ini):
+            ax.plot(run.t[ok], y[ok], ".", ms=2, color="0.4", label="measured")
+            ax.plot(run.t[ok], yi[ok], "--", lw=1, color="tab:orange", label="initial model")
+            ax.plot(run.t[ok], yf[ok], "-", lw=1.2, color="tab:blue", label="fitted model")
+            ax.set_ylabel(f"{c} ({unit})")
         axes[0, 0].set_title(f"{run.name} ({run.dof or 'no dof'}, {run.split})")
         axes[0, 0].legend(fontsize=7, loc="best")
         axes[-1, 0].set_xlabel("t (s)")
@@ -68,25 +73,47 @@ def plot_runs(runs, measured, fitted, initial, out_dir) -> list[Path]:
     return paths
 
 
-def plot_error_boxplots(runs, measured, fitted, path) -> Path:
-    """Seed 000 Fig. 6-7 style: per run, the error of its DOF's own coordinate."""
+def _save(fig, path) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
+def plot_channel_errors(runs, meas, fitted, path) -> Path:
+    """Per channel, the fitted model's error / noise level pooled over ``runs``."""
+    pooled: dict = {}
+    for run, m in zip(runs, meas):
+        for c, _, ok, _, _, e, sig in _series(m, fitted[run.name]["pred"]):
+            pooled.setdefault(c, []).append(e[ok & np.isfinite(e)] / sig)
+    fig, ax = plt.subplots(figsize=(max(5, 0.8 * len(pooled) + 2), 4))
+    if pooled:
+        ax.boxplot([np.concatenate(v) for v in pooled.values()], showfliers=False)
+        ax.set_xticks(range(1, len(pooled) + 1), list(pooled))
+    ax.axhline(0, color="0.6", lw=0.8)
+    ax.set_ylabel("open-loop error / noise sigma")
+    ax.set_title("fitted model, open-loop error per channel")
+    return _save(fig, path)
+
+
+def plot_error_boxplots(runs, meas, fitted, path) -> Path:
+    """Seed 000 Fig. 6-7 style: per run marked with a DOF, the error of its own coordinate."""
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))
-    for ax, group, unit in ((axes[0], LINEAR, "position error E_p (m)"), (axes[1], ROTATIONAL,
-                                                                         "orientation error E_o (rad)")):
+    for ax, group, unit in ((axes[0], LINEAR, "position error E_p (m)"),
+                            (axes[1], ROTATIONAL, "orientation error E_o (rad)")):
         data, labels = [], []
         for dof in group:
-            for run, m, p in zip(runs, measured, fitted):
+            for run, m in zip(runs, meas):
                 if run.dof != dof:
                     continue
-                j = _AXIS[dof]
-                if dof in LINEAR and "position" in m and np.isfinite(m["position"][:, j]).any():
-                    e = m["position"][:, j] - p["position"][:, j]
-                elif dof in ROTATIONAL and "quaternion" in m:
-                    em, ep = quat_to_euler(m["quaternion"]), quat_to_euler(p["quaternion"])
-                    e = (em[:, j] - ep[:, j] + np.pi) % (2 * np.pi) - np.pi
-                else:
+                chans = {c: (ok, e) for c, _, ok, _, _, e, _ in _series(m, fitted[run.name]["pred"])}
+                own = next((c for c in OWN_CHANNEL[dof] if c in chans), None)
+                if own is None:
                     continue
-                data.append(e[np.isfinite(e)])
+                ok, e = chans[own]
+                data.append(e[ok & np.isfinite(e)])
                 labels.append(run.name)
         if data:
             ax.boxplot(data, showfliers=False)
@@ -95,12 +122,7 @@ def plot_error_boxplots(runs, measured, fitted, path) -> Path:
         ax.set_ylabel(unit)
     axes[0].set_title("linear DOFs (seed 000 Fig. 6 style)")
     axes[1].set_title("rotational DOFs (seed 000 Fig. 7 style)")
-    fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return path
+    return _save(fig, path)
 
 
 def plot_convergence(logbooks, path) -> Path:
@@ -110,15 +132,10 @@ def plot_convergence(logbooks, path) -> Path:
         line, = ax.semilogy(gen, [r["min"] for r in lb], "-", label=f"{dof} best")
         ax.semilogy(gen, [r["avg"] for r in lb], ":", color=line.get_color(), lw=0.8)
     ax.set_xlabel("generation")
-    ax.set_ylabel("fitness (weighted mean |normalized error|)")
+    ax.set_ylabel("fitness (weighted mean |error| / noise)")
     ax.set_title("GA convergence (solid: best, dotted: population mean)")
     ax.legend(fontsize=7)
-    fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return path
+    return _save(fig, path)
 
 
 def plot_calibration(cal, dataset, out_dir, *, run_plots: str = "all") -> list[Path]:
@@ -126,28 +143,20 @@ def plot_calibration(cal, dataset, out_dir, *, run_plots: str = "all") -> list[P
 
     ``run_plots``: "all" runs, only the "validation" runs, or "none" get a
     measured-vs-simulated figure (one matplotlib figure per run is the slow part)."""
-    from uvsim.calibration.batching import prepare_runs, simulate_dataset
-
     out_dir = Path(out_dir)
-    runs = list(dataset.runs)
-    groups: dict = {}
-    for r in runs:
-        groups.setdefault((r.input_kind, r.inputs.shape[1]), []).append(r)
-    ordered, meas, fit, ini = [], [], [], []
-    for grp in groups.values():
-        b = prepare_runs(grp, initial_velocity=cal.initial_velocity)
-        ordered += grp
-        meas += b.measured
-        fit += simulate_dataset(cal.vehicle_, b)
-        ini += simulate_dataset(cal.initial_vehicle_, b)
-    val = [i for i, r in enumerate(ordered) if r.split == "validation"] or list(range(len(ordered)))
-    sel = {"all": list(range(len(ordered))), "validation": val, "none": []}[run_plots]
-    paths = plot_runs([ordered[i] for i in sel], [meas[i] for i in sel], [fit[i] for i in sel],
-                      [ini[i] for i in sel], out_dir / "runs")
-    paths.append(plot_error_boxplots([ordered[i] for i in val], [meas[i] for i in val], [fit[i] for i in val],
-                                     out_dir / "error_boxplots.png"))
-    paths.append(plot_convergence(cal.logbook_, out_dir / "ga_convergence.png"))
+    ev = cal.evaluation_
+    runs = [r for r in dataset.runs if r.name in ev["meas"]]
+    meas = [ev["meas"][r.name] for r in runs]
+    val = [i for i, r in enumerate(runs) if r.split == "validation"] or list(range(len(runs)))
+    sel = {"all": list(range(len(runs))), "validation": val, "none": []}[run_plots]
+    paths = plot_runs([runs[i] for i in sel], [meas[i] for i in sel], ev["fitted"], ev["initial"], out_dir / "runs")
+    vr, vm = [runs[i] for i in val], [meas[i] for i in val]
+    paths.append(plot_channel_errors(vr, vm, ev["fitted"], out_dir / "channel_errors.png"))
+    if any(r.dof in LINEAR + ROTATIONAL for r in vr):
+        paths.append(plot_error_boxplots(vr, vm, ev["fitted"], out_dir / "error_boxplots.png"))
+    if cal.logbook_:
+        paths.append(plot_convergence(cal.logbook_, out_dir / "ga_convergence.png"))
     return paths
 
 
-__all__ = ["plot_calibration", "plot_runs", "plot_error_boxplots", "plot_convergence"]
+__all__ = ["plot_calibration", "plot_runs", "plot_channel_errors", "plot_error_boxplots", "plot_convergence"]

@@ -1,0 +1,164 @@
+"""The joint stage of a calibration: one windowed prediction-error fit of every training
+run (:func:`uvsim.fitting.fit`), with an excitation screen, a checkpoint and a progress bar.
+
+:func:`run_joint` frees ``keep`` (always) plus the ``screen`` candidates that the data
+excite (:func:`uvsim.calibration.selection.excitation` at the start values), then fits
+them together with every run's window-start states and gyro biases (the nuisance).
+
+Checkpoint (:class:`JointCheckpoint`): one file holding the screen's outcome and the
+fit's state, written atomically after the screen, after every accepted
+Levenberg-Marquardt step and after every continuation stage; a fit resumed from it
+continues where it stopped (finished stages and iterations are not redone) and gives
+the result of an uninterrupted fit.  Kept small and self-contained (a generic
+checkpoint utility may replace it: only :meth:`load` / :meth:`save` are used).
+"""
+from __future__ import annotations
+
+import logging
+import os
+import pickle
+from pathlib import Path
+
+import numpy as np
+
+from uvsim.calibration.selection import EXCITATION_REL_SIGMA, excitation, information
+from uvsim.errors import CalibrationError
+from uvsim.fitting import fit, make_space
+from uvsim.fitting.fitter import build_problems
+
+log = logging.getLogger("uvsim")
+JOINT_CHECKPOINT_VERSION = 1
+
+
+def joint_checkpoint_path(path) -> Path:
+    """The joint stage's checkpoint file beside a calibration checkpoint ``path``."""
+    return Path(f"{path}.joint")
+
+
+class JointCheckpoint:
+    """Checkpoint file of the joint stage (module docstring).
+
+    Parameters
+    ----------
+    path : file written after every step (None: no saving).
+    key : fingerprint of the problem (vehicle, runs, settings); a saved state of another
+        problem is refused.
+    resume : file to continue from (None: start afresh).
+    """
+
+    def __init__(self, path, key: str, resume=None):
+        self.path = None if path is None else Path(path)
+        self.key = key
+        self.resume = None if resume is None else Path(resume)
+        self._doc = {"screen": None, "fit": None}
+        if self.resume is not None and self.resume.is_file():
+            try:
+                with open(self.resume, "rb") as fh:
+                    doc = pickle.load(fh)
+            except Exception as exc:  # a truncated or foreign file raises many types
+                raise CalibrationError(f"checkpoint {self.resume} cannot be read: {type(exc).__name__}") from None
+            if not isinstance(doc, dict) or doc.get("version") != JOINT_CHECKPOINT_VERSION \
+                    or doc.get("kind") != "joint":
+                raise CalibrationError(f"checkpoint {self.resume} is not a uvsim joint-stage checkpoint")
+            if doc["key"] != self.key:
+                raise CalibrationError(
+                    f"checkpoint {self.resume} was written for different settings, data or vehicle; resume needs "
+                    "the same --data, --vehicle, --dof, --free/--fix/--bounds, --weights, --noise, --horizons and GA "
+                    "settings")
+            self._doc = {"screen": doc.get("screen"), "fit": doc.get("fit")}
+            log.info("resuming from %s: the joint stage, %s", self.resume, doc.get("progress") or "start")
+
+    @property
+    def screen(self):
+        return self._doc["screen"]
+
+    def save_screen(self, screen: dict) -> None:
+        self._doc["screen"] = screen
+        self._write("screen done")
+
+    # the protocol of uvsim.fitting.fit(checkpoint=...)
+    def load(self):
+        return self._doc["fit"]
+
+    def save(self, state, *, progress: str = "") -> None:
+        self._doc["fit"] = state
+        self._write(progress)
+
+    def _write(self, progress: str) -> None:
+        if self.path is None:
+            return
+        doc = {"version": JOINT_CHECKPOINT_VERSION, "kind": "joint", "key": self.key, "progress": progress,
+               **self._doc}
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
+        with open(tmp, "wb") as fh:
+            pickle.dump(doc, fh, protocol=pickle.HIGHEST_PROTOCOL)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, self.path)
+
+
+def _bar(progress: bool, total: int):
+    if not progress:
+        return None
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, desc="joint fit", unit="it")
+
+
+def run_joint(vehicle, runs, meas, params, *, keep, screen, bounds, horizons, max_iter: int, gyro_bias: bool,
+              initial_velocity: str = "zero", workers: int = 1, checkpoint: JointCheckpoint | None = None,
+              progress: bool = False):
+    """Screen and fit (module docstring).
+
+    Parameters
+    ----------
+    vehicle : the model at the start values (GA results applied).
+    runs, meas : training runs and their measurement models.
+    params : ``vehicle.parameters()``.
+    keep : names freed whatever the screen says; screen : candidates freed if excited.
+    bounds : {name: (low, high)} for every name of ``keep`` and ``screen``.
+    horizons, max_iter, gyro_bias, initial_velocity, workers : see :func:`uvsim.fitting.fit`.
+
+    Returns
+    -------
+    (FitResult or None when nothing is free, screen report {"relative_sigma": {name:
+    value}, "not_excited": [names], "threshold": EXCITATION_REL_SIGMA})
+    """
+    keep, screen = list(keep), [k for k in screen if k not in keep]
+    report = {"relative_sigma": {}, "not_excited": [], "threshold": EXCITATION_REL_SIGMA}
+    if screen:
+        saved = checkpoint.screen if checkpoint is not None else None
+        if saved is None:
+            space = make_space(params, keep + screen, bounds=bounds)
+            probs, _ = build_problems(vehicle, runs, meas, space, horizons[0], space.z0, gyro_bias=gyro_bias,
+                                      initial_velocity=initial_velocity)
+            rel = excitation(space, information(probs, space.z0, workers))
+            saved = {"relative_sigma": {k: rel[k] for k in screen},
+                     "not_excited": [k for k in screen if not rel[k] <= EXCITATION_REL_SIGMA]}
+            if checkpoint is not None:
+                checkpoint.save_screen(saved)
+        report.update(saved)
+    names = [k for k in params if k in keep or (k in screen and k not in report["not_excited"])]
+    if not names:
+        return None, report
+    space = make_space(params, names, bounds=bounds)
+    bar = _bar(progress, max_iter * len(horizons))
+
+    def on_it(stage, it, cost):
+        if bar is not None:
+            bar.n = stage * max_iter + it
+            bar.set_postfix(stage=f"{stage + 1}/{len(horizons)}", cost=f"{cost:.5g}")
+            bar.refresh()
+
+    try:
+        res = fit(vehicle, runs, space, meas=meas, horizons=horizons, max_iter=max_iter, gyro_bias=gyro_bias,
+                  initial_velocity=initial_velocity, workers=workers, checkpoint=checkpoint, on_iteration=on_it,
+                  progress=lambda msg: log.debug(msg))
+    finally:
+        if bar is not None:
+            bar.n = bar.total
+            bar.close()
+    if not np.all(np.isfinite(res.z)):
+        raise CalibrationError("the joint fit diverged (non-finite parameters)")
+    return res, report

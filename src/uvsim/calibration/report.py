@@ -1,0 +1,185 @@
+"""Open-loop evaluation of a calibrated model and the calibration report.
+
+Every run (training and validation) is simulated from its estimated initial state with
+its logged inputs (:func:`uvsim.fitting.evaluate.open_loop`) and compared with what it
+logged through the measurement models (:func:`uvsim.metrics.measurement_metrics`).  A
+run that logs gyro rates is compared after removing its gyro bias: the joint fit's
+estimate for a training run; for a validation run (and for the initial model) the
+median rate residual of the run (a constant sensor offset, estimated from the run
+itself as a bias-calibrated gyro would be; not a model parameter).
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from uvsim.calibration.params import EFFECTIVE_INERTIA, LINEAR_DAMPING, QUADRATIC_DAMPING
+from uvsim.fitting.evaluate import open_loop
+from uvsim.metrics import measurement_metrics, pooled_group_rmse
+
+#: 1-sigma above this fraction of the value: reported as "weakly_determined".
+WEAK_RELATIVE_SIGMA = 0.25
+
+
+def evaluate_runs(vehicle, runs, meas, gyro_bias: dict | None = None, *, initial_velocity: str = "zero") -> dict:
+    """Per run name: ``{"metrics", "pred", "states", "gyro_bias"}`` of the open-loop
+    simulation of ``vehicle`` (module docstring); ``gyro_bias``: run name -> (3,) known
+    biases (the others are estimated as the median rate residual)."""
+    out = {}
+    for run, m, r in zip(runs, meas, open_loop(vehicle, runs, meas=meas, initial_velocity=initial_velocity)):
+        pred = r["pred"]
+        b = None
+        if m.has_gyro:
+            if gyro_bias and run.name in gyro_bias:
+                b = np.asarray(gyro_bias[run.name], float)
+            else:
+                e = m.residuals(pred)["rates"]
+                with np.errstate(all="ignore"):
+                    b = np.array([np.nanmedian(e[:, j]) if np.isfinite(e[:, j]).any() else 0.0 for j in range(3)])
+            pred = m.predict(r["states"], r["nu_dot"], b)
+        out[run.name] = {"metrics": measurement_metrics(m, pred), "pred": pred, "states": r["states"],
+                         "gyro_bias": None if b is None else [float(x) for x in b]}
+    return out
+
+
+def pooled_fit_percent(metrics_list) -> dict[str, float]:
+    """Per channel, the Fit % of several runs pooled:
+    ``100 (1 - sqrt(sum ||e||^2) / sqrt(sum ||y - mean_run(y)||^2))`` (each run's channel
+    centred on its own mean), from per-run :func:`uvsim.metrics.measurement_metrics`."""
+    err: dict[str, float] = {}
+    var: dict[str, float] = {}
+    for m in metrics_list:
+        for c, d in m["channels"].items():
+            f, n, r = d["fit_percent"], d["n"], d["rmse"]
+            if not (n and np.isfinite(f) and np.isfinite(r) and f < 100):
+                continue
+            e2 = r * r * n
+            err[c] = err.get(c, 0.0) + e2
+            var[c] = var.get(c, 0.0) + e2 / (1.0 - f / 100.0) ** 2
+    return {c: float(100.0 * (1.0 - np.sqrt(err[c] / var[c]))) for c in err if var[c] > 0}
+
+
+def run_entry(run, fitted: dict, initial: dict) -> dict:
+    """The report's ``per_run`` entry of one run from its fitted and initial evaluations."""
+    m, m0 = fitted["metrics"], initial["metrics"]
+    return {
+        "dof": run.dof, "split": run.split, "weight": run.weight,
+        "rmse": {k: v for k, v in m.items() if k not in ("channels", "groups")},
+        "nrmse": {c: v["nrmse"] for c, v in m["channels"].items()},
+        "fit_percent": {**{c: v["fit_percent"] for c, v in m["channels"].items()},
+                        **{g: v["fit_percent"] for g, v in m["groups"].items()}},
+        "initial_rmse": {k: v for k, v in m0.items() if k not in ("channels", "groups")},
+        "initial_fit_percent": {c: v["fit_percent"] for c, v in m0["channels"].items()},
+        "channels": m["channels"],
+        "gyro_bias": fitted["gyro_bias"],
+    }
+
+
+def pooled(evals: dict, runs, split: str) -> tuple[dict, dict]:
+    """(group RMSEs, channel Fit %) pooled over the runs of ``split``."""
+    ms = [evals[r.name]["metrics"] for r in runs if r.split == split]
+    return (pooled_group_rmse(ms), pooled_fit_percent(ms)) if ms else ({}, {})
+
+
+def identifiability_report(cal) -> dict:
+    """The report's ``identifiability``: the joint stage's analysis plus weakly determined
+    parameters, bounds and physical-limit hits, the excitation screen and the effective
+    inertias with a held rigid-body moment."""
+    res = cal.fit_
+    if res is None:
+        return {"not_excited": cal.screen_["not_excited"]}
+    out = dict(res.identifiability)
+    out["weakly_determined"] = [k for k, s in res.std.items()
+                                if s is not None and s > WEAK_RELATIVE_SIGMA * abs(res.values[k])]
+    out["at_bound"] = list(res.at_bounds)
+    out["physical_limit"] = list(res.physical_limit)
+    out["not_excited"] = list(cal.screen_["not_excited"])
+    out["excitation_relative_sigma"] = dict(cal.screen_["relative_sigma"])
+    eff = []
+    for d, (a, b) in EFFECTIVE_INERTIA.items():
+        if b in res.values and a not in res.values:
+            eff.append(f"{a} + {b} ({a} fixed at {cal.vehicle_.parameters()[a]:.6g})")
+    out["effective_inertia"] = eff
+    return out
+
+
+def effective_inertia_sigma(cal) -> dict:
+    """1-sigma of each DOF's effective inertia (rigid + added) from the joint covariance."""
+    res = cal.fit_
+    out = {}
+    for d, (a, b) in EFFECTIVE_INERTIA.items():
+        if res is None or not ({a, b} & set(res.names)):
+            out[d] = None
+            continue
+        v = np.zeros(len(res.names))
+        for k in (a, b):
+            if k in res.names:
+                v[res.names.index(k)] = 1.0
+        out[d] = float(np.sqrt(max(v @ res.covariance @ v, 0.0)))
+    return out
+
+
+def build_report(cal, ds, runs, problems, ga, bounds_of, t0, t_ga, t_ref) -> dict:
+    """The JSON-ready report of a fitted Calibrator (docs/calibration.md, report.json)."""
+    meas = cal._meas(ds.runs, cal.signal_weights)
+    gb = cal.fit_.gyro_bias if cal.fit_ is not None else None
+    fitted = evaluate_runs(cal.vehicle_, ds.runs, meas, gb, initial_velocity=cal.initial_velocity)
+    initial = evaluate_runs(cal.initial_vehicle_, ds.runs, meas, None, initial_velocity=cal.initial_velocity)
+    cal.evaluation_ = {"fitted": fitted, "initial": initial, "meas": {r.name: m for r, m in zip(ds.runs, meas)}}
+    per_run = {r.name: run_entry(r, fitted[r.name], initial[r.name]) for r in ds.runs}
+    val, val_fit = pooled(fitted, ds.runs, "validation")
+    tr, tr_fit = pooled(fitted, ds.runs, "train")
+    val0, val0_fit = pooled(initial, ds.runs, "validation")
+    tr0, _ = pooled(initial, ds.runs, "train")
+    p = cal.vehicle_.parameters()
+    p0 = cal.initial_vehicle_.parameters()
+    res = cal.fit_
+    settings = cal._settings()
+    noise = {r.name: m.describe() for r, m in zip(ds.runs, meas)}
+    return {
+        "vehicle": cal.initial_vehicle_.name,
+        "dataset": str(ds.path),
+        "dofs": list(problems),
+        "parameters": dict(cal.params_),
+        "uncertainty": dict(cal.uncertainty_),
+        "initial_parameters": {k: float(p0[k]) for k in cal.params_},
+        "ga_parameters": dict(cal.ga_params_),
+        "free_parameters": [] if res is None else list(res.names),
+        "bounds": {k: [float(x) for x in bounds_of(k)] for k in cal.params_},
+        "at_bounds": [] if res is None else list(res.at_bounds),
+        "physical_limit": [] if res is None else list(res.physical_limit),
+        "effective_inertia": {d: p[a] + p[b] for d, (a, b) in EFFECTIVE_INERTIA.items()},
+        "effective_inertia_uncertainty": effective_inertia_sigma(cal),
+        "linear_damping": {d: p[k] for d, k in LINEAR_DAMPING.items()},
+        "quadratic_damping": {d: p[k] for d, k in QUADRATIC_DAMPING.items()},
+        "gyro_bias": {} if res is None else dict(res.gyro_bias),
+        "validation_rmse": val, "validation_fit_percent": val_fit,
+        "training_rmse": tr, "training_fit_percent": tr_fit,
+        "initial_validation_rmse": val0, "initial_validation_fit_percent": val0_fit,
+        "initial_training_rmse": tr0,
+        "per_run": per_run,
+        "identifiability": cal.identifiability_,
+        "refinement": {} if res is None else {"stages": res.stages, "cost": res.cost,
+                                              "n_residuals": res.n_residuals},
+        "signal_scales": noise,
+        "noise": noise,
+        "attitude_lag": cal.lag_,
+        "notes": sorted({n for m in meas for n in m.notes}),
+        "run_weights": {r.name: float(cal._ga_run_weights.get(r.name, r.weight)) for r in runs},
+        "training_runs": [r.name for r in runs],
+        "evaluations": int(ga["evaluations"]),
+        "generations_run": int(ga["generations_run"]),
+        "ga_seconds": float(ga["wall_s"]),
+        "refine_seconds": float(t_ref - t_ga),
+        "wall_seconds": float(time.perf_counter() - t0),
+        "settings": {**settings.__dict__, "margin": cal.margin, "workers": cal.workers, "dask": cal.dask,
+                     "batch_rows": cal.batch_rows, "low_speed_exponent": cal.low_speed_exponent,
+                     "signal_weights": dict(cal.signal_weights or {}), "noise": dict(cal.noise or {}),
+                     "ga_channels": cal.ga_channels, "free": cal.free, "fix": cal.fix,
+                     "bounds": {k: list(v) for k, v in (cal.bounds or {}).items()},
+                     "refine": cal.refine, "horizons": cal._horizons(), "max_iter": cal.max_iter,
+                     "gyro_bias": cal.gyro_bias, "screen": cal.screen, "attitude_lag": cal.attitude_lag,
+                     "initial_velocity": cal.initial_velocity},
+        "logbook": {d: [dict(rec) for rec in lb] for d, lb in ga["logbooks"].items()},
+    }
