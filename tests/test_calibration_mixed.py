@@ -165,7 +165,7 @@ def test_joint_stage_checkpoint_kill_and_resume(mixed, tmp_path):
     while proc.poll() is None and time.time() - t0 < 120:
         if joint.is_file():
             try:
-                doc = pickle.loads(joint.read_bytes())
+                doc = pickle.loads(joint.read_bytes())["state"]  # uvsim.checkpoint envelope
             except Exception:  # being replaced right now
                 doc = {}
             st = (doc.get("fit") or {}).get("solver")

@@ -9,25 +9,24 @@ Checkpoint (:class:`JointCheckpoint`): one file holding the screen's outcome and
 fit's state, written atomically after the screen, after every accepted
 Levenberg-Marquardt step and after every continuation stage; a fit resumed from it
 continues where it stopped (finished stages and iterations are not redone) and gives
-the result of an uninterrupted fit.  Kept small and self-contained (a generic
-checkpoint utility may replace it: only :meth:`load` / :meth:`save` are used).
+the result of an uninterrupted fit.
 """
 from __future__ import annotations
 
 import logging
-import os
-import pickle
 from pathlib import Path
 
 import numpy as np
 
 from uvsim.calibration.selection import EXCITATION_REL_SIGMA, excitation, information
-from uvsim.errors import CalibrationError
+from uvsim.checkpoint import Checkpoint
 from uvsim.fitting import fit, make_space
 from uvsim.fitting.fitter import build_problems
 
 log = logging.getLogger("uvsim")
-JOINT_CHECKPOINT_VERSION = 1
+#: What a resumed calibration must keep equal (for the mismatch message).
+MUST_MATCH = ("--data, --vehicle, --dof, --free/--fix/--bounds, --weights, --noise, --horizons and the GA "
+              "settings")
 
 
 def joint_checkpoint_path(path) -> Path:
@@ -36,7 +35,9 @@ def joint_checkpoint_path(path) -> Path:
 
 
 class JointCheckpoint:
-    """Checkpoint file of the joint stage (module docstring).
+    """Checkpoint file of the joint stage (module docstring), on the shared
+    :class:`uvsim.checkpoint.Checkpoint` (atomic writes, problem fingerprint, "resuming
+    from ..."): one envelope holding the screen's outcome and the fit's state.
 
     Parameters
     ----------
@@ -47,26 +48,12 @@ class JointCheckpoint:
     """
 
     def __init__(self, path, key: str, resume=None):
-        self.path = None if path is None else Path(path)
-        self.key = key
-        self.resume = None if resume is None else Path(resume)
+        self._out = None if path is None else Checkpoint(path, kind="joint", key=key, what="the joint stage",
+                                                         must_match=MUST_MATCH)
         self._doc = {"screen": None, "fit": None}
-        if self.resume is not None and self.resume.is_file():
-            try:
-                with open(self.resume, "rb") as fh:
-                    doc = pickle.load(fh)
-            except Exception as exc:  # a truncated or foreign file raises many types
-                raise CalibrationError(f"checkpoint {self.resume} cannot be read: {type(exc).__name__}") from None
-            if not isinstance(doc, dict) or doc.get("version") != JOINT_CHECKPOINT_VERSION \
-                    or doc.get("kind") != "joint":
-                raise CalibrationError(f"checkpoint {self.resume} is not a uvsim joint-stage checkpoint")
-            if doc["key"] != self.key:
-                raise CalibrationError(
-                    f"checkpoint {self.resume} was written for different settings, data or vehicle; resume needs "
-                    "the same --data, --vehicle, --dof, --free/--fix/--bounds, --weights, --noise, --horizons and GA "
-                    "settings")
+        if resume is not None and Path(resume).is_file():
+            doc = Checkpoint(resume, kind="joint", key=key, what="the joint stage", must_match=MUST_MATCH).load()
             self._doc = {"screen": doc.get("screen"), "fit": doc.get("fit")}
-            log.info("resuming from %s: the joint stage, %s", self.resume, doc.get("progress") or "start")
 
     @property
     def screen(self):
@@ -85,17 +72,8 @@ class JointCheckpoint:
         self._write(progress)
 
     def _write(self, progress: str) -> None:
-        if self.path is None:
-            return
-        doc = {"version": JOINT_CHECKPOINT_VERSION, "kind": "joint", "key": self.key, "progress": progress,
-               **self._doc}
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
-        with open(tmp, "wb") as fh:
-            pickle.dump(doc, fh, protocol=pickle.HIGHEST_PROTOCOL)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, self.path)
+        if self._out is not None:
+            self._out.save(dict(self._doc), progress=progress)
 
 
 def _bar(progress: bool, total: int):

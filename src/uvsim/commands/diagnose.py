@@ -54,7 +54,8 @@ def format_table(report: dict) -> str:
     for st in report["steps"]:
         lines.append(f"step {st['step']}: validation cost {st['before_cost_per_entry']:.3f} (squared noise sigmas "
                      f"per residual) with {', '.join(e['effect'] + ':' + e['variant'] for e in report['effects'][:st['step'] - 1]) or 'the given model'}")
-        lines.append(f"  {'candidate':30s} {'screen':>7s} {'val cost':>9s} {'change':>8s} {'P(better)':>9s}  accepted  why")
+        lines.append(f"  {'candidate':30s} {'screen':>7s} {'Wald p':>8s} {'val cost':>9s} {'change':>8s} {'P(better)':>9s}  "
+                     "accepted  why")
         screen = {(s["effect"], s["variant"]): s["screening_reduction"] for s in st["screened"]}
         shown = set()
         for c in st["candidates"]:
@@ -62,11 +63,12 @@ def format_table(report: dict) -> str:
             shown.add(key)
             red = screen.get(key)
             if "compare" in c:
+                wp = c["compare"].get("wald", {}).get("p")
                 lines.append(f"  {c['effect'] + ':' + c['variant']:30s} {_pct(red):>7s} "
-                             f"{c['validation_cost_per_entry']:9.3f} {-100 * c['compare']['relative']:+7.1f}% "
+                             f"{('%.1e' % wp) if wp is not None else '-':>8s} {c['validation_cost_per_entry']:9.3f} {-100 * c['compare']['relative']:+7.1f}% "
                              f"{c['compare']['p_better']:9.3f}  {'YES' if c['chosen'] else ('(yes)' if c['accepted'] else 'no'):8s}  {c['why']}")
             else:
-                lines.append(f"  {c['effect'] + ':' + c['variant']:30s} {_pct(red):>7s} {'':>9s} {'':>8s} {'':>9s}  "
+                lines.append(f"  {c['effect'] + ':' + c['variant']:30s} {_pct(red):>7s} {'':>8s} {'':>9s} {'':>8s} {'':>9s}  "
                              f"{'no':8s}  {c['why']}")
         rest = [f"{e}:{v} {_pct(r)}" for (e, v), r in screen.items() if (e, v) not in shown]
         if rest:

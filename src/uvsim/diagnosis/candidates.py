@@ -76,6 +76,23 @@ class Candidate:
     def complexity(self) -> int:
         return len(self.free)
 
+    @property
+    def null(self) -> dict:
+        """The parameters (and their values) that switch the effect off: what the
+        in-sample Wald test of :mod:`uvsim.diagnosis.core` tests against."""
+        off = {}
+        for n in self.free:
+            if n.startswith(("current_", "drag_centre_")) or n in ("tether_stiffness", "tether_tension",
+                                                                   "ballast_weight", "bottom_effect_damping",
+                                                                   "thruster_lag_time_constant"):
+                off[n] = 0.0
+            elif n.startswith(("thruster_gain_", "thruster_reverse_", "force_reverse_", "force_gain_")) \
+                    or n == "thrust_asymmetry_ratio":
+                off[n] = 1.0
+            elif self.effect == "coupled_damping":
+                off[n] = 0.0
+        return off
+
 
 def _current():
     b = {"current_n": (-CURRENT_H, CURRENT_H), "current_e": (-CURRENT_H, CURRENT_H),

@@ -68,6 +68,9 @@ SCREEN_FLOOR = 0.01
 #: Simpler variants of a winning effect are fitted and compared on validation only when
 #: their screening reduction is at least this share of the winner's.
 SIMPLER_SHARE = 0.5
+#: After an accepted candidate, the next one is fitted too only if its screening reduction
+#: is at least this share of the accepted one's (a close call the validation decides).
+CLOSE_SHARE = 0.8
 DEFAULT_HORIZON = 3.0
 #: Relative cost decrease at which a diagnosis fit stops: the decisions compare costs
 #: that differ by percents, so 1e-5 is ample.
@@ -148,11 +151,11 @@ class _Selector:
             fp.append(FreeParameter(n, s0, lo, hi))
         return ParameterSpace(fp, base, {k: v for k, v in fixed.items() if k not in free})
 
-    def fit_train(self, vehicle, space, label: str):
+    def fit_train(self, vehicle, space, label: str, max_iter: int | None = None):
         self.fits += 1
         self.say(f"fitting {label} ({space.p} parameter(s)) on {len(self.train)} training run(s)")
-        return fit(vehicle, self.train, space, meas=self.meas_tr, horizons=(self.horizon,), max_iter=self.max_iter,
-                   workers=self.workers, ftol=FTOL)
+        return fit(vehicle, self.train, space, meas=self.meas_tr, horizons=(self.horizon,),
+                   max_iter=self.max_iter if max_iter is None else max_iter, workers=self.workers, ftol=FTOL)
 
     def val_cost(self, vehicle, values: Mapping) -> dict:
         """Per-window validation costs of a model with fixed parameters (nodes re-estimated)."""
@@ -228,9 +231,7 @@ class _Selector:
             starts = [{**c.start, **tether_seed}] if (c.effect == "tether" and tether_seed) else _starts(c)
             for st in starts:
                 try:
-                    sp = self.space(veh, list(cur["free"]) + c.free, {**cur["bounds"], **c.bounds},
-                                    {**vals0, **st}, vals0)
-                    r = EquationError(veh, motions, sp, scale=ee0.scale).gauss_newton(iterations=2)
+                    r = self._joint_gn(veh, motions, c, cur, vals0, st, J[:nb], ee0.scale)
                 except (UvsimError, np.linalg.LinAlgError, ValueError) as exc:
                     r = {"rss": np.inf, "values": {}, "error": str(exc)}
                 if best is None or r["rss"] < best["rss"]:
@@ -241,6 +242,37 @@ class _Selector:
             out.append((c, {"reduction": red, "values": best["values"], **({"error": best["error"]}
                                                                             if "error" in best else {})}))
         return out, info
+
+    def _joint_gn(self, veh, motions, c: Candidate, cur, vals0: Mapping, start: Mapping, J_base: np.ndarray,
+                  scale: np.ndarray, iterations: int = 2) -> dict:
+        """Gauss-Newton on the equation error of candidate ``c`` together with the current
+        free parameters: the candidate's columns are re-differentiated at every step, the
+        current parameters' columns ``J_base`` (per unit, at ``vals0``) are reused (they move
+        little), so a step costs ``1 + len(c.free)`` evaluations."""
+        base = dict(vals0)
+        names_b = list(cur["free"])
+        lo_b = np.array([cur["bounds"][n][0] for n in names_b])
+        hi_b = np.array([cur["bounds"][n][1] for n in names_b])
+        xc = {n: float(start.get(n, c.start[n])) for n in c.free}
+        best = None
+        for it in range(iterations + 1):
+            sp = self.space(veh, c.free, c.bounds, xc, base)
+            ee = EquationError(veh, motions, sp, scale=scale)
+            Jc, r = ee.jacobian()
+            rss = float(r @ r)
+            if best is None or rss < best["rss"]:
+                best = {"rss": rss, "values": {**{n: base[n] for n in names_b}, **xc}}
+            if it == iterations:
+                break
+            Jc = Jc / sp.scale[:, None]
+            A = np.vstack([J_base, Jc]).T
+            d, *_ = np.linalg.lstsq(A, -r, rcond=None)
+            nb = len(names_b)
+            if nb:
+                b = np.clip(np.array([base[n] for n in names_b]) + d[:nb], lo_b, hi_b)
+                base.update(zip(names_b, map(float, b)))
+            xc = {n: float(np.clip(xc[n] + dd, *c.bounds[n])) for n, dd in zip(c.free, d[nb:])}
+        return best
 
     # ---------------------------------------------------------------- one step
     def current(self, accepted, values) -> dict:
@@ -289,8 +321,17 @@ class _Selector:
             picked = [x for x in choice if x[2] >= max(SCREEN_SHARE * lead, SCREEN_FLOOR)][: max(top, 1)]
         else:
             picked = choice
-        for c, s, _ in picked:
-            fitted.append(self.fit_candidate(c, s, cur, val_cur))
+        # through the simulator in screening order; stop at the first accepted candidate unless
+        # the next one screened nearly as well (then the validation decides between them)
+        lead_ok = None
+        for c, s, red in picked:
+            if lead_ok is not None and red < CLOSE_SHARE * lead_ok:
+                break
+            row = self.fit_candidate(c, s, cur, val_cur)
+            row["accepted"], row["why"] = _judge(row, val_cur)
+            fitted.append(row)
+            if row["accepted"] and lead_ok is None:
+                lead_ok = red
         return {"screening": ee_info, "screened": rows, "fitted": fitted, "all_screened": screened, "cur": cur}
 
     def fit_candidate(self, c: Candidate, s, cur, val_cur) -> dict:
@@ -326,6 +367,7 @@ class _Selector:
                 problem = f"fitted values are not physical: {exc}"
         vc = self.val_cost(veh, vals)
         cmp = bootstrap_improvement(val_cur["windows"], vc["windows"], level=LEVEL)
+        cmp["wald"] = _wald(best, c)
         row.update(result=best, values={k: best.values[k] for k in c.free}, std={k: best.std.get(k) for k in c.free},
                    train_cost=best.cost, val=vc, compare=cmp, problem=problem,
                    at_bounds=[n for n in best.at_bounds if n in c.free], vehicle=veh, all_values=vals)
@@ -376,6 +418,22 @@ def _starts(c: Candidate) -> list[dict]:
     for dn, de in ((-5.0, 0.0), (5.0, 0.0), (0.0, -5.0), (0.0, 5.0)):
         out.append({**c.start, "tether_anchor_n": n0 + dn, "tether_anchor_e": e0 + de})
     return out
+
+
+def _wald(res, c: Candidate) -> dict:
+    """In-sample Wald test of the effect being off (``c.null``) with the fit's cluster-robust
+    covariance (windows as clusters, so correlated residuals within a window do not make it
+    optimistic): ``W = (theta - theta_0)^T C^-1 (theta - theta_0)`` ~ chi^2_k under the null."""
+    from scipy.stats import chi2
+
+    null = c.null
+    idx = [res.names.index(n) for n in null if n in res.names]
+    if not idx:
+        return {"W": None, "k": 0, "p": None}
+    d = np.array([res.values[res.names[i]] - null[res.names[i]] for i in idx])
+    C = res.covariance[np.ix_(idx, idx)]
+    W = float(d @ np.linalg.pinv(C) @ d)
+    return {"W": W, "k": len(idx), "p": float(chi2.sf(W, len(idx)))}
 
 
 def _judge(row, val_cur) -> tuple[bool, str]:
@@ -460,12 +518,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     for k in range(1, max_effects + 1):
         st = sel.step(accepted, values, val_cur, exclude=exclude, only=only, top=top, k_step=k)
         table = []
-        winners = []
-        for row in st["fitted"]:
-            ok, why = _judge(row, val_cur)
-            row["accepted"], row["why"] = ok, why
-            if ok:
-                winners.append(row)
+        winners = [row for row in st["fitted"] if row.get("accepted")]
         best = max(winners, key=lambda r: r["compare"]["delta"]) if winners else None
         if best is not None:
             best = _simplest_sufficient(sel, best, st, accepted, values, val_cur) or best
