@@ -13,10 +13,12 @@ effect                variants (free parameters)                              ne
 ====================  ======================================================  ==========
 current               horizontal (n, e); 3d (n, e, d)                          -
 tether                horizontal pull (stiffness, anchor n, e); horizontal_     position
-                      slack (+ slack length); 3d (+ anchor d); 3d_slack;
-                      3d_attach (+ attachment x, y, z on the frame);
-                      tension (constant pull, anchor n, e, d); 3d_drag (3d +
-                      wetted cable length, quadratic cross-flow drag)
+                      slack (+ slack length); 3d (+ anchor d); tension
+                      (constant pull); 3d_slack; 3d_drag (+ wetted cable
+                      length: cross-flow drag); the same attached anywhere on
+                      the frame (3d_attach, tension_attach, slack_attach,
+                      drag_attach); full (tension + stiffness beyond slack +
+                      drag + attachment)
 ballast               xy (weight, x, y); xyz (weight, x, y, z)                  -
 thruster_lag          steady (time constant; starts at the command);            -
                       from_rest (starts at zero thrust)
@@ -106,6 +108,11 @@ def _current():
 
 
 def _tether(p_ref):
+    """Tether variants, from the elastic line at the origin to the full law.  The pull
+    along the line to the anchor is ``T_0 + k max(0, L - L_s)`` (:mod:`uvsim.effects.tether`):
+    ``tension`` is ``T_0`` alone, the elastic variants ``k`` (with ``L_s = 0`` or free),
+    ``full`` all three (when the line is always taut only ``T_0 - k L_s`` and ``k`` are
+    determined; the identifiability report says so)."""
     pn, pe, pd = (float(x) for x in p_ref)
     b = {"tether_stiffness": (0.0, TETHER_K), "tether_tension": (0.0, TETHER_T),
          "tether_anchor_n": (pn - ANCHOR_RANGE, pn + ANCHOR_RANGE),
@@ -119,26 +126,32 @@ def _tether(p_ref):
          "tether_length": 10.0, "tether_slack_length": 0.0}
     base = {"type": "tether", "tension": 0.0, "stiffness": 0.5, "slack_length": 0.0, "length": 0.0,
             "anchor_n": pn - 5.0, "anchor_e": pe, "anchor_d": pd}
-    anchor3 = ["tether_anchor_n", "tether_anchor_e", "tether_anchor_d"]
+    tens = {**base, "stiffness": 0.0, "tension": 1.0}
+    a3 = ["tether_anchor_n", "tether_anchor_e", "tether_anchor_d"]
+    at = ["tether_attach_x", "tether_attach_y", "tether_attach_z"]
+    k, ls, t0, ln = "tether_stiffness", "tether_slack_length", "tether_tension", "tether_length"
+    drag = "quadratic cross-flow drag of the wetted cable (C_d 1.2, 7.6 mm Fathom tether)"
+
+    def cand(variant, spec, free, notes):
+        return Candidate("tether", variant, spec, free, b, s, notes)
+
     return [
-        Candidate("tether", "horizontal", {**base, "horizontal": True},
-                  ["tether_stiffness", "tether_anchor_n", "tether_anchor_e"], b, s,
-                  "elastic line pulling horizontally towards an anchor (cable on the floor or at the surface)"),
-        Candidate("tether", "horizontal_slack", {**base, "horizontal": True},
-                  ["tether_stiffness", "tether_slack_length", "tether_anchor_n", "tether_anchor_e"], b, s,
-                  "elastic line pulling horizontally once stretched beyond its slack length"),
-        Candidate("tether", "3d", dict(base), ["tether_stiffness"] + anchor3, b, s,
-                  "elastic line pulling in 3-D towards an anchor, attached at the body origin"),
-        Candidate("tether", "3d_slack", dict(base), ["tether_stiffness", "tether_slack_length"] + anchor3, b, s,
-                  "elastic line pulling in 3-D once stretched beyond its slack length"),
-        Candidate("tether", "3d_attach", dict(base),
-                  ["tether_stiffness"] + anchor3 + ["tether_attach_x", "tether_attach_y", "tether_attach_z"], b, s,
-                  "elastic line in 3-D, attached anywhere on the frame (moments from the lever arm)"),
-        Candidate("tether", "tension", {**base, "stiffness": 0.0, "tension": 1.0}, ["tether_tension"] + anchor3, b, s,
-                  "constant pull towards an anchor (a spool or float), attached at the body origin"),
-        Candidate("tether", "3d_drag", dict(base, length=10.0), ["tether_stiffness"] + anchor3 + ["tether_length"],
-                  b, s, "elastic line in 3-D plus quadratic cross-flow drag of a cable of this wetted length "
-                        "(C_d 1.2, 7.6 mm Fathom tether)"),
+        cand("horizontal", {**base, "horizontal": True}, [k, "tether_anchor_n", "tether_anchor_e"],
+             "elastic line pulling horizontally towards an anchor (cable on the floor or at the surface)"),
+        cand("horizontal_slack", {**base, "horizontal": True}, [k, ls, "tether_anchor_n", "tether_anchor_e"],
+             "elastic line pulling horizontally once stretched beyond its slack length"),
+        cand("3d", dict(base), [k] + a3, "elastic line pulling in 3-D towards an anchor, attached at the body origin"),
+        cand("tension", tens, [t0] + a3, "constant pull towards an anchor (a spool or float), attached at the origin"),
+        cand("3d_slack", dict(base), [k, ls] + a3, "elastic line pulling in 3-D once stretched beyond its slack"),
+        cand("3d_drag", dict(base, length=10.0), [k] + a3 + [ln], f"elastic line in 3-D plus {drag}"),
+        cand("3d_attach", dict(base), [k] + a3 + at, "elastic line in 3-D, attached anywhere on the frame"),
+        cand("tension_attach", tens, [t0] + a3 + at, "constant pull, attached anywhere on the frame"),
+        cand("slack_attach", dict(base), [k, ls] + a3 + at,
+             "elastic line beyond its slack length, attached anywhere on the frame"),
+        cand("drag_attach", {**tens, "length": 10.0}, [t0] + a3 + at + [ln],
+             f"constant pull plus {drag}, attached anywhere on the frame"),
+        cand("full", {**base, "tension": 1.0, "length": 10.0}, [t0, k, ls] + a3 + at + [ln],
+             f"tension plus elastic pull beyond a slack length, plus {drag}, attached anywhere on the frame"),
     ]
 
 

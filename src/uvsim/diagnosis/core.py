@@ -14,14 +14,15 @@ Procedure (issue 10; docs/diagnose.md):
 3. **Fit** the ``top`` effects through the simulator (windowed output error, started
    from the screening estimate and from the catalogue's default start: a small
    multi-start), with the current model's parameters fixed.
-4. **Judge on the validation runs**: for the current model and each fitted candidate
-   the node states of the validation windows are re-estimated with the parameters
-   fixed, and the per-window costs are compared by a block bootstrap over windows
-   (:mod:`uvsim.fitting.compare`).  A candidate is *accepted* when it is significantly
-   better at level :data:`LEVEL` (one-sided), removes at least :data:`MIN_RELATIVE` of
-   the validation cost, and its fitted values are physical (the effect's field ranges).
-   Among variants of one effect, the simplest that is not significantly worse than the
-   best wins; among effects, the largest significant improvement.
+4. **Judge** (:func:`_judge`): in the training fit, a Wald test of "the effect is off"
+   with the cluster-robust covariance (windows as clusters, so autocorrelated residuals
+   do not make it optimistic) must reject at :data:`WALD_P`; on the validation runs
+   (node states re-estimated with the parameters fixed) the cost must drop by at least
+   :data:`MIN_RELATIVE`, confirmed by a block bootstrap over windows
+   (:mod:`uvsim.fitting.compare`) in :data:`VAL_LEVEL` of the resamples; and the fitted
+   values must be physical (the effect's field ranges).  Among variants of one effect,
+   the simplest that is not significantly worse than the best (bootstrap at
+   :data:`LEVEL`) wins; among effects, the largest improvement.
 5. **Forward selection.**  The accepted effect joins the model, everything chosen so far
    (plus ``retune``) is re-fitted together, and steps 2-4 repeat with the remaining
    effects until nothing significant is left or ``max_effects`` are in.
@@ -50,8 +51,17 @@ from uvsim.measurements import measurements_for
 from uvsim.plausibility import check_runs, parse_allow
 from uvsim.vehicle import load_vehicle
 
-#: One-sided confidence level of "significantly better" (block bootstrap).
+#: One-sided confidence level of "significantly better" (block bootstrap), used to compare
+#: variants; the acceptance of an effect uses VAL_LEVEL together with the Wald test.
 LEVEL = 0.99
+#: Acceptance: the robust Wald test of "the effect is off" on the training fit must give a
+#: p-value below WALD_P, and the validation cost must drop by MIN_RELATIVE with the drop
+#: confirmed in VAL_LEVEL of the block-bootstrap resamples of the validation windows.  The
+#: two pieces of evidence are complementary: on clean scenarios the Wald test alone accepted
+#: spurious thruster lags (p ~ 1e-6) that made the validation runs worse, and a handful of
+#: validation windows alone (two runs) cannot reach 99 % for a real but moderate effect.
+WALD_P = 1e-4
+VAL_LEVEL = 0.9
 #: Smallest share of the validation cost an accepted effect must remove (practical
 #: significance: with thousands of samples a 1 % improvement can be "significant").
 MIN_RELATIVE = 0.05
@@ -68,6 +78,8 @@ SCREEN_FLOOR = 0.01
 #: Simpler variants of a winning effect are fitted and compared on validation only when
 #: their screening reduction is at least this share of the winner's.
 SIMPLER_SHARE = 0.5
+#: At most this many simpler variants are fitted to challenge a winner (cost control).
+MAX_SIMPLER = 1
 #: After an accepted candidate, the next one is fitted too only if its screening reduction
 #: is at least this share of the accepted one's (a close call the validation decides).
 CLOSE_SHARE = 0.8
@@ -180,7 +192,7 @@ class _Selector:
             return {}
 
     # ---------------------------------------------------------------- screening
-    def screen(self, cur, cands: list) -> tuple[list, dict]:
+    def screen(self, cur, cands: list, coupled: bool = True) -> tuple[list, dict]:
         """Equation-error reduction and seed of every candidate, each fitted together with
         the current model's free parameters (``cur``: vehicle, values, free, bounds), and the
         coupled-damping pick; returns (candidates with their screening numbers, info)."""
@@ -201,8 +213,8 @@ class _Selector:
         # one Jacobian for the families that are linear in their parameters and picked by
         # regression: the off-diagonal damping derivatives (forward stepwise, two of them)
         # and each thruster's gain (one variant per thruster)
-        terms = coupling_terms()
-        veh_c = veh0.with_effects([{"type": "coupled_damping", **{t: 0.0 for t in terms}}])
+        terms = [t for t in coupling_terms() if t not in cur["free"]] if coupled else []
+        veh_c = veh0.with_effects([{"type": "coupled_damping", **{t: 0.0 for t in terms}}]) if terms else veh0
         gains = [f"thruster_gain_{i + 1}" for i in range(veh0.n_thrusters)]
         lin = list(cur["free"]) + terms + (gains if any(c.effect == "thruster_gain" for c in cands) else [])
         bnd = {**cur["bounds"], **{t: (-1e4, 1e4) for t in terms}, **{g: (0.05, 1.5) for g in gains}}
@@ -211,24 +223,29 @@ class _Selector:
         J = J / sp_l.scale[:, None]  # per unit of each parameter
         nb = len(cur["free"])
         base_cols = list(range(nb))
-        pick = _stepwise(J[nb:nb + len(terms)], rl, terms, k=2, base=J[:nb])
-        cands = cands + [coupled_candidate(pick)]
+        if coupled:
+            cands = cands + [coupled_candidate(_stepwise(J[nb:nb + len(terms)], rl, terms, k=2, base=J[:nb]))]
         single = {}
         for i, g in enumerate(gains):
             col = nb + len(terms) + i
             if col < J.shape[0]:
                 single[g] = _ls_step(J[base_cols + [col]], rl, [*cur["free"], g], {**vals0})
-        tether_seed: dict = {}
-        for c in sorted(cands, key=lambda c: (c.effect != "tether", c.variant != "3d")):
+        tether_best = (np.inf, {})  # the best tether so far seeds the next (more general) variant
+        order = sorted(cands, key=lambda c: (c.effect != "tether", c.complexity if c.effect == "tether" else 0,
+                                             c.variant != "3d"))
+        for c in order:
             if c.effect == "thruster_gain" and len(c.free) == 1 and c.free[0] in single:
                 vals, rss = single[c.free[0]]
                 out.append((c, {"reduction": max(0.0, 1.0 - rss / rss0), "values": vals}))
                 continue
             veh = veh0.with_effects([c.spec]) if c.spec is not None else veh0
             best = None
-            # a small multi-start on the cheap equation error (the global stage); the other tether
-            # variants start from the best 3-D tether
-            starts = [{**c.start, **tether_seed}] if (c.effect == "tether" and tether_seed) else _starts(c)
+            # a small multi-start on the cheap equation error (the global stage) for the first
+            # tether; the more general ones start from the best simpler tether
+            if c.effect == "tether" and tether_best[1]:
+                starts = [{**c.start, **{k: v for k, v in tether_best[1].items() if k in c.free}}]
+            else:
+                starts = _starts(c)
             for st in starts:
                 try:
                     r = self._joint_gn(veh, motions, c, cur, vals0, st, J[:nb], ee0.scale)
@@ -237,8 +254,8 @@ class _Selector:
                 if best is None or r["rss"] < best["rss"]:
                     best = r
             red = max(0.0, 1.0 - best["rss"] / rss0) if np.isfinite(best["rss"]) else 0.0
-            if c.effect == "tether" and c.variant == "3d" and best.get("values"):
-                tether_seed = {k: v for k, v in best["values"].items() if k in c.free}
+            if c.effect == "tether" and best.get("values") and best["rss"] < tether_best[0]:
+                tether_best = (best["rss"], {k: v for k, v in best["values"].items() if k.startswith("tether_")})
             out.append((c, {"reduction": red, "values": best["values"], **({"error": best["error"]}
                                                                             if "error" in best else {})}))
         return out, info
@@ -295,7 +312,9 @@ class _Selector:
         cands = catalogue(input_kind=run0.input_kind, n_thrusters=vehicle_cur.n_thrusters, dt=dt, p_ref=p_ref, has_position=has_pos, z_max=z_max, only=only,
                           exclude=exclude)
         self.say(f"step {k_step}: screening {len(cands) + 1} candidate variant(s) by equation error")
-        screened, ee_info = self.screen(cur, cands) if cands else ([], {"available": False})
+        want_coupled = "coupled_damping" not in exclude and (only is None or "coupled_damping" in only)
+        screened, ee_info = (self.screen(cur, cands, coupled=want_coupled) if cands
+                             else ([], {"available": False}))
         # per effect: the simplest variant within VARIANT_SHARE of the best variant's reduction
         by_effect: dict = {}
         for c, s in screened:
@@ -437,20 +456,28 @@ def _wald(res, c: Candidate) -> dict:
 
 
 def _judge(row, val_cur) -> tuple[bool, str]:
+    """The acceptance rule (module docstring): physical values, an in-sample robust Wald
+    test of the effect being off at :data:`WALD_P`, and on the validation runs a
+    reduction of the cost by at least :data:`MIN_RELATIVE` that the block bootstrap over
+    windows confirms at :data:`VAL_LEVEL` (one-sided)."""
     if "compare" not in row:
         return False, row.get("why", "not fitted")
     cmp = row["compare"]
     if row["problem"]:
         return False, row["problem"]
-    if not cmp["significant"]:
-        return False, (f"not significant: validation cost {100 * cmp['relative']:+.1f} % "
-                       f"(bootstrap P(better) = {cmp['p_better']:.3f}, needs the {100 * (1 - LEVEL):.0f} % "
-                       f"quantile above 0)")
+    w = cmp.get("wald") or {}
+    if w.get("p") is not None and not w["p"] < WALD_P:
+        return False, (f"not significant in the training runs: robust Wald test p = {w['p']:.2g} "
+                       f"(needs < {WALD_P:g}; the fitted effect is indistinguishable from none)")
     if cmp["relative"] < MIN_RELATIVE:
-        return False, (f"too small: removes {100 * cmp['relative']:.1f} % of the validation cost "
-                       f"(needs >= {100 * MIN_RELATIVE:.0f} %) although significant")
-    return True, (f"significant: removes {100 * cmp['relative']:.1f} % of the validation cost "
-                  f"(P(better) = {cmp['p_better']:.3f})")
+        return False, (f"does not help the validation runs: validation cost {-100 * cmp['relative']:+.1f} % "
+                       f"(needs a reduction of >= {100 * MIN_RELATIVE:.0f} %)")
+    if cmp["p_better"] < VAL_LEVEL:
+        return False, (f"not confirmed on the validation runs: the cost drops {100 * cmp['relative']:.1f} % but "
+                       f"the bootstrap over windows finds it better in only {100 * cmp['p_better']:.0f} % of "
+                       f"resamples (needs {100 * VAL_LEVEL:.0f} %)")
+    return True, (f"significant: Wald p = {w.get('p', float('nan')):.1g} in training, validation cost "
+                  f"-{100 * cmp['relative']:.1f} % (better in {100 * cmp['p_better']:.1f} % of resamples)")
 
 
 def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: Sequence[str] | None = None,
@@ -521,6 +548,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         winners = [row for row in st["fitted"] if row.get("accepted")]
         best = max(winners, key=lambda r: r["compare"]["delta"]) if winners else None
         if best is not None:
+            best = _richer_challenger(sel, best, st, val_cur) or best
             best = _simplest_sufficient(sel, best, st, accepted, values, val_cur) or best
         for row in st["fitted"]:
             table.append(_row_report(row, best))
@@ -598,6 +626,34 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
                      ol_before, ol_after, sel.meas_va)
 
 
+def _richer_challenger(sel, best, st, val_cur):
+    """The winning effect's variant that removed most of the equation error, when that is
+    not the winner (the screening prefers the simplest of near-equals, but it is blunt to
+    details such as a tether's pull law): fitted, and it replaces the winner when it is
+    significantly better on validation (bootstrap at :data:`LEVEL`, by at least
+    :data:`MIN_RELATIVE`).  Returns the new winner or None."""
+    c = best["candidate"]
+    same = [(cc, s) for cc, s in st["all_screened"] if cc.effect == c.effect and s]
+    if not same:
+        return None
+    top_c, top_s = max(same, key=lambda cs: cs[1].get("reduction", 0.0))
+    if top_c is c or top_c.complexity <= c.complexity:
+        return None
+    row = sel.fit_candidate(top_c, top_s, st["cur"], val_cur)
+    if "compare" not in row:
+        return None
+    ok, why = _judge(row, val_cur)
+    row["accepted"], row["why"] = ok, why
+    st["fitted"].append(row)
+    if not ok:
+        return None
+    better = bootstrap_improvement(best["val"]["windows"], row["val"]["windows"], level=LEVEL)
+    if better["p_better"] >= VAL_LEVEL and better["relative"] >= MIN_RELATIVE:
+        row["why"] = why + f"; significantly better than {c.variant} on validation"
+        return row
+    return None
+
+
 def _simplest_sufficient(sel, best, st, accepted, values, val_cur):
     """Among the winning effect's variants simpler than the winner, the simplest that is
     not significantly worse than it on validation (fitted here); None to keep the winner."""
@@ -607,6 +663,7 @@ def _simplest_sufficient(sel, best, st, accepted, values, val_cur):
     simpler = [cc for cc, _ in st["all_screened"] if cc.effect == c.effect and cc.complexity < c.complexity
                and red[id(cc)] >= SIMPLER_SHARE * red.get(id(c), 0.0)]
     simpler.sort(key=lambda cc: cc.complexity)
+    simpler = simpler[:MAX_SIMPLER]
     for cc in simpler:
         s = next((s for x, s in st["all_screened"] if x is cc), None)
         row = sel.fit_candidate(cc, s, st["cur"], val_cur)
