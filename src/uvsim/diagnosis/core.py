@@ -351,6 +351,20 @@ class _Selector:
             fitted.append(row)
             if row["accepted"] and lead_ok is None:
                 lead_ok = red
+        if lead_ok is None and ee_info.get("available"):
+            # nothing accepted: the equation error is blunt for small effects in slow logs (10 Hz), so
+            # the next effects by screening rank get an output-error fit too, up to `top` fits in all
+            done = {id(r["candidate"]) for r in fitted}
+            for c, s, red in choice:
+                if len(fitted) >= max(top, 1):
+                    break
+                if id(c) in done:
+                    continue
+                row = self.fit_candidate(c, s, cur, val_cur)
+                row["accepted"], row["why"] = _judge(row, val_cur)
+                fitted.append(row)
+                if row["accepted"]:
+                    break
         return {"screening": ee_info, "screened": rows, "fitted": fitted, "all_screened": screened, "cur": cur}
 
     def fit_candidate(self, c: Candidate, s, cur, val_cur) -> dict:
@@ -546,7 +560,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         st = sel.step(accepted, values, val_cur, exclude=exclude, only=only, top=top, k_step=k)
         table = []
         winners = [row for row in st["fitted"] if row.get("accepted")]
-        best = max(winners, key=lambda r: r["compare"]["delta"]) if winners else None
+        best = _parsimonious(winners)
         if best is not None:
             best = _richer_challenger(sel, best, st, val_cur) or best
             best = _simplest_sufficient(sel, best, st, accepted, values, val_cur) or best
@@ -624,6 +638,19 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     }
     return Diagnosis(report, veh, veh_after, list(zip(accepted, [dict(values) for _ in accepted])), train, val,
                      ol_before, ol_after, sel.meas_va)
+
+
+def _parsimonious(winners: list):
+    """Among the accepted candidates of a step, the one with the fewest parameters whose
+    validation cost is not significantly worse (bootstrap at :data:`LEVEL`) than the best's
+    (two effects can describe the same force: a constant-tension tether pulling straight
+    down is a ballast); ties by the lower validation cost.  None without a winner."""
+    if not winners:
+        return None
+    top = min(winners, key=lambda r: r["val"]["cost"])
+    ok = [r for r in winners
+          if r is top or not bootstrap_improvement(r["val"]["windows"], top["val"]["windows"], level=LEVEL)["significant"]]
+    return min(ok, key=lambda r: (r["candidate"].complexity, r["val"]["cost"]))
 
 
 def _richer_challenger(sel, best, st, val_cur):
