@@ -13,7 +13,7 @@ from uvsim.benchmarks.scenarios import BASE_RETUNE, TRUTH_TO_CATALOGUE
 from uvsim.cli import main
 from uvsim.diagnosis import diagnose
 from uvsim.diagnosis.candidates import EFFECTS, catalogue
-from uvsim.diagnosis.core import _stepwise
+from uvsim.diagnosis.selector import _stepwise
 from uvsim.errors import CalibrationError
 from uvsim.fitting.compare import bootstrap_improvement
 from uvsim.scenarios import generate, load_truth, sample_scenario
@@ -110,6 +110,36 @@ def test_bad_options_are_clear_errors(tmp_path, kw, match):
     out, _ = _scenario(tmp_path, 4, n_effects=0, n_runs=4, duration=[6, 6])
     with pytest.raises(CalibrationError, match=match):
         diagnose(out, **kw)
+
+
+def test_interrupted_diagnosis_resumes_without_repeating_finished_fits(tmp_path):
+    """Every finished fit is checkpointed; a resumed run takes them from the file and reaches
+    the same answer as an uninterrupted one."""
+    out, _ = _scenario(tmp_path, 1, effects=[{"type": "current", "magnitude": 0.05}], n_runs=6, duration=[6, 8])
+    kw = dict(retune=["X_u", "N_r"], only=["current", "ballast"], max_effects=1)
+    ref = diagnose(out, **kw).report
+    ck = tmp_path / "d.ckpt"
+    seen = []
+
+    def stop_at_second_fit(msg):
+        seen.append(msg)
+        if sum(m.startswith("fit ") for m in seen) == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        diagnose(out, checkpoint=ck, progress=stop_at_second_fit, **kw)
+    assert ck.is_file()
+    log = []
+    rep = diagnose(out, resume=ck, progress=log.append, **kw).report
+    assert any(m.startswith("resuming from") for m in log)
+    assert sum("taken from the checkpoint" in m for m in log) >= 2  # the baseline fit and its validation cost
+    assert rep["effect"] == ref["effect"]
+    for e, e_ref in zip(rep["effects"], ref["effects"]):
+        for k, d in e["parameters"].items():
+            assert d["value"] == pytest.approx(e_ref["parameters"][k]["value"], rel=1e-9)
+    # a checkpoint of other settings is refused, naming what must match
+    with pytest.raises(CalibrationError, match="different settings"):
+        diagnose(out, resume=ck, retune=["X_u"], only=["current", "ballast"], max_effects=1)
 
 
 # ----------------------------------------------------------------------------- units

@@ -3,6 +3,7 @@
     uvsim diagnose --data DIR [--vehicle NAME|FILE] [--json report.json] [--plots DIR] [--out fixed.yaml]
                    [--retune X_uu,N_rr] [--only current,tether] [--noise depth=0.01,attitude=0.005]
                    [--weights position=1,depth=0] [--horizon 3] [--max-effects 2] [--workers 2]
+                   [--checkpoint CKPT] [--resume CKPT]
 """
 from __future__ import annotations
 
@@ -39,6 +40,10 @@ def register(subparsers) -> None:
     p.add_argument("--top", type=int, default=3, help="candidates fitted through the simulator per step (default 3)")
     p.add_argument("--max-iter", type=int, default=12, help="Levenberg-Marquardt iterations per fit (default 12)")
     p.add_argument("--workers", type=int, default=1, help="processes for the simulations (same result)")
+    p.add_argument("--checkpoint", help="file saved after every finished fit (default: the --json or --out file "
+                                        "plus .ckpt; none without either)")
+    p.add_argument("--resume", metavar="CKPT", help="continue an interrupted diagnosis from its checkpoint "
+                                                    "(same dataset, vehicle and settings)")
     p.add_argument("--quiet", action="store_true", help="no progress messages")
     add_allow_argument(p)
     p.set_defaults(func=run)
@@ -106,15 +111,28 @@ def run(args) -> int:
 
     progress = None if args.quiet else (lambda m: print(f"uvsim diagnose: {m}", flush=True))
     noise, weights = parse_pairs(args.noise, "--noise"), parse_pairs(args.weights, "--weights")
-    check_outputs({"--json": args.json_out, "--out": args.out}, {"--plots": args.plots})
+    ckpt = args.checkpoint or next((f"{f}.ckpt" for f in (args.json_out, args.out) if f), None)
+    check_outputs({"--json": args.json_out, "--out": args.out, "--checkpoint": ckpt}, {"--plots": args.plots})
+    if args.resume and not Path(args.resume).is_file():
+        raise CalibrationError(f"--resume: the checkpoint {args.resume} does not exist")
     ds = read_dataset(args.data)
     if args.vehicle is None and ds.vehicle is None:
         raise CalibrationError(f"{ds.path}: no --vehicle given and the manifest names none")
     veh = load_vehicle(args.vehicle if args.vehicle is not None else (ds.vehicle_file or ds.vehicle))
     notes = check_runs_at_door("diagnose", ds.runs, veh, args.allow)
-    diag = diagnose(ds, veh, retune=_list(args.retune), only=_list(args.only), noise=noise, weights=weights,
-                    horizon=args.horizon, max_effects=args.max_effects, top=args.top, max_iter=args.max_iter,
-                    workers=args.workers, progress=progress, allow=parse_allow(args.allow))
+    try:
+        diag = diagnose(ds, veh, retune=_list(args.retune), only=_list(args.only), noise=noise, weights=weights,
+                        horizon=args.horizon, max_effects=args.max_effects, top=args.top, max_iter=args.max_iter,
+                        workers=args.workers, progress=progress, allow=parse_allow(args.allow), checkpoint=ckpt,
+                        resume=args.resume)
+    except KeyboardInterrupt:
+        held = ckpt or args.resume
+        if held and Path(held).is_file():
+            say("diagnose", f"interrupted; {held} holds the finished fits; continue with --resume {held}")
+        else:
+            say("diagnose", "interrupted before the first fit finished" + (
+                "" if held else " (no checkpoint: give --checkpoint, --json or --out to keep finished fits)"))
+        raise
     rep = diag.report
     split = rep["runs"]["split"]
     if split != "from the manifest":  # the runs were re-split: say so (it is in the report too)

@@ -1,0 +1,386 @@
+"""One diagnosis's state and steps: screening by equation error, fits through the simulator.
+
+:class:`Selector` holds the runs, their measurement models and the fits made so far;
+:meth:`Selector.step` screens every candidate variant of :mod:`uvsim.diagnosis.candidates`
+on the inverse-dynamics residual of the current model (:mod:`uvsim.fitting.equation_error`,
+no simulation), fits the best through the simulator (windowed prediction error,
+:func:`uvsim.fitting.fit`) together with the current model's free parameters, and judges
+them (:mod:`uvsim.diagnosis.decision`).  Every fit is stored under a fingerprint of what it
+fitted, so a diagnosis interrupted and resumed from its checkpoint repeats no finished fit.
+"""
+from __future__ import annotations
+
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from uvsim.checkpoint import fingerprint
+from uvsim.diagnosis.candidates import Candidate, catalogue, coupled_candidate, coupling_terms
+from uvsim.diagnosis.decision import LEVEL, judge, wald
+from uvsim.errors import CalibrationError, UvsimError, VehicleError
+from uvsim.fitting import fit
+from uvsim.fitting.compare import bootstrap_improvement
+from uvsim.fitting.equation_error import EquationError, measured_motion
+from uvsim.fitting.parameters import FreeParameter, ParameterSpace, default_bounds
+from uvsim.forces import make_term
+from uvsim.measurements import measurements_for
+
+#: A variant is as good as the best of its effect when it removes this share of what the
+#: best removes in the screening.
+VARIANT_SHARE = 0.9
+#: Candidates fitted through the simulator: at most ``top`` effects whose screening
+#: reduction is at least this share of the best one's (and above SCREEN_FLOOR).
+SCREEN_SHARE = 0.25
+SCREEN_FLOOR = 0.01
+#: After an accepted candidate, the next one is fitted too only if its screening reduction
+#: is at least this share of the accepted one's (a close call the validation decides).
+CLOSE_SHARE = 0.8
+#: Relative cost decrease at which a diagnosis fit stops: the decisions compare costs
+#: that differ by percents, so 1e-5 is ample.
+FTOL = 1e-5
+
+
+class Selector:
+    """State and steps of one diagnosis (module docstring).
+
+    ``store`` is a dict of finished fits by fingerprint (restored from a checkpoint), and
+    ``on_fit(store)`` is called after every new fit (to save the checkpoint)."""
+
+    def __init__(self, vehicle, train, val, *, retune, noise, weights, horizon, max_iter, workers, say,
+                 store=None, on_fit=None):
+        self.base_vehicle = vehicle
+        self.train, self.val = train, val
+        self.noise, self.weights = noise, weights
+        self.horizon, self.max_iter, self.workers, self.say = horizon, max_iter, workers, say
+        self.meas_tr = [measurements_for(r, vehicle, noise=noise, weights=weights, run_weight=1.0) for r in train]
+        self.meas_va = [measurements_for(r, vehicle, noise=noise, weights=weights, run_weight=1.0) for r in val]
+        self.motions = [measured_motion(r) for r in train]
+        self.retune = list(retune or [])
+        p = vehicle.parameters()
+        unknown = [n for n in self.retune if n not in p]
+        if unknown:
+            raise CalibrationError(f"retune: unknown base parameter(s) {unknown} of vehicle {vehicle.name}")
+        self.retune_bounds = {n: default_bounds(n, p[n], 0.5) for n in self.retune}
+        self.fits = 0
+        self.store = {} if store is None else store
+        self.on_fit = on_fit
+
+    # ---------------------------------------------------------------- models
+    def vehicle_for(self, accepted: Sequence[Candidate], extra: Candidate | None = None):
+        specs = [c.spec for c in accepted if c.spec is not None]
+        if extra is not None and extra.spec is not None:
+            specs.append(extra.spec)
+        return self.base_vehicle.with_effects(specs) if specs else self.base_vehicle
+
+    def space(self, vehicle, free: Sequence[str], bounds: Mapping, start: Mapping, fixed: Mapping) -> ParameterSpace:
+        base = vehicle.parameters()
+        fp = []
+        for n in free:
+            lo, hi = bounds[n]
+            s0 = float(np.clip(start.get(n, base[n]), lo, hi))  # seeds may come from a screening at a bound
+            fp.append(FreeParameter(n, s0, lo, hi))
+        return ParameterSpace(fp, base, {k: v for k, v in fixed.items() if k not in free})
+
+    def _fit(self, kind: str, vehicle, space: ParameterSpace, runs, meas, max_iter: int, label: str):
+        """``fit`` with the store: a fit already made (same model, free parameters, start and
+        fixed values, runs) is taken from it."""
+        key = fingerprint({"kind": kind, "effects": [e.to_dict() for e in vehicle.effects],
+                           "free": [(p.name, p.start, p.lower, p.upper) for p in space.free],
+                           "fixed": space.fixed, "runs": [r.name for r in runs], "max_iter": max_iter})
+        if key in self.store:
+            self.say(f"{label}: taken from the checkpoint")
+            return self.store[key]
+        res = fit(vehicle, runs, space, meas=meas, horizons=(self.horizon,), max_iter=max_iter,
+                  workers=self.workers, ftol=FTOL)
+        self.store[key] = res
+        if self.on_fit is not None:
+            self.on_fit(self.store)
+        return res
+
+    def fit_train(self, vehicle, space, label: str, max_iter: int | None = None):
+        self.fits += 1
+        self.say(f"fit {self.fits}: {label} ({space.p} parameter(s)) on {len(self.train)} training run(s)")
+        return self._fit("train", vehicle, space, self.train, self.meas_tr,
+                         self.max_iter if max_iter is None else max_iter, label)
+
+    def val_cost(self, vehicle, values: Mapping) -> dict:
+        """Per-window validation costs of a model with fixed parameters (nodes re-estimated)."""
+        sp = ParameterSpace([], vehicle.parameters(), dict(values))
+        res = self._fit("validation", vehicle, sp, self.val, self.meas_va, self.max_iter, "validation cost")
+        w = np.concatenate(res.window_costs)
+        return {"windows": w, "cost": float(w.sum()), "n": int(res.n_residuals),
+                "per_entry": float(w.sum() / max(res.n_residuals, 1))}
+
+    def seed_retune(self, vehicle) -> dict:
+        """Equation-error estimate of the re-tuned base coefficients (the start of the
+        baseline fit; damping and added mass enter the inverse dynamics linearly)."""
+        motions = [m for m in self.motions if m is not None]
+        if not motions or not self.retune:
+            return {}
+        self.say(f"equation-error start for the {len(self.retune)} re-tuned coefficient(s)")
+        sp = self.space(vehicle, self.retune, self.retune_bounds, {}, {})
+        try:
+            return EquationError(vehicle, motions, sp).gauss_newton(iterations=3)["values"]
+        except (UvsimError, np.linalg.LinAlgError, ValueError):
+            return {}
+
+    # ---------------------------------------------------------------- screening
+    def screen(self, cur, cands: list, coupled: bool = True) -> tuple[list, dict]:
+        """Equation-error reduction and seed of every candidate, each fitted together with
+        the current model's free parameters (``cur``: vehicle, values, free, bounds), and the
+        coupled-damping pick; returns (candidates with their screening numbers, info)."""
+        motions = [m for m in self.motions if m is not None]
+        info = {"available": bool(motions)}
+        if not motions:
+            return [(c, None) for c in cands], info
+        veh0, vals0 = cur["vehicle"], dict(cur["values"])
+        ee0 = EquationError(veh0, motions, ParameterSpace([], veh0.parameters(), vals0))
+        if cur["free"]:  # the current model at its own equation-error optimum
+            sp0 = self.space(veh0, cur["free"], cur["bounds"], vals0, vals0)
+            vals0.update(EquationError(veh0, motions, sp0, scale=ee0.scale).gauss_newton(iterations=2)["values"])
+        r0 = EquationError(veh0, motions, ParameterSpace([], veh0.parameters(), vals0), scale=ee0.scale).residuals(
+            np.zeros((1, 0)))[0]
+        rss0 = float(r0 @ r0)
+        info.update(rss=rss0, n=int(r0.size), scale=ee0.scale.tolist())
+        out = []
+        # one Jacobian for the families that are linear in their parameters and picked by
+        # regression: the off-diagonal damping derivatives (forward stepwise, two of them)
+        # and each thruster's gain (one variant per thruster)
+        terms = [t for t in coupling_terms() if t not in cur["free"]] if coupled else []
+        veh_c = veh0.with_effects([{"type": "coupled_damping", **{t: 0.0 for t in terms}}]) if terms else veh0
+        gains = [f"thruster_gain_{i + 1}" for i in range(veh0.n_thrusters)]
+        lin = list(cur["free"]) + terms + (gains if any(c.effect == "thruster_gain" for c in cands) else [])
+        bnd = {**cur["bounds"], **{t: (-1e4, 1e4) for t in terms}, **{g: (0.05, 1.5) for g in gains}}
+        sp_l = self.space(veh_c, lin, bnd, vals0, vals0)
+        J, rl = EquationError(veh_c, motions, sp_l, scale=ee0.scale).jacobian()
+        J = J / sp_l.scale[:, None]  # per unit of each parameter
+        nb = len(cur["free"])
+        base_cols = list(range(nb))
+        if coupled:
+            cands = cands + [coupled_candidate(_stepwise(J[nb:nb + len(terms)], rl, terms, k=2, base=J[:nb]))]
+        single = {}
+        for i, g in enumerate(gains):
+            col = nb + len(terms) + i
+            if col < J.shape[0]:
+                single[g] = _ls_step(J[base_cols + [col]], rl, [*cur["free"], g], {**vals0})
+        tether_best = (np.inf, {})  # the best tether so far seeds the next (more general) variant
+        order = sorted(cands, key=lambda c: (c.effect != "tether", c.complexity if c.effect == "tether" else 0,
+                                             c.variant != "3d"))
+        for c in order:
+            if c.effect == "thruster_gain" and len(c.free) == 1 and c.free[0] in single:
+                vals, rss = single[c.free[0]]
+                out.append((c, {"reduction": max(0.0, 1.0 - rss / rss0), "values": vals}))
+                continue
+            veh = veh0.with_effects([c.spec]) if c.spec is not None else veh0
+            best = None
+            # a small multi-start on the cheap equation error (the global stage) for the first
+            # tether; the more general ones start from the best simpler tether
+            if c.effect == "tether" and tether_best[1]:
+                starts = [{**c.start, **{k: v for k, v in tether_best[1].items() if k in c.free}}]
+            else:
+                starts = _starts(c)
+            for st in starts:
+                try:
+                    r = self._joint_gn(veh, motions, c, cur, vals0, st, J[:nb], ee0.scale)
+                except (UvsimError, np.linalg.LinAlgError, ValueError) as exc:
+                    r = {"rss": np.inf, "values": {}, "error": str(exc)}
+                if best is None or r["rss"] < best["rss"]:
+                    best = r
+            red = max(0.0, 1.0 - best["rss"] / rss0) if np.isfinite(best["rss"]) else 0.0
+            if c.effect == "tether" and best.get("values") and best["rss"] < tether_best[0]:
+                tether_best = (best["rss"], {k: v for k, v in best["values"].items() if k.startswith("tether_")})
+            out.append((c, {"reduction": red, "values": best["values"], **({"error": best["error"]}
+                                                                            if "error" in best else {})}))
+        return out, info
+
+    def _joint_gn(self, veh, motions, c: Candidate, cur, vals0: Mapping, start: Mapping, J_base: np.ndarray,
+                  scale: np.ndarray, iterations: int = 2) -> dict:
+        """Gauss-Newton on the equation error of candidate ``c`` together with the current
+        free parameters: the candidate's columns are re-differentiated at every step, the
+        current parameters' columns ``J_base`` (per unit, at ``vals0``) are reused (they move
+        little), so a step costs ``1 + len(c.free)`` evaluations."""
+        base = dict(vals0)
+        names_b = list(cur["free"])
+        lo_b = np.array([cur["bounds"][n][0] for n in names_b])
+        hi_b = np.array([cur["bounds"][n][1] for n in names_b])
+        xc = {n: float(start.get(n, c.start[n])) for n in c.free}
+        best = None
+        for it in range(iterations + 1):
+            sp = self.space(veh, c.free, c.bounds, xc, base)
+            ee = EquationError(veh, motions, sp, scale=scale)
+            Jc, r = ee.jacobian()
+            rss = float(r @ r)
+            if best is None or rss < best["rss"]:
+                best = {"rss": rss, "values": {**{n: base[n] for n in names_b}, **xc}}
+            if it == iterations:
+                break
+            Jc = Jc / sp.scale[:, None]
+            A = np.vstack([J_base, Jc]).T
+            d, *_ = np.linalg.lstsq(A, -r, rcond=None)
+            nb = len(names_b)
+            if nb:
+                b = np.clip(np.array([base[n] for n in names_b]) + d[:nb], lo_b, hi_b)
+                base.update(zip(names_b, map(float, b)))
+            xc = {n: float(np.clip(xc[n] + dd, *c.bounds[n])) for n, dd in zip(c.free, d[nb:])}
+        return best
+
+    # ---------------------------------------------------------------- one step
+    def current(self, accepted, values) -> dict:
+        """The current model: vehicle, values, free parameters (re-tuned + accepted effects) and their bounds."""
+        free = list(self.retune) + [n for a in accepted for n in a.free]
+        bounds = {**self.retune_bounds, **{n: a.bounds[n] for a in accepted for n in a.free}}
+        return {"vehicle": self.vehicle_for(accepted), "values": dict(values), "free": free, "bounds": bounds}
+
+    def step(self, accepted, values_cur, val_cur, *, exclude, only, top, k_step) -> dict:
+        cur = self.current(accepted, values_cur)
+        vehicle_cur = cur["vehicle"]
+        run0 = self.train[0]
+        dt = float(np.median(np.concatenate([np.diff(r.t) for r in self.train])))
+        has_pos = any(r.has_position for r in self.train)
+        p_ref = np.nanmean(np.array([np.where(np.isfinite(r.position[0]), r.position[0], 0.0) for r in self.train]),
+                           axis=0)
+        depths = [r.position[:, 2] for r in self.train if r.has_position and np.isfinite(r.position[:, 2]).any()]
+        depths += [r.depth for r in self.train if r.has_depth]
+        z_max = float(max(np.nanmax(z) for z in depths)) if depths else None
+        cands = catalogue(input_kind=run0.input_kind, n_thrusters=vehicle_cur.n_thrusters, dt=dt, p_ref=p_ref, has_position=has_pos, z_max=z_max, only=only,
+                          exclude=exclude)
+        self.say(f"step {k_step}: screening {len(cands) + 1} candidate variant(s) by equation error")
+        want_coupled = "coupled_damping" not in exclude and (only is None or "coupled_damping" in only)
+        screened, ee_info = (self.screen(cur, cands, coupled=want_coupled) if cands
+                             else ([], {"available": False}))
+        # per effect: the simplest variant within VARIANT_SHARE of the best variant's reduction
+        by_effect: dict = {}
+        for c, s in screened:
+            by_effect.setdefault(c.effect, []).append((c, s))
+        choice = []
+        for eff, lst in by_effect.items():
+            if ee_info.get("available"):
+                bestred = max(s["reduction"] for _, s in lst)
+                ok = [(c, s) for c, s in lst if s["reduction"] >= VARIANT_SHARE * bestred]
+                c, s = min(ok, key=lambda cs: (cs[0].complexity, -cs[1]["reduction"]))
+                choice.append((c, s, bestred))
+            else:
+                c, s = min(lst, key=lambda cs: cs[0].complexity)
+                choice.append((c, s, 0.0))
+        choice.sort(key=lambda x: -x[2])
+        rows = []
+        for c, s, red in choice:
+            rows.append({"effect": c.effect, "variant": c.variant, "screening_reduction": s["reduction"] if s else None,
+                         "fitted": False})
+        fitted = []
+        if ee_info.get("available"):
+            lead = choice[0][2] if choice else 0.0
+            picked = [x for x in choice if x[2] >= max(SCREEN_SHARE * lead, SCREEN_FLOOR)][: max(top, 1)]
+        else:
+            picked = choice
+        # through the simulator in screening order; stop at the first accepted candidate unless
+        # the next one screened nearly as well (then the validation decides between them)
+        lead_ok = None
+        for c, s, red in picked:
+            if lead_ok is not None and red < CLOSE_SHARE * lead_ok:
+                break
+            row = self.fit_candidate(c, s, cur, val_cur)
+            row["accepted"], row["why"] = judge(row, val_cur)
+            fitted.append(row)
+            if row["accepted"] and lead_ok is None:
+                lead_ok = red
+        if lead_ok is None and ee_info.get("available"):
+            # nothing accepted: the equation error is blunt for small effects in slow logs (10 Hz), so
+            # the next effects by screening rank get an output-error fit too, up to `top` fits in all
+            done = {id(r["candidate"]) for r in fitted}
+            for c, s, red in choice:
+                if len(fitted) >= max(top, 1):
+                    break
+                if id(c) in done:
+                    continue
+                row = self.fit_candidate(c, s, cur, val_cur)
+                row["accepted"], row["why"] = judge(row, val_cur)
+                fitted.append(row)
+                if row["accepted"]:
+                    break
+        return {"screening": ee_info, "screened": rows, "fitted": fitted, "all_screened": screened, "cur": cur}
+
+    def fit_candidate(self, c: Candidate, s, cur, val_cur) -> dict:
+        """Output-error fit of ``c`` together with the current model's free parameters,
+        and its validation cost."""
+        vehicle_cur, values_cur = cur["vehicle"], cur["values"]
+        veh = vehicle_cur.with_effects([c.spec]) if c.spec is not None else vehicle_cur
+        # start from the screening estimate (the best of its multi-start); without one, from
+        # the catalogue's starts
+        starts = [{**values_cur, **c.start, **s["values"]}] if s and s.get("values") else \
+            [{**values_cur, **st} for st in _starts(c)]
+        free = list(cur["free"]) + c.free
+        bounds = {**cur["bounds"], **c.bounds}
+        best = None
+        for st in starts:
+            sp = self.space(veh, free, bounds, st, values_cur)
+            try:
+                res = self.fit_train(veh, sp, c.label + (f" + {len(cur['free'])} current" if cur["free"] else ""))
+            except (UvsimError, np.linalg.LinAlgError):
+                continue
+            if best is None or res.cost < best.cost:
+                best = res
+        row = {"effect": c.effect, "variant": c.variant, "candidate": c, "free": c.free}
+        if best is None:
+            row.update(accepted=False, why="every fit failed")
+            return row
+        vals = {**values_cur, **best.values}
+        problem = None
+        if c.spec is not None:
+            try:
+                make_term(c.spec).with_parameters({k: v for k, v in best.values.items() if k in c.free})
+            except VehicleError as exc:
+                problem = f"fitted values are not physical: {exc}"
+        vc = self.val_cost(veh, vals)
+        cmp = bootstrap_improvement(val_cur["windows"], vc["windows"], level=LEVEL)
+        cmp["wald"] = wald(best, c)
+        row.update(result=best, values={k: best.values[k] for k in c.free}, std={k: best.std.get(k) for k in c.free},
+                   train_cost=best.cost, val=vc, compare=cmp, problem=problem,
+                   at_bounds=[n for n in best.at_bounds if n in c.free], vehicle=veh, all_values=vals)
+        return row
+
+
+def _ls_step(J: np.ndarray, r: np.ndarray, names: Sequence[str], start: Mapping) -> tuple[dict, float]:
+    """One Gauss-Newton step on the columns ``J`` (k, m) (per unit of each named parameter)
+    from ``start``: (values, residual sum of squares of the linearization)."""
+    coef, *_ = np.linalg.lstsq(J.T, -r, rcond=None)
+    res = r + J.T @ coef
+    vals = {n: float(start.get(n, 0.0 if not n.startswith("thruster_gain") else 1.0)) + float(c)
+            for n, c in zip(names, coef)}
+    return vals, float(res @ res)
+
+
+def _stepwise(J: np.ndarray, r: np.ndarray, names: Sequence[str], k: int = 2, base: np.ndarray | None = None
+              ) -> list[str]:
+    """Forward stepwise selection of ``k`` regressors (rows of ``J``, (n_terms, m)) that,
+    together with the ``base`` regressors (always in), best explain ``-r`` (least squares);
+    at most one per force row (the first letter)."""
+    chosen: list[int] = []
+    B = np.zeros((0, J.shape[1])) if base is None else base
+    for _ in range(k):
+        best, best_rss = None, np.inf
+        for j in range(J.shape[0]):
+            if j in chosen or names[j][0] in {names[c][0] for c in chosen}:
+                continue
+            A = np.vstack([B, J[chosen + [j]]]).T
+            coef, *_ = np.linalg.lstsq(A, -r, rcond=None)
+            res = r + A @ coef
+            rss = float(res @ res)
+            if rss < best_rss:
+                best, best_rss = j, rss
+        if best is None:
+            break
+        chosen.append(best)
+    return [names[j] for j in chosen]
+
+
+def _starts(c: Candidate) -> list[dict]:
+    """Start values of a candidate's multi-start: the catalogue start, plus for a tether
+    anchors in four directions (the pull direction is what the data decide)."""
+    if c.effect != "tether":
+        return [dict(c.start)]
+    out = []
+    n0, e0 = c.start["tether_anchor_n"] + 5.0, c.start["tether_anchor_e"]  # the reference position
+    for dn, de in ((-5.0, 0.0), (5.0, 0.0), (0.0, -5.0), (0.0, 5.0)):
+        out.append({**c.start, "tether_anchor_n": n0 + dn, "tether_anchor_e": e0 + de})
+    return out
