@@ -82,6 +82,42 @@ def test_two_effects_are_both_named(tmp_path):
     assert named == {TRUTH_TO_CATALOGUE.get(e["type"], e["type"]) for e in truth["effects"]}
 
 
+# ----------------------------------------------------------------------------- shipped datasets
+def _shipped(name):
+    from pathlib import Path
+
+    return Path(uvsim.__file__).parent / "data" / "datasets" / name
+
+
+@pytest.mark.slow
+def test_shipped_tank_tether_dataset_names_the_tether():
+    """Seed 000 style (issue 6): the tether is named, its anchor and stiffness recovered."""
+    d = diagnose(_shipped("bluerov2_tank_tether"), "bluerov2_heavy", workers=2)
+    rep = d.report
+    assert [e["effect"] for e in rep["effects"]] == ["tether"], rep["message"]
+    p = rep["effects"][0]["parameters"]
+    anchor = [p[f"tether_anchor_{k}"]["value"] for k in "ned"]  # truth (-4, 1, -1) m, 0.3 N/m (manifest)
+    np.testing.assert_allclose(anchor, [-4.0, 1.0, -1.0], atol=0.3)
+    assert p["tether_stiffness"]["value"] == pytest.approx(0.3, rel=0.2)
+    assert rep["rmse_after"]["position_m"] <= 0.1 * rep["rmse_before"]["position_m"]
+
+
+@pytest.mark.slow
+def test_shipped_two_effect_dataset_names_both():
+    """The tether + current dataset (examples/make_two_effect_dataset.py): both named,
+    the current within 0.01 m/s of its truth.yaml value."""
+    root = _shipped("bluerov2_two_effects")
+    truth = load_truth(root)
+    d = diagnose(root, workers=2)
+    rep = d.report
+    assert {e["effect"] for e in rep["effects"]} == {"tether", "current"}, rep["message"]
+    cur = next(e for e in rep["effects"] if e["effect"] == "current")["parameters"]
+    true = next(e for e in truth["effects"] if e["type"] == "current")["velocity_ned"]
+    assert cur["current_n"]["value"] == pytest.approx(true[0], abs=0.01)
+    assert cur["current_e"]["value"] == pytest.approx(true[1], abs=0.01)
+    assert _main_rmse(rep, "rmse_after") <= 0.5 * _main_rmse(rep, "rmse_before")
+
+
 def test_cli_writes_report_corrected_vehicle_and_plots(tmp_path, capsys):
     out, _ = _scenario(tmp_path, 1, effects=[{"type": "current", "magnitude": 0.05}])
     rep, veh, plots = tmp_path / "r.json", tmp_path / "fixed.yaml", tmp_path / "plots"

@@ -75,7 +75,17 @@ def run_scenario(seed: int, n_effects: int, *, workers: int = 1, retune=BASE_RET
             "true": true, "named": named, "named_variants": [f"{e['effect']}:{e['variant']}" for e in rep["effects"]],
             "correct": true == named, "rmse_group": g, "rmse_before": before, "rmse_after": after,
             "halved": (after is not None and before is not None and after <= 0.5 * before) if true else None,
-            "confidence": rep["confidence"], "seconds": seconds, "fits": rep["fits"]}
+            "confidence": rep["confidence"], "seconds": seconds, "fits": rep["fits"],
+            "steps": [_step_digest(st) for st in rep["steps"]]}
+
+
+def _step_digest(st: dict) -> dict:
+    """What a step fitted and why each was (not) accepted: enough to read a failure."""
+    return {"chosen": st.get("chosen"),
+            "fitted": [{"candidate": f"{c['effect']}:{c['variant']}", "accepted": c["accepted"],
+                        "validation_cost": c.get("validation_cost_per_entry"), "why": c["why"]}
+                       for c in st["candidates"]],
+            "screened": {f"{c['effect']}:{c['variant']}": c["screening_reduction"] for c in st["screened"]}}
 
 
 def summarize(records: list[dict]) -> dict:

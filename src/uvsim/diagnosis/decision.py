@@ -4,10 +4,10 @@
   "the effect is off" (:func:`wald`), and a validation improvement confirmed by a block
   bootstrap over windows (:func:`uvsim.fitting.compare.bootstrap_improvement`).
 * :func:`parsimonious` -- among accepted candidates of one step, the simplest that is not
-  significantly worse than the best (two effects can describe one force).
+  clearly worse than the best (:func:`clearly_better`: two effects can describe one force).
 * :func:`richer_challenger`, :func:`simplest_sufficient` -- among the variants of the
   winning effect, a richer one replaces the winner only when significantly better on
-  validation, and a simpler one when not significantly worse.
+  validation, and a simpler one when not clearly worse.
 
 The thresholds are module constants, stated with the reason for each; docs/diagnose.md
 gives the method and its references.
@@ -79,16 +79,25 @@ def judge(row, val_cur) -> tuple[bool, str]:
                   f"-{100 * cmp['relative']:.1f} % (better in {100 * cmp['p_better']:.1f} % of resamples)")
 
 
+def clearly_better(worse_windows, better_windows) -> bool:
+    """``better`` beats ``worse`` on validation both statistically (block bootstrap at
+    :data:`LEVEL`) and practically (by at least :data:`MIN_RELATIVE` of the cost): with
+    thousands of residuals a 0.4 % difference can be "significant" (a ballast against the
+    constant-tension tether that mimics it, benchmark seed 119), and such a difference must
+    not outweigh parsimony."""
+    cmp = bootstrap_improvement(worse_windows, better_windows, level=LEVEL)
+    return bool(cmp["significant"]) and cmp["relative"] >= MIN_RELATIVE
+
+
 def parsimonious(winners: list):
     """Among the accepted candidates of a step, the one with the fewest parameters whose
-    validation cost is not significantly worse (bootstrap at :data:`LEVEL`) than the best's
+    validation cost is not clearly worse (:func:`clearly_better`) than the best's
     (two effects can describe the same force: a constant-tension tether pulling straight
     down is a ballast); ties by the lower validation cost.  None without a winner."""
     if not winners:
         return None
     top = min(winners, key=lambda r: r["val"]["cost"])
-    ok = [r for r in winners
-          if r is top or not bootstrap_improvement(r["val"]["windows"], top["val"]["windows"], level=LEVEL)["significant"]]
+    ok = [r for r in winners if r is top or not clearly_better(r["val"]["windows"], top["val"]["windows"])]
     return min(ok, key=lambda r: (r["candidate"].complexity, r["val"]["cost"]))
 
 
@@ -122,7 +131,8 @@ def richer_challenger(sel, best, st, val_cur):
 
 def simplest_sufficient(sel, best, st, val_cur):
     """Among the winning effect's variants simpler than the winner, the simplest that is
-    not significantly worse than it on validation (fitted here); None to keep the winner."""
+    not clearly worse than it on validation (:func:`clearly_better`; fitted here); None to
+    keep the winner."""
     c = best["candidate"]
     red = {id(cc): (s or {}).get("reduction", 0.0) for cc, s in st["all_screened"]}
     # simpler variants that the screening does not already rule out (at least half the winner's reduction)
@@ -138,8 +148,7 @@ def simplest_sufficient(sel, best, st, val_cur):
         ok, why = judge(row, val_cur)
         if not ok:
             continue
-        worse = bootstrap_improvement(row["val"]["windows"], best["val"]["windows"], level=LEVEL)
-        if not worse["significant"]:
+        if not clearly_better(row["val"]["windows"], best["val"]["windows"]):
             row["accepted"], row["why"] = True, why + f"; simplest variant as good as {c.variant}"
             st["fitted"].append(row)
             return row
