@@ -38,3 +38,26 @@ def test_realsensor_benchmark_recovers_identifiable_parameters(tmp_path):
     assert 0.5 < sig / truth["sensors"]["depth"]["sigma"] < 2.0
     for c in ("depth", "roll", "pitch", "p", "q", "r", "acc_x", "acc_y"):
         assert rep["validation_fit_percent"][c] > 80.0, c
+
+
+@pytest.mark.slow
+def test_diagnose_names_the_undeclared_weak_thruster_on_the_realsensor_benchmark(tmp_path):
+    """Issue 14: ``uvsim diagnose`` on the same data (gyro, lagged roll/pitch without yaw,
+    interpolated 10 Hz stern depth, accelerometer, PWM; base coefficients and z_b off by up
+    to 10 %, re-tuned) names the weak thruster, and its noise level for the interpolated
+    depth is within a factor 2 of the truth."""
+    from uvsim.benchmarks.scenarios import BASE_RETUNE
+    from uvsim.diagnosis import diagnose
+
+    d = realsensor.make_dataset(tmp_path / "data")
+    truth = yaml.safe_load((d / "truth.yaml").read_text())
+    weak, gain = realsensor.weak_thruster(truth)
+    rep = diagnose(d, retune=[*BASE_RETUNE, "z_b"], workers=2).report
+    assert [e["effect"] for e in rep["effects"]] == ["thruster_gain"], rep["message"]
+    params = rep["effects"][0]["parameters"]
+    assert list(params) == [weak]
+    assert params[weak]["value"] == pytest.approx(gain, rel=0.10)
+    assert rep["rmse_after"]["depth_m"] <= 0.5 * rep["rmse_before"]["depth_m"]
+    for run in rep["noise"].values():
+        assert run["depth"]["sampling"] == "interpolated"
+        assert 0.5 < run["depth"]["sigma"] / truth["sensors"]["depth"]["sigma"] < 2.0

@@ -150,8 +150,13 @@ class EquationError:
         self.scale = None
         if scale is None:
             r = self.forces(space.z0[None])
-            s = [1.4826 * np.nanmedian(np.abs(r[0][..., j] - np.nanmedian(r[0][..., j]))) for j in range(6)]
-            self.scale = np.where(np.isfinite(s) & (np.asarray(s) > 0), s, 1.0)
+            s = np.ones(6)
+            for j in range(6):  # robust spread per DOF; a DOF the log cannot give (all NaN) keeps 1
+                x = r[0][..., j]
+                x = x[np.isfinite(x)]
+                if x.size:
+                    s[j] = 1.4826 * np.median(np.abs(x - np.median(x)))
+            self.scale = np.where(np.isfinite(s) & (s > 0), s, 1.0)
         else:
             self.scale = np.asarray(scale, float)
 
