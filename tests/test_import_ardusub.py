@@ -252,6 +252,30 @@ def test_cli_import_then_simulate_compare(tmp_path, capsys):
     assert "T4_rear_left" in capsys.readouterr().err
 
 
+def test_tlog_compares_and_bin_calibrates(tmp_path, capsys):
+    """The pairings the other end-to-end tests leave out: the .tlog through
+    `simulate --compare`, the .BIN through `calibrate` (a fitted vehicle, or the result
+    checks' refusal on this surface log; never a traceback)."""
+    tl = tmp_path / "tl"
+    assert main(["import", "ardusub", str(TLOG), "--out", str(tl), "--adapt-vehicle"]) == 0
+    run = sorted(tl.glob("*.csv"))[0]
+    capsys.readouterr()
+    assert main(["simulate", "--run", str(run), "--compare"]) == 0
+    text = capsys.readouterr().out
+    for ch in ("depth", "roll", "pitch", "RMSE", "Fit %"):
+        assert ch in text
+    bn = tmp_path / "bn"
+    assert main(["import", "ardusub", str(BIN), "--out", str(bn), "--adapt-vehicle"]) == 0
+    capsys.readouterr()
+    out = tmp_path / "fit.yaml"
+    rc = main(["calibrate", "--data", str(bn), "--population", "4", "--generations", "1", "--out", str(out)])
+    err = capsys.readouterr().err
+    if rc == 0:
+        assert load_vehicle(out).name
+    else:
+        assert rc == 2 and "fails its sanity checks" in err and not out.exists(), err
+
+
 def test_calibrate_accepts_an_imported_dataset_with_a_dof_segment(tmp_path, capsys):
     """The imported dataset passes every input contract and the calibration runs; on this
     short surface log with a stand-in vehicle the fit predicts nothing (docs/import_export.md),
