@@ -70,6 +70,22 @@ def load_yaml(path, *, error: type = UvsimError, what: str = "YAML file"):
         raise error(f"{path}: not valid YAML:{where} {problem}" + (f" ({context})" if context else "")) from None
 
 
+def plain(x):
+    """``x`` with numpy scalars and arrays turned into Python types, recursively through
+    dicts (keys as str), lists and tuples: what ``yaml.safe_dump`` and ``json`` accept."""
+    import numpy as np
+
+    if isinstance(x, dict):
+        return {str(k): plain(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [plain(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return plain(x.tolist())
+    if isinstance(x, np.generic):
+        return x.item()
+    return x
+
+
 def _nearest_existing(p: Path) -> Path:
     """The path itself or its closest existing ancestor."""
     cur = p

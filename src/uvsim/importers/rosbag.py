@@ -46,9 +46,9 @@ import hashlib
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 from uvsim.errors import LogFormatError
+from uvsim.files import load_yaml
 from uvsim.importers import require
 from uvsim.importers.build import build_runs
 from uvsim.importers.segments import Segment, load_segments, write_imported_dataset
@@ -213,12 +213,7 @@ def _check_spec(name: str, spec, where: str) -> dict:
 def load_map(path) -> dict:
     """Read and check a topic map (module docstring); errors name the file and key."""
     path = Path(path)
-    try:
-        doc = yaml.safe_load(path.read_text())
-    except FileNotFoundError:
-        raise LogFormatError(f"{path}: map file does not exist") from None
-    except yaml.YAMLError as exc:
-        raise LogFormatError(f"{path}: cannot parse YAML: {exc}") from None
+    doc = load_yaml(path, error=LogFormatError, what="map file (YAML)")
     if not isinstance(doc, dict) or not isinstance(doc.get("streams"), dict) or not doc["streams"]:
         raise LogFormatError(f"{path}: expected a mapping with 'streams: {{name: {{topic: ..., type: ...}}}}'")
     unknown = set(doc) - {"vehicle", "frame", "stamp", "types", "streams", "description"}

@@ -25,6 +25,7 @@ import pandas as pd
 import yaml
 
 from uvsim.errors import LogFormatError
+from uvsim.files import load_yaml, plain
 from uvsim.importers.timeline import gaps
 from uvsim.logs import DOFS, MANIFEST, MEASURED_COLUMNS, SPLITS, VOLTAGE_COLUMN, Run, write_run
 
@@ -45,12 +46,7 @@ class Segment:
 def load_segments(path, default_prefix: str) -> list[Segment]:
     """Read a segments YAML (module docstring); errors name the file and ``segments[k]``."""
     path = Path(path)
-    try:
-        doc = yaml.safe_load(path.read_text())
-    except FileNotFoundError:
-        raise LogFormatError(f"{path}: segments file does not exist") from None
-    except yaml.YAMLError as exc:
-        raise LogFormatError(f"{path}: cannot parse YAML: {exc}") from None
+    doc = load_yaml(path, error=LogFormatError, what="segments file (YAML)")
     items = doc.get("segments") if isinstance(doc, dict) else doc
     if not isinstance(items, list) or not items:
         raise LogFormatError(f"{path}: expected a non-empty list 'segments: [{{start: .., end: ..}}, ...]'")
@@ -151,19 +147,7 @@ def write_imported_dataset(out, runs: list[tuple[Segment, pd.DataFrame]], *, veh
         write_run(out / f"{seg.name}.csv", Run(name=seg.name, path=None, data=df, dof=seg.dof,
                                                weight=seg.weight, split=seg.split))
         entries.append({"file": f"{seg.name}.csv", "dof": seg.dof, "weight": seg.weight, "split": seg.split})
-    doc = {"vehicle": vehicle, "description": description, "runs": entries, "import": _plain(record)}
+    doc = {"vehicle": vehicle, "description": description, "runs": entries, "import": plain(record)}
     (out / MANIFEST).write_text(yaml.safe_dump(doc, sort_keys=False, width=110))
     return out
 
-
-def _plain(x):
-    """numpy scalars/arrays -> plain Python for YAML."""
-    if isinstance(x, dict):
-        return {str(k): _plain(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_plain(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return [_plain(v) for v in x.tolist()]
-    if isinstance(x, np.generic):
-        return x.item()
-    return x

@@ -25,6 +25,7 @@ import pandas as pd
 import yaml
 from scipy.spatial.transform import Rotation
 
+from uvsim.files import plain
 from uvsim.logs import Run, write_dataset
 from uvsim.scenarios.effects import (CATALOGUED, MAGNITUDE_MEANING, MAGNITUDE_RANGES, CoupledDamping, ScenarioError,
                                      effect_from_dict)
@@ -38,23 +39,6 @@ from uvsim.scenarios.vehicle_data import (ADDED_MASS_NAMES, INERTIA_NAMES, LINEA
 #: ``effect_snr`` at or above which an effect counts as detectable.
 DETECTABLE_SNR = 2.0
 TRUTH_FILE = "truth.yaml"
-
-
-def _plain(x):
-    """numpy scalars/arrays -> Python types, recursively (for YAML)."""
-    if isinstance(x, dict):
-        return {str(k): _plain(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_plain(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return _plain(x.tolist())
-    if isinstance(x, np.bool_):
-        return bool(x)
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, np.floating):
-        return float(x)
-    return x
 
 
 class _Dumper(yaml.SafeDumper):
@@ -107,7 +91,7 @@ def vehicle_document(v, *, name: str, description: str, sensors: dict | None = N
     doc["effects"] = []
     if sensors:
         doc["sensors"] = sensors
-    return _plain(doc)
+    return plain(doc)
 
 
 def _sensor_positions(spec: ScenarioSpec) -> dict:
@@ -210,7 +194,7 @@ def _truth_record(spec, res, snr, run_records) -> dict:
         d.update(magnitude_range=[lo, hi], magnitude_meaning=MAGNITUDE_MEANING[eff.type],
                  catalogued=eff.type in CATALOGUED, **s)
         effects.append(d)
-    return _plain({
+    return plain({
         "generator": "uvsim.scenarios",
         "seed": spec.seed,
         "profile": spec.profile,
