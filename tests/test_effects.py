@@ -9,6 +9,7 @@ import uvsim
 from uvsim.effects import CATALOGUE
 from uvsim.errors import VehicleError
 from uvsim.forces import make_term
+from uvsim.kinematics import quat_to_rotation
 from uvsim.model import Model
 
 VEH = uvsim.load_vehicle("bluerov2_heavy")
@@ -59,6 +60,35 @@ def test_tether_pull_and_moment_by_hand():
     # constant tension only, slack: 5 N towards the anchor
     tau = effect_force({"type": "tether", "anchor_n": -3.0, "anchor_d": 1.0, "tension": 5.0, "slack_length": 10.0})
     np.testing.assert_allclose(tau, [-5.0, 0, 0, 0, 0, 0], atol=1e-9)
+
+
+@pytest.mark.parametrize("horizontal", [False, True])
+def test_tether_at_any_attitude_matches_the_ned_formulas(horizontal):
+    """The tether is evaluated in the body frame; at random attitudes, positions and
+    velocities it equals the NED-frame formulas of its docstring written out here."""
+    rng = np.random.default_rng(7)
+    eff = {"type": "tether", "anchor_n": -3.0, "anchor_e": 1.0, "anchor_d": 0.5, "stiffness": 2.0,
+           "slack_length": 1.0, "tension": 0.5, "length": 5.0, "attach_x": 0.1, "attach_y": -0.05,
+           "attach_z": -0.1, "horizontal": horizontal}
+    c = 0.5 * 1000.0 * 1.2 * 0.0076 * 5.0 / 3.0
+    r_a, p0 = np.array([0.1, -0.05, -0.1]), np.array([-3.0, 1.0, 0.5])
+    for _ in range(5):
+        q = rng.normal(size=4)
+        q /= np.linalg.norm(q)
+        pos, nu = rng.normal(size=3), rng.normal(0, 0.5, size=6)
+        R = quat_to_rotation(q)
+        d = p0 - (pos + R @ r_a)
+        if horizontal:
+            d[2] = 0.0
+        L = np.linalg.norm(d)
+        e = d / L
+        F = (0.5 + 2.0 * max(0.0, L - 1.0)) * e
+        v_a = R @ (nu[:3] + np.cross(nu[3:], r_a))
+        v_n = v_a - (v_a @ e) * e
+        F = F - c * np.linalg.norm(v_n) * v_n
+        f = R.T @ F
+        tau = effect_force(eff, pos=pos, q=q, nu=nu)
+        np.testing.assert_allclose(tau, np.r_[f, np.cross(r_a, f)], atol=1e-9)
 
 
 def test_tether_drag_by_hand():

@@ -246,3 +246,28 @@ def test_nuisance_only_fit_with_no_free_parameter(surge_yaw_runs):
     # at the truth, what is left is the noise: about one unit per residual (run weights aside)
     n = sum(b.n for b in res["blocks"])
     assert 0.3 < 2 * res["cost"] / n < 3.0
+
+
+def test_solver_stops_where_the_local_model_predicts_no_gain(surge_yaw_runs):
+    """A loose ``ftol`` ends the iterations when the Gauss-Newton model predicts a relative
+    decrease below it, without a trial simulation; the solution carries the window scores
+    (covariance) all the same, and a tight ``ftol`` from there moves the cost by less than
+    the loose tolerance allowed."""
+    from uvsim.fitting.solver import covariance
+
+    v = uvsim.load_vehicle("bluerov2_heavy")
+    truth = v.parameters()
+    space = make_space(truth, ["X_uu", "N_rr"], start={"X_uu": truth["X_uu"] * 1.2, "N_rr": truth["N_rr"] * 0.8})
+    prob = WindowedProblem(v, surge_yaw_runs, [measurements_for(r, v) for r in surge_yaw_runs], space, 2.0)
+    loose = solve(prob, space.z0, ftol=1e-3)
+    assert loose["message"].startswith("converged")
+    assert all(b.scores is not None for b in loose["blocks"])
+    cov = covariance(loose["blocks"])
+    assert np.all(np.diag(cov["robust"]) > 0)
+    tight = solve(prob, loose["z"], [n.copy() for n in loose["nus"]], ftol=1e-9, max_iter=10)
+    assert tight["cost"] <= loose["cost"]
+    assert (loose["cost"] - tight["cost"]) <= 2e-3 * loose["cost"]
+    # at a point the model already fits, the first predicted step is below ftol: no trial at all
+    again = solve(prob, tight["z"], [n.copy() for n in tight["nus"]], ftol=1e-3)
+    assert again["message"] == "converged: predicted relative cost decrease below ftol"
+    assert again["iterations"] == 1 and again["cost"] == tight["cost"]

@@ -30,7 +30,7 @@ import numpy as np
 
 from uvsim.errors import SimulationError, VehicleError
 from uvsim.forces.base import Context
-from uvsim.bilinear import CORIOLIS, CROSS, ROT_QRATE, bilinear
+from uvsim.bilinear import CORIOLIS, CROSS, ROT_QRATE, WRITTEN_OUT_ROWS, bilinear, rot_qrate
 from uvsim.rigid_body import rigid_body_mass_matrix
 from uvsim.vehicle import ADDED_MASS_NAMES, INERTIA_NAMES, check_parameter_values, inertia_tensor, load_vehicle
 
@@ -238,7 +238,7 @@ class Model:
         v, w = nu[:, :3], nu[:, 3:]
         # rotation matrix body -> NED (seed 003 eq. 3) and quaternion rate (eq. 2, 4), both
         # bilinear in q and [q, w]: one outer product and one matrix product
-        rq = bilinear(q, y[:, 3:13], ROT_QRATE)
+        rq = rot_qrate(y) if n >= WRITTEN_OUT_ROWS else bilinear(q, y[:, 3:13], ROT_QRATE)
         R = rq[:, :9].reshape(n, 3, 3)
 
         # current (seed 000 eq. 2)

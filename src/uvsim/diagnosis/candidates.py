@@ -21,7 +21,8 @@ tether                horizontal pull (stiffness, anchor n, e); horizontal_     
                       drag + attachment)
 ballast               xy (weight, x, y); xyz (weight, x, y, z)                  -
 thruster_lag          steady (time constant; starts at the command);            -
-                      from_rest (starts at zero thrust)
+                      from_rest (starts at zero thrust); both are fitted when
+                      a lag wins, the lower validation cost is kept
 thrust_asymmetry      common (one reverse ratio); per_thruster (one per          -
                       thruster); per_dof (one per DOF, generalized-force
                       inputs)
@@ -172,10 +173,10 @@ def _lag(dt):
     s = {"thruster_lag_time_constant": max(0.2, 2 * lo)}
     return [Candidate("thruster_lag", "steady", {"type": "thruster_lag", "time_constant": s[
         "thruster_lag_time_constant"], "start": "steady"}, ["thruster_lag_time_constant"], b, s,
-                      "first-order thrust lag, thrust at the command when the log starts"),
+                      "first-order thrust lag, thrust at the command when the log starts", {"alternatives": "lag_start"}),
             Candidate("thruster_lag", "from_rest", {"type": "thruster_lag", "time_constant": s[
                 "thruster_lag_time_constant"], "start": "zero"}, ["thruster_lag_time_constant"], b, s,
-                      "first-order thrust lag, thrusters at rest when the log starts")]
+                      "first-order thrust lag, thrusters at rest when the log starts", {"alternatives": "lag_start"})]
 
 
 def _asymmetry(kind, k):

@@ -36,8 +36,8 @@ import numpy as np
 
 from uvsim.checkpoint import Checkpoint, fingerprint
 from uvsim.diagnosis.candidates import EFFECTS, Candidate
-from uvsim.diagnosis.decision import (LEVEL, MIN_RELATIVE, VAL_LEVEL, WALD_P, parsimonious, richer_challenger,
-                                      simplest_sufficient)
+from uvsim.diagnosis.decision import (LEVEL, MIN_RELATIVE, VAL_LEVEL, WALD_P, alternative_challenger, parsimonious,
+                                      richer_challenger, simplest_sufficient)
 from uvsim.diagnosis.selector import VARIANT_SHARE, Selector
 from uvsim.errors import CalibrationError, UvsimError
 from uvsim.fitting.evaluate import open_loop, pooled
@@ -140,7 +140,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     if not (horizon is None or (np.isfinite(horizon) and horizon > 0)):
         raise CalibrationError(f"horizon must be a positive number of seconds, got {horizon!r}")
     train, val, split_note = _split(dataset)
-    kinds = {(r.input_kind, r.inputs.shape[1]) for r in train + val}
+    kinds = {(r.input_kind, len(r.input_columns)) for r in train + val}
     if len(kinds) > 1:
         raise CalibrationError(f"{dataset.path}: runs mix input kinds {sorted(kinds)}; diagnose one kind at a time")
     key = fingerprint({"vehicle": veh.to_dict(), "runs": [(r.name, float(np.nansum(r.data.to_numpy())))
@@ -173,6 +173,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         if best is not None:
             best = richer_challenger(sel, best, st, val_cur) or best
             best = simplest_sufficient(sel, best, st, val_cur) or best
+            best = alternative_challenger(sel, best, st, val_cur) or best
         for row in st["fitted"]:
             table.append(_row_report(row, best))
         step_rep = {"step": k, "before_cost_per_entry": val_cur["per_entry"], "screening": st["screening"],

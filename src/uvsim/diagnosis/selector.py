@@ -35,9 +35,11 @@ SCREEN_FLOOR = 0.01
 #: After an accepted candidate, the next one is fitted too only if its screening reduction
 #: is at least this share of the accepted one's (a close call the validation decides).
 CLOSE_SHARE = 0.8
-#: Relative cost decrease at which a diagnosis fit stops: the decisions compare costs
-#: that differ by percents, so 1e-5 is ample.
-FTOL = 1e-5
+#: Relative cost decrease (achieved, or predicted by the local model) at which a diagnosis
+#: fit stops: the decisions compare costs that differ by percents (MIN_RELATIVE = 5 %), so
+#: 1e-4 is ample (1e-5 cost two more linearizations per fit for changes in the fifth digit;
+#: docs/performance.md).
+FTOL = 1e-4
 
 
 class Selector:
@@ -142,7 +144,6 @@ class Selector:
             np.zeros((1, 0)))[0]
         rss0 = float(r0 @ r0)
         info.update(rss=rss0, n=int(r0.size), scale=ee0.scale.tolist())
-        out = []
         # one Jacobian for the families that are linear in their parameters and picked by
         # regression: the off-diagonal damping derivatives (forward stepwise, two of them)
         # and each thruster's gain (one variant per thruster)
@@ -163,25 +164,37 @@ class Selector:
             col = nb + len(terms) + i
             if col < J.shape[0]:
                 single[g] = _ls_step(J[base_cols + [col]], rl, [*cur["free"], g], {**vals0})
-        tether_best = (np.inf, {})  # the best tether so far seeds the next (more general) variant
         order = sorted(cands, key=lambda c: (c.effect != "tether", c.complexity if c.effect == "tether" else 0,
                                              c.variant != "3d"))
-        for c in order:
+        args = (motions, cur, vals0, J[:nb], ee0.scale, single, rss0)
+        # the tethers form a chain (each seeds the next, more general one); the others are
+        # independent (screening them in a second process was slower: fork and page copies)
+        chains = [[c for c in order if c.effect == "tether"], [c for c in order if c.effect != "tether"]]
+        results = [self._screen_chain(ch, *args) for ch in chains]
+        done = {id(c): r for ch, res in zip(chains, results) for c, r in zip(ch, res)}
+        out = [(c, done[id(c)]) for c in order]
+        return out, info
+
+    def _screen_chain(self, cands, motions, cur, vals0, J_base, scale, single, rss0) -> list:
+        """Screening numbers of ``cands`` in order; each tether starts from the best simpler
+        tether before it (a small multi-start on the cheap equation error, the global
+        stage, for the first)."""
+        tether_best = (np.inf, {})
+        res = []
+        for c in cands:
             if c.effect == "thruster_gain" and len(c.free) == 1 and c.free[0] in single:
                 vals, rss = single[c.free[0]]
-                out.append((c, {"reduction": max(0.0, 1.0 - rss / rss0), "values": vals}))
+                res.append({"reduction": max(0.0, 1.0 - rss / rss0), "values": vals})
                 continue
-            veh = veh0.with_effects([c.spec]) if c.spec is not None else veh0
+            veh = cur["vehicle"].with_effects([c.spec]) if c.spec is not None else cur["vehicle"]
             best = None
-            # a small multi-start on the cheap equation error (the global stage) for the first
-            # tether; the more general ones start from the best simpler tether
             if c.effect == "tether" and tether_best[1]:
                 starts = [{**c.start, **{k: v for k, v in tether_best[1].items() if k in c.free}}]
             else:
                 starts = _starts(c)
             for st in starts:
                 try:
-                    r = self._joint_gn(veh, motions, c, cur, vals0, st, J[:nb], ee0.scale)
+                    r = self._joint_gn(veh, motions, c, cur, vals0, st, J_base, scale)
                 except (UvsimError, np.linalg.LinAlgError, ValueError) as exc:
                     r = {"rss": np.inf, "values": {}, "error": str(exc)}
                 if best is None or r["rss"] < best["rss"]:
@@ -189,9 +202,9 @@ class Selector:
             red = max(0.0, 1.0 - best["rss"] / rss0) if np.isfinite(best["rss"]) else 0.0
             if c.effect == "tether" and best.get("values") and best["rss"] < tether_best[0]:
                 tether_best = (best["rss"], {k: v for k, v in best["values"].items() if k.startswith("tether_")})
-            out.append((c, {"reduction": red, "values": best["values"], **({"error": best["error"]}
-                                                                            if "error" in best else {})}))
-        return out, info
+            res.append({"reduction": red, "values": best["values"], **({"error": best["error"]}
+                                                                       if "error" in best else {})})
+        return res
 
     def _joint_gn(self, veh, motions, c: Candidate, cur, vals0: Mapping, start: Mapping, J_base: np.ndarray,
                   scale: np.ndarray, iterations: int = 2) -> dict:

@@ -85,24 +85,45 @@ class Tether(Effect):
         g = {f.key: self.p(params, f.key, n) for f in self.FIELDS}
         r_a = np.stack([g["attach_x"], g["attach_y"], g["attach_z"]], -1)
         p0 = np.stack([g["anchor_n"], g["anchor_e"], g["anchor_d"]], -1)
+        if self.options["horizontal"]:
+            p0 = p0[:, :2]  # the pull direction uses the north and east components only
         c_drag = 0.5 * g["rho"] * g["cd"] * g["diameter"] * g["length"] / 3.0
-        return r_a, p0, g["tension"], g["stiffness"], g["slack_length"], c_drag
+        attached = bool(np.any(r_a))
+        return (r_a, np.ascontiguousarray(r_a.T), p0, g["tension"], g["stiffness"], g["slack_length"], c_drag,
+                bool(np.any(c_drag)), attached)
 
     def forces(self, ctx, prep):
-        r_a, p0, T0, k, Ls, c_drag = prep
+        # evaluated in the body frame (one rotation instead of three; the tether is evaluated
+        # at every RK4 stage of every diagnosis fit, docs/performance.md):
+        #   3-D:        d_b = R^T (p_0 - p) - r_a,  e_b = d_b / L
+        #   horizontal: d = (p_0 - p - R r_a) north/east only (NED),  e_b = R^T e
+        r_a, ra, p0, T0, k, Ls, c_drag, has_drag, attached = prep
         R = ctx.R
-        p_a = ctx.pos + np.einsum("nij,nj->ni", R, np.broadcast_to(r_a, ctx.pos.shape))
-        d = p0 - p_a
-        if self.options["horizontal"]:
-            d = d * np.array([1.0, 1.0, 0.0])
-        L = np.linalg.norm(d, axis=1)
-        e = d / np.maximum(L, 1e-9)[:, None]
-        pull = T0 + k * np.maximum(0.0, L - Ls)
-        F = pull[:, None] * e
-        if np.any(c_drag):
-            v_b = ctx.nu_r[:, :3] + cross(ctx.nu_r[:, 3:], np.broadcast_to(r_a, ctx.pos.shape))
-            v_a = np.einsum("nij,nj->ni", R, v_b)
-            v_n = v_a - np.sum(v_a * e, axis=1, keepdims=True) * e
-            F = F - (c_drag * np.linalg.norm(v_n, axis=1))[:, None] * v_n
-        f = np.einsum("nji,nj->ni", R, F)  # R^T F
-        return np.concatenate([f, cross(np.broadcast_to(r_a, f.shape), f)], axis=1)
+        if p0.shape[1] == 3:
+            dn = p0 - ctx.pos
+            d = R[:, 0, :] * dn[:, :1] + R[:, 1, :] * dn[:, 1:2] + R[:, 2, :] * dn[:, 2:3]
+            if attached:
+                d = d - r_a
+            L = np.sqrt((d * d).sum(1))
+            e = d / np.maximum(L, 1e-9)[:, None]
+        else:
+            d = p0 - ctx.pos[:, :2]
+            if attached:
+                d = d - (R[:, :2, 0] * ra[0][:, None] + R[:, :2, 1] * ra[1][:, None] + R[:, :2, 2] * ra[2][:, None])
+            L = np.sqrt((d * d).sum(1))
+            en = d / np.maximum(L, 1e-9)[:, None]
+            e = R[:, 0, :] * en[:, :1] + R[:, 1, :] * en[:, 1:2]
+        f = (T0 + k * np.maximum(0.0, L - Ls))[:, None] * e
+        if has_drag:
+            v = ctx.nu_r[:, :3]
+            if attached:
+                v = v + cross(ctx.nu_r[:, 3:], r_a)
+            v_n = v - (v * e).sum(1)[:, None] * e
+            f = f - (c_drag * np.sqrt((v_n * v_n).sum(1)))[:, None] * v_n
+        tau = np.empty((f.shape[0], 6))
+        tau[:, :3] = f
+        if attached:
+            tau[:, 3:] = cross(r_a, f)
+        else:
+            tau[:, 3:] = 0.0
+        return tau

@@ -14,6 +14,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from uvsim.fitting.fitter import group_by_input
+from uvsim.fitting.objective import padded_runs
 from uvsim.measurements import measurements_for
 from uvsim.metrics import measurement_metrics, pooled_group_rmse
 from uvsim.model import Model
@@ -36,19 +37,11 @@ def open_loop(vehicle, runs, *, overrides=None, meas=None, initial_velocity: str
     out: list = [None] * len(runs)
     for idx in group_by_input(runs):
         R = len(idx)
-        n = max(runs[i].t.size for i in idx)
-        k = runs[idx[0]].inputs.shape[1]
-        T, U = np.empty((R, n)), np.empty((R, n, k))
-        V = np.full((R, n), np.nan) if any(runs[i].voltage is not None for i in idx) else None
+        T, U, V = padded_runs([runs[i] for i in idx])
+        n, k = U.shape[1], U.shape[2]
         P0, Q0, N0 = [], [], []
-        for j, i in enumerate(idx):
-            run = runs[i]
-            m = run.t.size
-            T[j, :m], T[j, m:] = run.t, run.t[-1]
-            U[j, :m], U[j, m:] = run.inputs, run.inputs[-1]
-            if V is not None and run.voltage is not None:
-                V[j, :m], V[j, m:] = run.voltage, run.voltage[-1]
-            p, q, v, _ = initial_state_from_run(run, initial_velocity=initial_velocity, window_s=INITIAL_WINDOW_S,
+        for i in idx:
+            p, q, v, _ = initial_state_from_run(runs[i], initial_velocity=initial_velocity, window_s=INITIAL_WINDOW_S,
                                                 sensors=meas[i].sensors)
             P0.append(p), Q0.append(q), N0.append(v)
         ov = {name: np.full(R, float(val)) for name, val in (overrides or {}).items()}

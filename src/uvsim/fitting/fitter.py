@@ -24,7 +24,7 @@ from typing import Sequence
 import numpy as np
 
 from uvsim.errors import CalibrationError
-from uvsim.fitting.objective import WindowedProblem
+from uvsim.fitting.objective import WindowedProblem, whole_runs
 from uvsim.fitting.parameters import ParameterSpace
 from uvsim.fitting.solver import covariance, solve
 from uvsim.measurements import measurements_for
@@ -69,7 +69,7 @@ def group_by_input(runs: Sequence) -> list[list[int]]:
     """Indices of runs grouped by (input kind, input count), in first-seen order."""
     groups: dict = {}
     for i, r in enumerate(runs):
-        groups.setdefault((r.input_kind, r.inputs.shape[1]), []).append(i)
+        groups.setdefault((r.input_kind, len(r.input_columns)), []).append(i)
     return list(groups.values())
 
 
@@ -84,10 +84,16 @@ def build_problems(vehicle, runs, meas, space: ParameterSpace, horizon, z_ref, *
     kind each; returns (problems, run order)."""
     probs, order = [], []
     for idx in group_by_input(runs):
+        # the reference trajectories of the whole group in one batch (few large numpy calls
+        # rather than many small ones), then cut into the problems
+        z = space.z0 if z_ref is None else np.asarray(z_ref, float)
+        yref, _, _ = whole_runs(vehicle, [runs[i] for i in idx], [meas[i].sensors for i in idx], space, z,
+                                initial_velocity=initial_velocity)
         for a in range(0, len(idx), RUNS_PER_PROBLEM):
             sub = idx[a:a + RUNS_PER_PROBLEM]
             probs.append(WindowedProblem(vehicle, [runs[i] for i in sub], [meas[i] for i in sub], space, horizon,
-                                         z_ref=z_ref, gyro_bias=gyro_bias, initial_velocity=initial_velocity))
+                                         z_ref=z_ref, gyro_bias=gyro_bias, initial_velocity=initial_velocity,
+                                         yref=yref[a:a + RUNS_PER_PROBLEM]))
             order += sub
     return probs, order
 

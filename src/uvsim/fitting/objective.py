@@ -123,7 +123,7 @@ def layout(runs, horizon: float | None) -> Layout:
     win_run = np.array(win_run, int)
     length = np.array([e - s + 1 for b in bounds for s, e in b], int)
     L = int(length.max())
-    k = runs[0].inputs.shape[1]
+    k = len(runs[0].input_columns)
     T = np.empty((win_run.size, L))
     U = np.empty((win_run.size, L, k))
     V = np.full((win_run.size, L), np.nan) if any(r.voltage is not None for r in runs) else None
@@ -148,6 +148,44 @@ def layout(runs, horizon: float | None) -> Layout:
     return Layout(bounds, win_run, np.array(first, int), length, T, U, own_win, own_pos, V)
 
 
+def padded_runs(runs):
+    """Whole runs padded to one length (the last sample held): T (R, n), U (R, n, k) and
+    V (R, n) (NaN where not logged) or None when no run logs a voltage."""
+    R = len(runs)
+    n = max(r.t.size for r in runs)
+    T = np.empty((R, n))
+    U = np.empty((R, n, len(runs[0].input_columns)))
+    V = np.full((R, n), np.nan) if any(r.voltage is not None for r in runs) else None
+    for i, run in enumerate(runs):
+        t, u, v = run.t, run.inputs, run.voltage  # (each is read from the run's table)
+        m = t.size
+        T[i, :m], T[i, m:] = t, t[-1]
+        U[i, :m], U[i, m:] = u, u[-1]
+        if V is not None and v is not None:
+            V[i, :m], V[i, m:] = v, v[-1]
+    return T, U, V
+
+
+def whole_runs(vehicle, runs, sensors, space, z, *, initial_velocity: str = "zero", nu0=None, accel: bool = False):
+    """Whole-run simulations of ``runs`` (one input kind) with the parameters ``z`` of
+    ``space``, from the runs' estimated initial states (``sensors``: per run, what its
+    measurement model reads); all runs in one batch.  Returns (states (R, n_max, n_y),
+    accelerations (R, n_max, 6) or None, the model)."""
+    R = len(runs)
+    T, U, V = padded_runs(runs)
+    P0, Q0, N0 = [], [], []
+    for run, sens in zip(runs, sensors):
+        p, q, v, _ = initial_state_from_run(run, initial_velocity=initial_velocity, window_s=INITIAL_WINDOW_S,
+                                            sensors=sens)
+        P0.append(p), Q0.append(q), N0.append(v)
+    model = Model(vehicle, space.overrides(np.atleast_2d(np.asarray(z, float)), R), n=R,
+                  input_kind=runs[0].input_kind)
+    y0 = model.initial_state(np.array(P0), np.array(Q0), np.array(N0) if nu0 is None else nu0, U[:, 0])
+    acc = np.empty((R, T.shape[1], 6)) if accel else None
+    Y = _rk4_loop(model, T, U, y0, 1, "nan", accel=acc, V=V)
+    return Y, acc, model
+
+
 class WindowedProblem:
     """Residuals of a set of runs for batches of (parameters, node perturbations, gyro
     biases) under windowed prediction (module docstring).
@@ -164,8 +202,8 @@ class WindowedProblem:
     """
 
     def __init__(self, vehicle, runs, meas, space, horizon=None, *, z_ref=None, gyro_bias=True,
-                 initial_velocity: str = "zero"):
-        kinds = {(r.input_kind, r.inputs.shape[1]) for r in runs}
+                 initial_velocity: str = "zero", yref: np.ndarray | None = None):
+        kinds = {(r.input_kind, len(r.input_columns)) for r in runs}
         if len(kinds) != 1:
             raise CalibrationError(f"runs mix input kinds/counts: {sorted(kinds)}; fit them in separate groups")
         self.vehicle, self.runs, self.space = vehicle, list(runs), space
@@ -180,7 +218,9 @@ class WindowedProblem:
         self.accel = any(m.needs_acceleration for m in self.meas)
         self.initial_velocity = initial_velocity
         z_ref = space.z0 if z_ref is None else np.asarray(z_ref, float)
-        self._prepare_nodes(z_ref)
+        if yref is not None:  # reference trajectories simulated for these runs beforehand (whole_runs)
+            yref = np.asarray(yref, float)[:, : max(r.t.size for r in self.runs)]
+        self._prepare_nodes(z_ref, yref)
 
     # ------------------------------------------------------------------ set-up
     def model(self, Z: np.ndarray, rows_per_set: int) -> Model:
@@ -190,39 +230,20 @@ class WindowedProblem:
 
     def _padded_runs(self):
         """Whole runs padded to one length: T (R, n), U (R, n, k), V (R, n) or None."""
-        R = len(self.runs)
-        n = max(r.t.size for r in self.runs)
-        T = np.empty((R, n))
-        U = np.empty((R, n, self.runs[0].inputs.shape[1]))
-        V = np.full((R, n), np.nan) if self.lay.V is not None else None
-        for i, run in enumerate(self.runs):
-            m = run.t.size
-            T[i, :m], T[i, m:] = run.t, run.t[-1]
-            U[i, :m], U[i, m:] = run.inputs, run.inputs[-1]
-            if V is not None and run.voltage is not None:
-                V[i, :m], V[i, m:] = run.voltage, run.voltage[-1]
-        return T, U, V
+        return padded_runs(self.runs)
 
     def full_runs(self, z: np.ndarray, nu0: np.ndarray | None = None):
         """States (R, n_max, n_y) of whole-run simulations from the runs' estimated initial
-        states with parameters z (the reference trajectory; also the open-loop prediction)."""
-        R = len(self.runs)
-        n = max(r.t.size for r in self.runs)
-        T, U, V = self._padded_runs()
-        P0, Q0, N0 = [], [], []
-        for i, run in enumerate(self.runs):
-            p, q, v, _ = initial_state_from_run(run, initial_velocity=self.initial_velocity, window_s=INITIAL_WINDOW_S,
-                                                sensors=self.meas[i].sensors)
-            P0.append(p), Q0.append(q), N0.append(v)
-        model = self.model(np.asarray(z)[None], R)
-        y0 = model.initial_state(np.array(P0), np.array(Q0), np.array(N0) if nu0 is None else nu0, U[:, 0])
-        acc = np.empty((R, n, 6)) if self.accel else None
-        Y = _rk4_loop(model, T, U, y0, 1, "nan", accel=acc, V=V)
-        return Y, acc, model
+        states with parameters z (the reference trajectory; also the open-loop prediction),
+        accelerations or None, and the model (:func:`whole_runs`)."""
+        return whole_runs(self.vehicle, self.runs, [m.sensors for m in self.meas], self.space, z,
+                          initial_velocity=self.initial_velocity, nu0=nu0, accel=self.accel)
 
-    def _prepare_nodes(self, z_ref):
-        Yref, _, model = self.full_runs(z_ref)
-        self.n_term = model.n_y - 13
+    def _prepare_nodes(self, z_ref, yref=None):
+        if yref is None:
+            yref = self.full_runs(z_ref)[0]
+        Yref = yref
+        self.n_term = Yref.shape[-1] - 13
         W = self.lay.W
         self.x_ref = np.empty((W, 13))
         self.prior_sigma = np.empty((W, 12))

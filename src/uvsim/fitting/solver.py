@@ -168,7 +168,7 @@ def _normal_pieces(r, Jz, Jn, cluster, nw, scores) -> RunNormal:
     np.add.at(sse, cluster, r * r)
     out = RunNormal(float(r @ r), r.size, Jz.T @ Jz, Jz.T @ r, Jn.T @ Jn, Jn.T @ Jz, Jn.T @ r, sse)
     if scores:
-        Jt = Jz - Jn @ np.linalg.lstsq(out.D, out.B, rcond=None)[0] if Jn.shape[1] else Jz
+        Jt = Jz - Jn @ np.linalg.solve(out.D, out.B) if Jn.shape[1] else Jz  # D > 0: every nuisance has a prior
         sc = np.zeros((nw, Jz.shape[1]))
         np.add.at(sc, cluster, Jt * r[:, None])
         out.scores = sc
@@ -344,7 +344,7 @@ def _solve(probs, ev, z0, nus0, *, max_iter, ftol, xtol, progress, state=None, o
         if nus0 is None:
             nus0 = [n for p in probs for n in p.zero_nuisance()]
         nus = [np.array(n, float) for n in nus0]
-        blocks = ev.linearize(z, nus)
+        blocks = ev.linearize(z, nus, scores=True)
         cost = _cost(blocks)
         history = [cost]
         lam, nu_f = 1e-3, 2.0
@@ -354,16 +354,22 @@ def _solve(probs, ev, z0, nus0, *, max_iter, ftol, xtol, progress, state=None, o
         z, nus = np.array(state["z"], float), [np.array(n, float) for n in state["nus"]]
         cost, history, lam, nu_f = state["cost"], list(state["history"]), state["lam"], state["nu_f"]
         evals, it0 = state["evaluations"], state["iteration"]
-        blocks = ev.linearize(z, nus)
+        blocks = ev.linearize(z, nus, scores=True)
     message = "maximum number of iterations reached"
     it = it0
+    at_z = True  # ``blocks`` is the linearization (with window scores) at ``z``
     for it in range(it0 + 1, max_iter + 1):
         dz, dnus = _step(blocks, lam, z, lo, hi)
+        pred = _predicted_decrease(blocks, dz, dnus)
+        if nu_f == 2.0 and 0.0 <= pred <= ftol * cost:
+            # the local model predicts a relative decrease below ftol for a step with the damping of
+            # the last accepted one: converged here (no trial simulation; these blocks are final)
+            message = "converged: predicted relative cost decrease below ftol"
+            break
         z_new = z + dz
         nus_new = [a + b for a, b in zip(nus, dnus)]
         c_new = _cost(ev.linearize(z_new, nus_new, jacobian=False))
         evals += 1
-        pred = _predicted_decrease(blocks, dz, dnus)
         rho = (cost - c_new) / pred if pred > 0 else -1.0
         if np.isfinite(c_new) and rho > 0:
             small = (cost - c_new) <= ftol * cost
@@ -375,9 +381,10 @@ def _solve(probs, ev, z0, nus0, *, max_iter, ftol, xtol, progress, state=None, o
             if progress is not None:
                 progress(it, cost)
             if small or step_small:
+                at_z = False
                 message = "converged: relative cost decrease below ftol" if small else "converged: step below xtol"
                 break
-            blocks = ev.linearize(z, nus)
+            blocks = ev.linearize(z, nus, scores=True)
             evals += n_sets
             if on_step is not None:
                 on_step({"z": z.copy(), "nus": [n.copy() for n in nus], "cost": cost, "history": list(history),
@@ -389,8 +396,9 @@ def _solve(probs, ev, z0, nus0, *, max_iter, ftol, xtol, progress, state=None, o
                 message = ("converged: no further decrease predicted" if pred <= 0 else
                            "stopped: no decrease possible (damping limit)")
                 break
-    blocks = ev.linearize(z, nus, scores=True)  # at the solution, with the window scores
-    evals += n_sets
+    if not at_z:
+        blocks = ev.linearize(z, nus, scores=True)  # at the solution, with the window scores
+        evals += n_sets
     return {"z": z, "nus": nus, "cost": cost, "blocks": blocks, "iterations": it, "evaluations": evals,
             "message": message, "history": history, "seconds": time.perf_counter() - t0}
 
