@@ -14,7 +14,8 @@ with ``A = J_z^T J_z``, ``B_r = J_r^T J_z``, ``D_r = J_r^T J_r`` (+ Levenberg-Ma
 damping ``lambda diag``), ``g = J^T r``.  Damping update after Madsen, Nielsen &
 Tingleff (2004), "Methods for non-linear least squares problems", sec. 3.2 (Nielsen's
 update).  Stopping: at every fresh linearization, when the decrease the Gauss-Newton model
-predicts for its own bounded minimizer is below ``ftol`` times the cost (the Newton
+predicts for its own minimizer (variables held at a bound excepted, the step not cut back
+into the box) is below ``ftol`` times the cost (the Newton
 decrement test, Boyd & Vandenberghe 2004, sec. 9.5.1; no trial simulation is then needed
 and the linearization at hand is the final one), when a step is below ``xtol``, or after
 ``max_iter`` iterations.  Bounds on ``z``: a step that would leave the box is cut
@@ -380,8 +381,8 @@ def _solve(probs, ev, z0, nus0, *, max_iter, ftol, xtol, progress, state=None, o
     for it in range(it0 + 1, max_iter + 1):
         if nu_f == 2.0 and _newton_decrement(blocks, z, lo, hi) <= ftol * cost:
             # at a fresh linearization, the decrease the Gauss-Newton model predicts for its own
-            # (bounded) minimizer is below ftol: converged here, no trial simulation, and these
-            # blocks are the final ones
+            # minimizer is below ftol: converged here, no trial simulation, and these blocks are
+            # the final ones
             message = "converged: predicted relative cost decrease below ftol"
             break
         dz, dnus = _step(blocks, lam, z, lo, hi)
