@@ -237,7 +237,8 @@ class Model:
         nu = y[:, 7:13]
         v, w = nu[:, :3], nu[:, 3:]
         # rotation matrix body -> NED (seed 003 eq. 3) and quaternion rate (eq. 2, 4), both
-        # bilinear in q and [q, w]: one outer product and one matrix product
+        # bilinear in q and [q, w]: one outer product and one matrix product on small batches,
+        # the formulas written out per column on large ones (uvsim.bilinear.rot_qrate)
         rq = rot_qrate(y) if n >= WRITTEN_OUT_ROWS else bilinear(q, y[:, 3:13], ROT_QRATE)
         R = rq[:, :9].reshape(n, 3, 3)
 

@@ -35,9 +35,9 @@ SCREEN_FLOOR = 0.01
 #: After an accepted candidate, the next one is fitted too only if its screening reduction
 #: is at least this share of the accepted one's (a close call the validation decides).
 CLOSE_SHARE = 0.8
-#: Relative cost decrease (achieved, or predicted by the local model) at which a diagnosis
-#: fit stops: the decisions compare costs that differ by percents (MIN_RELATIVE = 5 %), so
-#: 1e-4 is ample (1e-5 cost two more linearizations per fit for changes in the fifth digit;
+#: Decrease the Gauss-Newton model predicts for its own minimizer, relative to the cost, at
+#: which a diagnosis fit stops (uvsim.fitting.solver): the decisions compare costs that differ
+#: by percents (MIN_RELATIVE = 5 %), so 1e-4 is ample (1e-5 cost two more linearizations per fit for changes in the fifth digit;
 #: docs/performance.md).
 FTOL = 1e-4
 
@@ -166,16 +166,10 @@ class Selector:
                 single[g] = _ls_step(J[base_cols + [col]], rl, [*cur["free"], g], {**vals0})
         order = sorted(cands, key=lambda c: (c.effect != "tether", c.complexity if c.effect == "tether" else 0,
                                              c.variant != "3d"))
-        args = (motions, cur, vals0, J[:nb], ee0.scale, single, rss0)
-        # the tethers form a chain (each seeds the next, more general one); the others are
-        # independent (screening them in a second process was slower: fork and page copies)
-        chains = [[c for c in order if c.effect == "tether"], [c for c in order if c.effect != "tether"]]
-        results = [self._screen_chain(ch, *args) for ch in chains]
-        done = {id(c): r for ch, res in zip(chains, results) for c, r in zip(ch, res)}
-        out = [(c, done[id(c)]) for c in order]
-        return out, info
+        res = self._screen_each(order, motions, cur, vals0, J[:nb], ee0.scale, single, rss0)
+        return list(zip(order, res)), info
 
-    def _screen_chain(self, cands, motions, cur, vals0, J_base, scale, single, rss0) -> list:
+    def _screen_each(self, cands, motions, cur, vals0, J_base, scale, single, rss0) -> list:
         """Screening numbers of ``cands`` in order; each tether starts from the best simpler
         tether before it (a small multi-start on the cheap equation error, the global
         stage, for the first)."""

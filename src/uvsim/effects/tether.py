@@ -89,15 +89,14 @@ class Tether(Effect):
             p0 = p0[:, :2]  # the pull direction uses the north and east components only
         c_drag = 0.5 * g["rho"] * g["cd"] * g["diameter"] * g["length"] / 3.0
         attached = bool(np.any(r_a))
-        return (r_a, np.ascontiguousarray(r_a.T), p0, g["tension"], g["stiffness"], g["slack_length"], c_drag,
-                bool(np.any(c_drag)), attached)
+        return r_a, p0, g["tension"], g["stiffness"], g["slack_length"], c_drag, bool(np.any(c_drag)), attached
 
     def forces(self, ctx, prep):
         # evaluated in the body frame (one rotation instead of three; the tether is evaluated
         # at every RK4 stage of every diagnosis fit, docs/performance.md):
         #   3-D:        d_b = R^T (p_0 - p) - r_a,  e_b = d_b / L
         #   horizontal: d = (p_0 - p - R r_a) north/east only (NED),  e_b = R^T e
-        r_a, ra, p0, T0, k, Ls, c_drag, has_drag, attached = prep
+        r_a, p0, T0, k, Ls, c_drag, has_drag, attached = prep
         R = ctx.R
         if p0.shape[1] == 3:
             dn = p0 - ctx.pos
@@ -109,7 +108,7 @@ class Tether(Effect):
         else:
             d = p0 - ctx.pos[:, :2]
             if attached:
-                d = d - (R[:, :2, 0] * ra[0][:, None] + R[:, :2, 1] * ra[1][:, None] + R[:, :2, 2] * ra[2][:, None])
+                d = d - (R[:, :2, 0] * r_a[:, 0:1] + R[:, :2, 1] * r_a[:, 1:2] + R[:, :2, 2] * r_a[:, 2:3])
             L = np.sqrt((d * d).sum(1))
             en = d / np.maximum(L, 1e-9)[:, None]
             e = R[:, 0, :] * en[:, :1] + R[:, 1, :] * en[:, 1:2]

@@ -228,10 +228,6 @@ class WindowedProblem:
         return Model(self.vehicle, self.space.overrides(Z, rows_per_set), n=Z.shape[0] * rows_per_set,
                      input_kind=self.input_kind)
 
-    def _padded_runs(self):
-        """Whole runs padded to one length: T (R, n), U (R, n, k), V (R, n) or None."""
-        return padded_runs(self.runs)
-
     def full_runs(self, z: np.ndarray, nu0: np.ndarray | None = None):
         """States (R, n_max, n_y) of whole-run simulations from the runs' estimated initial
         states with parameters z (the reference trajectory; also the open-loop prediction),
@@ -240,9 +236,7 @@ class WindowedProblem:
                           initial_velocity=self.initial_velocity, nu0=nu0, accel=self.accel)
 
     def _prepare_nodes(self, z_ref, yref=None):
-        if yref is None:
-            yref = self.full_runs(z_ref)[0]
-        Yref = yref
+        Yref = self.full_runs(z_ref)[0] if yref is None else yref
         self.n_term = Yref.shape[-1] - 13
         W = self.lay.W
         self.x_ref = np.empty((W, 13))
@@ -283,7 +277,7 @@ class WindowedProblem:
         P = Z.shape[0]
         R = len(self.runs)
         n = self._yref.shape[1]
-        T, U, V = self._padded_runs()
+        T, U, V = padded_runs(self.runs)
         Vt = None if V is None else np.tile(V, (P, 1))
         m_run = self.model(Z, R)
         closed = m_run.term_states_along(np.tile(T, (P, 1)), np.tile(U, (P, 1, 1)), Vt)
