@@ -292,7 +292,8 @@ def _row(cand, cost, *, p=1e-9, relative=0.5, p_better=1.0, n=40, seed=0):
 
 
 class _StubSelector:
-    """fit_candidate returns the prepared row of a candidate and counts the fits."""
+    """fit_candidate returns the prepared row of a candidate and counts the fits;
+    open_loop_cost reads the row's ``ol`` (its stand-in vehicle)."""
 
     def __init__(self, rows):
         self.rows, self.fitted = rows, []
@@ -301,19 +302,29 @@ class _StubSelector:
         self.fitted.append(c.label)
         return dict(self.rows[c.label])
 
+    def open_loop_cost(self, vehicle, values):
+        return vehicle
 
-def test_lag_start_alternative_is_fitted_and_the_lower_validation_cost_wins():
+
+def test_lag_start_alternative_is_fitted_and_the_lower_open_loop_cost_wins():
+    """Benchmark seed 6: the two lag starts have the same windowed validation cost (each
+    window's initial velocities absorb the start), so the free simulation decides."""
     from uvsim.diagnosis.decision import alternative_challenger
 
     steady, rest = catalogue(input_kind="thrust", n_thrusters=8, dt=0.02, p_ref=np.zeros(3), has_position=True,
                              z_max=None, only=["thruster_lag"])
     st = {"all_screened": [(steady, {"reduction": 0.8}), (rest, {"reduction": 0.7})], "cur": {}, "fitted": []}
-    best = _row(steady, 105.0)
-    sel = _StubSelector({"thruster_lag:from_rest": _row(rest, 100.0)})
+
+    def with_ol(row, ol):
+        return {**row, "vehicle": ol, "all_values": {}, "why": "significant"}
+
+    best = with_ol(_row(steady, 100.0), 50.0)
+    sel = _StubSelector({"thruster_lag:from_rest": with_ol(_row(rest, 100.1), 10.0)})
     new = alternative_challenger(sel, best, st, None)
     assert sel.fitted == ["thruster_lag:from_rest"] and new["candidate"] is rest
-    # a worse or a rejected alternative keeps the winner (and is still reported)
-    for row in (_row(rest, 110.0), _row(rest, 90.0, p=0.5)):
+    assert "open-loop" in new["why"]
+    # a worse (open loop) or a rejected alternative keeps the winner (and is still reported)
+    for row in (with_ol(_row(rest, 90.0), 60.0), with_ol(_row(rest, 90.0, p=0.5), 1.0)):
         st["fitted"] = []
         assert alternative_challenger(_StubSelector({"thruster_lag:from_rest": row}), best, st, None) is None
         assert [r["candidate"] for r in st["fitted"]] == [rest]

@@ -75,6 +75,7 @@ def run_scenario(seed: int, n_effects: int, *, workers: int = 1, retune=BASE_RET
             "true": true, "named": named, "named_variants": [f"{e['effect']}:{e['variant']}" for e in rep["effects"]],
             "correct": true == named, "rmse_group": g, "rmse_before": before, "rmse_after": after,
             "halved": (after is not None and before is not None and after <= 0.5 * before) if true else None,
+            "validation_cost_per_entry": rep["validation_cost_per_entry"],
             "confidence": rep["confidence"], "seconds": seconds, "fits": rep["fits"],
             "steps": [_step_digest(st) for st in rep["steps"]]}
 

@@ -18,7 +18,8 @@ tether                horizontal pull (stiffness, anchor n, e); horizontal_     
                       length: cross-flow drag); the same attached anywhere on
                       the frame (3d_attach, tension_attach, slack_attach,
                       drag_attach); full (tension + stiffness beyond slack +
-                      drag + attachment)
+                      drag + attachment); horizontal_full (the same with a
+                      horizontal pull)
 ballast               xy (weight, x, y); xyz (weight, x, y, z)                  -
 thruster_lag          steady (time constant; starts at the command);            -
                       from_rest (starts at zero thrust); both are fitted when
@@ -151,6 +152,10 @@ def _tether(p_ref):
              "elastic line beyond its slack length, attached anywhere on the frame"),
         cand("drag_attach", {**tens, "length": 10.0}, [t0] + a3 + at + [ln],
              f"constant pull plus {drag}, attached anywhere on the frame"),
+        cand("horizontal_full", {**base, "horizontal": True, "tension": 1.0, "length": 10.0},
+             [t0, k, ls, "tether_anchor_n", "tether_anchor_e"] + at + [ln],
+             f"horizontal pull (tension plus elastic beyond a slack length), plus {drag}, attached anywhere "
+             "on the frame (a cable trailing on the floor or at the surface)"),
         cand("full", {**base, "tension": 1.0, "length": 10.0}, [t0, k, ls] + a3 + at + [ln],
              f"tension plus elastic pull beyond a slack length, plus {drag}, attached anywhere on the frame"),
     ]

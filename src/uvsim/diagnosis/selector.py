@@ -21,6 +21,7 @@ from uvsim.errors import CalibrationError, UvsimError, VehicleError
 from uvsim.fitting import fit
 from uvsim.fitting.compare import bootstrap_improvement
 from uvsim.fitting.equation_error import EquationError, measured_motion
+from uvsim.fitting.evaluate import open_loop
 from uvsim.fitting.parameters import FreeParameter, ParameterSpace, default_bounds
 from uvsim.forces import make_term
 from uvsim.measurements import measurements_for
@@ -112,6 +113,21 @@ class Selector:
         w = np.concatenate(res.window_costs)
         return {"windows": w, "cost": float(w.sum()), "n": int(res.n_residuals),
                 "per_entry": float(w.sum() / max(res.n_residuals, 1))}
+
+    def open_loop_cost(self, vehicle, values: Mapping) -> float:
+        """Noise-normalized sum of squares of free simulations of the validation runs from
+        their logged starts (:func:`uvsim.fitting.evaluate.open_loop`, the report's
+        before/after RMSE); inf when a simulation diverges."""
+        known = vehicle.parameters()
+        ol = open_loop(vehicle, self.val, overrides={k: v for k, v in values.items() if k in known},
+                       meas=self.meas_va)
+        total = 0.0
+        for m, o in zip(self.meas_va, ol):
+            r = m.normalized(o["pred"], fill=np.nan)
+            if not np.isfinite(r).all():
+                return float("inf")
+            total += float(r @ r)
+        return total
 
     def seed_retune(self, vehicle) -> dict:
         """Equation-error estimate of the re-tuned base coefficients (the start of the
