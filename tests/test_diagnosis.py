@@ -273,8 +273,8 @@ def test_benchmark_100_single_and_30_two_effect_scenarios(tmp_path):
     assert s["two_effects"]["both_named_rate"] >= 0.8
     correct, halved = s["single_or_clean"]["correct_rate"], s["halved_share_of_correct_detections"]
     assert correct >= 0.95
-    # no regression below the recorded run (96/99 correct detections halved)
-    assert halved >= 0.96
+    # no regression below the recorded run (98/99 correct detections halved; seed 38 cannot be, docs)
+    assert halved >= 0.98
     # issue 10's remaining target (every correct detection halved) is not met yet:
     # docs/diagnose.md lists the failing scenarios and why
     if halved < 1.0:
