@@ -23,7 +23,7 @@ tether                horizontal pull (stiffness, anchor n, e); horizontal_     
 ballast               xy (weight, x, y); xyz (weight, x, y, z)                  -
 thruster_lag          steady (time constant; starts at the command);            -
                       from_rest (starts at zero thrust); both are fitted when
-                      a lag wins, the lower validation cost is kept
+                      a lag wins, the lower open-loop validation cost is kept
 thrust_asymmetry      common (one reverse ratio); per_thruster (one per          -
                       thruster); per_dof (one per DOF, generalized-force
                       inputs)

@@ -14,11 +14,10 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from uvsim.fitting.fitter import group_by_input
-from uvsim.fitting.objective import padded_runs
+from uvsim.fitting.objective import whole_runs
+from uvsim.fitting.parameters import ParameterSpace
 from uvsim.measurements import measurements_for
 from uvsim.metrics import measurement_metrics, pooled_group_rmse
-from uvsim.model import Model
-from uvsim.simulate import INITIAL_WINDOW_S, _rk4_loop, initial_state_from_run
 from uvsim.vehicle import load_vehicle
 
 
@@ -36,22 +35,12 @@ def open_loop(vehicle, runs, *, overrides=None, meas=None, initial_velocity: str
         meas = [measurements_for(r, veh, noise=noise, weights=weights) for r in runs]
     out: list = [None] * len(runs)
     for idx in group_by_input(runs):
-        R = len(idx)
-        T, U, V = padded_runs([runs[i] for i in idx])
-        n, k = U.shape[1], U.shape[2]
-        P0, Q0, N0 = [], [], []
-        for i in idx:
-            p, q, v, _ = initial_state_from_run(runs[i], initial_velocity=initial_velocity, window_s=INITIAL_WINDOW_S,
-                                                sensors=meas[i].sensors)
-            P0.append(p), Q0.append(q), N0.append(v)
-        ov = {name: np.full(R, float(val)) for name, val in (overrides or {}).items()}
-        model = Model(veh, ov, n=R, input_kind=runs[idx[0]].input_kind)
-        model.check_inputs(k, where=f"run {runs[idx[0]].name}")
-        y0 = model.initial_state(np.array(P0), np.array(Q0), np.array(N0), U[:, 0])
-        need_acc = any(meas[i].needs_acceleration for i in idx)
-        acc = np.empty((R, n, 6)) if need_acc else None
+        group = [runs[i] for i in idx]
+        space = ParameterSpace([], veh.parameters(), dict(overrides or {}))
         with threadpool_limits(1, "blas"):
-            Y = _rk4_loop(model, T, U, y0, 1, "nan", accel=acc, V=V)
+            Y, acc, _ = whole_runs(veh, group, [meas[i].sensors for i in idx], space, np.zeros(0),
+                                   initial_velocity=initial_velocity,
+                                   accel=any(meas[i].needs_acceleration for i in idx))
         for j, i in enumerate(idx):
             m = runs[i].t.size
             b = None if not gyro_bias or runs[i].name not in gyro_bias else np.asarray(gyro_bias[runs[i].name])

@@ -180,6 +180,7 @@ def whole_runs(vehicle, runs, sensors, space, z, *, initial_velocity: str = "zer
         P0.append(p), Q0.append(q), N0.append(v)
     model = Model(vehicle, space.overrides(np.atleast_2d(np.asarray(z, float)), R), n=R,
                   input_kind=runs[0].input_kind)
+    model.check_inputs(U.shape[2], where=f"run {runs[0].name}")
     y0 = model.initial_state(np.array(P0), np.array(Q0), np.array(N0) if nu0 is None else nu0, U[:, 0])
     acc = np.empty((R, T.shape[1], 6)) if accel else None
     Y = _rk4_loop(model, T, U, y0, 1, "nan", accel=acc, V=V)
