@@ -51,6 +51,61 @@ def test_ballast_force_and_moment_by_hand():
     np.testing.assert_allclose(tau[3:], np.cross([0.1, 0, 0], [0, 2.0, 0]), atol=1e-9)
 
 
+def test_ballast_piece_mass_is_inertia_only():
+    """A piece's own mass joins M_RB as a point mass at r_p (parallel axis); its weight
+    stays the net ``weight`` (restoring unchanged), and it changes the accelerations."""
+    from uvsim.rigid_body import rigid_body_mass_matrix
+
+    r = np.array([-0.02, 0.1, -0.05])
+    massless = {"type": "ballast", "weight": -0.2, "x": r[0], "y": r[1], "z": r[2]}
+    m0, m1 = Model(VEH.with_effects([massless])), Model(VEH.with_effects([{**massless, "mass": 0.01}]))
+    dI = 0.01 * ((r @ r) * np.eye(3) - np.outer(r, r))
+    np.testing.assert_allclose(m1.M - m0.M, rigid_body_mass_matrix(0.01, dI, r), atol=1e-15)
+    # the same generalized force at rest (weight and buoyancy unchanged), other accelerations
+    q = np.array([np.cos(0.1), np.sin(0.1), 0.0, 0.0])
+    y = m0.initial_state(np.zeros(3), q)
+    a0, a1 = m0.rhs(0.0, y, np.zeros((1, 6)))[0, 7:13], m1.rhs(0.0, y, np.zeros((1, 6)))[0, 7:13]
+    np.testing.assert_allclose(m1.M @ a1, m0.M @ a0, atol=1e-12)
+    assert np.max(np.abs(a1 - a0)) > 1e-6
+    # per-row masses in one batch; the vehicle file round trip keeps the mass
+    mb = Model(VEH.with_effects([massless]), {"ballast_mass": np.array([0.0, 0.01])})
+    np.testing.assert_allclose(mb.M[1], m1.M, atol=1e-15)
+    np.testing.assert_allclose(mb.M[0], m0.M, atol=1e-15)
+    assert make_term({**massless, "mass": 0.01}).to_dict()["mass"] == 0.01
+    with pytest.raises(VehicleError, match="mass"):
+        make_term({**massless, "mass": -1.0})
+
+
+def test_ballast_piece_mass_reproduces_the_independent_truth(tmp_path):
+    """Benchmark scenario 38 (``uvsim.scenarios``, written apart from the effects): a 10 g foam
+    block.  On its telegraph validation run uvsim with the piece's mass follows the log to
+    about the noise; the massless load turns the vehicle the other way (> 100 mm)."""
+    from uvsim.kinematics import euler_to_quat
+    from uvsim.logs import read_dataset
+    from uvsim.scenarios import generate, load_truth, sample_scenario
+
+    out = generate(sample_scenario(38, profile="diagnose", n_effects=1), tmp_path / "ds")
+    truth = load_truth(out)
+    (e,) = truth["effects"]
+    assert e["type"] == "ballast" and 0.005 < e["mass"] < 0.02
+    model = uvsim.load_vehicle(out / truth["model_vehicle_file"])
+    base = model.with_parameters({k: v for k, v in truth["coefficients"]["truth"].items() if k in model.parameters()})
+    load = {"type": "ballast", "weight": e["weight"], **dict(zip("xyz", e["position"]))}
+    start = {r["file"].removesuffix(".csv"): r["initial_state"] for r in truth["runs"]}
+    run = [r for r in read_dataset(out).validation if "telegraph" in r.name][0]
+    s = start[run.name]
+    rmse = {}
+    for label, veh in (("mass", base.with_effects([{**load, "mass": e["mass"]}])), ("massless", base.with_effects([load]))):
+        res = uvsim.simulate(veh, run.t, run.inputs, input_kind=run.input_kind, pos0=np.array(s["position"]),
+                             q0=euler_to_quat(np.array([s["roll"], s["pitch"], s["yaw"]])),
+                             nu0=np.array(s["nu"]), substeps=4)
+        err = res.position - run.data[["x", "y", "z"]].to_numpy()
+        rmse[label] = float(np.sqrt(np.mean(np.sum(err ** 2, axis=1))))
+    sigma = truth["noise"]["mocap.sigma_position"]
+    assert rmse["mass"] < 3 * np.sqrt(3) * sigma, rmse
+    assert rmse["massless"] > 0.1, rmse
+
+
 def test_tether_pull_and_moment_by_hand():
     eff = {"type": "tether", "anchor_n": -3.0, "anchor_d": 1.0, "stiffness": 2.0, "slack_length": 1.0,
            "attach_z": -0.1, "length": 0.0}

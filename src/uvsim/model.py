@@ -144,14 +144,23 @@ class Model:
         def arr(name):
             return np.broadcast_to(np.asarray(params[name], float), (n,))
 
-        self.mass = arr("m")
-        if np.any(self.mass <= 0):
+        m_meas = arr("m")
+        if np.any(m_meas <= 0):
             raise VehicleError("parameter m: mass must be positive")
-        self.r_g = np.stack([arr("x_g"), arr("y_g"), arr("z_g")], -1)
+        r_g_meas = np.stack([arr("x_g"), arr("y_g"), arr("z_g")], -1)
+        # constant masses that terms add (a ballast piece): into M_RB, not into the weight W
+        # = m g of the restoring term (the piece's weight is in its own force)
+        fixed = [(t, fm) for t in self.terms if (fm := t.fixed_mass_properties(params, n)) is not None]
+        self.mass, first_moment, dI = m_meas.copy(), m_meas[:, None] * r_g_meas, np.zeros((n, 3, 3))
+        for _, (dm, dfirst, dI_t) in fixed:
+            self.mass, first_moment, dI = self.mass + dm, first_moment + dfirst, dI + dI_t
+        if np.any(self.mass <= 0):
+            raise VehicleError("the rigid body's mass with the terms' fixed masses must be positive")
+        self.r_g = first_moment / self.mass[:, None] if fixed else r_g_meas
         # an override that is the same for every row is shared (e.g. values held fixed in a fit)
         varying = {k for k, v in overrides.items()
                    if np.ndim(params[k]) > 0 and np.size(params[k]) > 1 and np.any(params[k] != params[k][0])}
-        rb_names = ["m", "x_g", "y_g", "z_g", *INERTIA_NAMES]
+        rb_names = ["m", "x_g", "y_g", "z_g", *INERTIA_NAMES, *(k for t, _ in fixed for k in t.parameters())]
         shared_rb = not (varying & set(rb_names))
         shared_am = not (varying & set(ADDED_MASS_NAMES))
         # mass matrices, eigenvalues and inverses for the distinct parameter sets only (a
@@ -163,7 +172,7 @@ class Model:
         else:
             inv_idx, first = np.zeros(n, int), np.zeros(1, int)
         inv_idx = np.asarray(inv_idx).ravel()
-        I = inertia_tensor(*(arr(k)[first] for k in INERTIA_NAMES))
+        I = inertia_tensor(*(arr(k)[first] for k in INERTIA_NAMES)) + dI[first]
         MA = np.broadcast_to(vehicle.added_mass_matrix, (first.size, 6, 6)).copy()
         for i, k in enumerate(ADDED_MASS_NAMES):
             MA[:, i, i] = arr(k)[first]
@@ -184,7 +193,10 @@ class Model:
         self.Minv = Minv[0] if (shared_rb and shared_am) else Minv[inv_idx]
         self._M_mv, self._Minv_mv = _MatVec(self.M), _MatVec(self.Minv)
         self._MRB_mv, self._MA_mv = _MatVec(self.M_RB), _MatVec(self.M_A)
-        self.weight = self.mass * self.g
+        self.weight = m_meas * self.g
+        # what the restoring term weighs: the vehicle's measured mass at its measured CG
+        self.weight_mass, self.weight_r_g = m_meas, r_g_meas
+        self.fixed_mass, self.fixed_first, self.fixed_dI = self.mass - m_meas, first_moment - m_meas[:, None] * r_g_meas, dI
         self.current_ned = np.stack([arr(k) for k in ("current_n", "current_e", "current_d")], -1)
         self.has_current = current is not None or bool(np.any(self.current_ned != 0))
         self.changes_mass = any(t.changes_mass for t in self.terms)
@@ -259,10 +271,13 @@ class Model:
             nu_r = nu
 
         # mass properties (possibly changed by actuators)
-        mass, weight, r_g = self.mass, self.weight, self.r_g
+        # (the context carries the weighed mass and its CG: a term's fixed mass is not weighed)
+        mass, weight, r_g = self.weight_mass, self.weight, self.weight_r_g
         MRB_mv, Minv_mv = self._MRB_mv, self._Minv_mv
         if self.changes_mass:
             mass, r_g, M_RB, Minv = self._mass_update(t, y, pos, R, nu, nu_r, u)
+            r_g = (mass[:, None] * r_g - self.fixed_first) / (mass - self.fixed_mass)[:, None]
+            mass = mass - self.fixed_mass
             weight = mass * self.g
             MRB_mv, Minv_mv = (lambda x: _matvec(M_RB, x)), (lambda x: _matvec(Minv, x))
         states = {i: y[:, s] for i, s in self.state_slices.items()} if self.state_slices else {}
@@ -324,8 +339,8 @@ class Model:
         n = y.shape[0]
         mass = self.mass.copy()
         first = self.mass[:, None] * self.r_g
-        I = inertia_tensor(*(np.broadcast_to(np.asarray(self.params[k], float), (n,)) for k in INERTIA_NAMES)).copy()
-        ctx = Context(t, pos, y[:, 3:7], R, nu, nu_r, u, self.input_kind, self.weight, self.mass, self.r_g,
+        I = inertia_tensor(*(np.broadcast_to(np.asarray(self.params[k], float), (n,)) for k in INERTIA_NAMES)) + self.fixed_dI
+        ctx = Context(t, pos, y[:, 3:7], R, nu, nu_r, u, self.input_kind, self.weight, self.weight_mass, self.weight_r_g,
                       {i: y[:, s] for i, s in self.state_slices.items()}, self.params, False)
         for i, term in enumerate(self.terms):
             if term.changes_mass:
@@ -350,7 +365,7 @@ class Model:
         M = self.M if self.M.ndim == 2 else self.M[0]
         T = 0.5 * np.einsum("...i,ij,...j->...", nu, M, nu)
         R = quat_to_rotation(y[..., QUAT])
-        zg = y[..., 2] + np.einsum("...j,j->...", R[..., 2, :], self.r_g[0])
+        zg = y[..., 2] + np.einsum("...j,j->...", R[..., 2, :], self.weight_r_g[0])
         r_b = np.array([self.params[k] if np.ndim(self.params[k]) == 0 else self.params[k][0] for k in ("x_b", "y_b", "z_b")])
         zb = y[..., 2] + np.einsum("...j,j->...", R[..., 2, :], r_b)
         B = self.params["B"] if np.ndim(self.params["B"]) == 0 else self.params["B"][0]

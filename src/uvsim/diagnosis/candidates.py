@@ -20,7 +20,9 @@ tether                horizontal pull (stiffness, anchor n, e); horizontal_     
                       drag_attach); full (tension + stiffness beyond slack +
                       drag + attachment); horizontal_full (the same with a
                       horizontal pull)
-ballast               xy (weight, x, y); xyz (weight, x, y, z)                  -
+ballast               xy (weight, x, y); xyz (weight, x, y, z); xyz_mass (+       -
+                      the piece's own mass: inertia only, fitted when xy or
+                      xyz wins and kept on a lower open-loop validation cost)
 thruster_lag          steady (time constant; starts at the command);            -
                       from_rest (starts at zero thrust); both are fitted when
                       a lag wins, the lower open-loop validation cost is kept
@@ -40,7 +42,7 @@ bottom_effect         drag coefficient and floor depth                          
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 
@@ -56,6 +58,8 @@ EFFECTS = ("current", "tether", "ballast", "thruster_lag", "thrust_asymmetry", "
 CURRENT_H, CURRENT_V = 0.5, 0.3
 TETHER_K, TETHER_T, ANCHOR_RANGE = 50.0, 50.0, 50.0
 BALLAST_W, BALLAST_R, ATTACH_R = 20.0, 0.5, 0.4
+#: a ballast piece's own mass: up to 2 kg (20 N of lead is 2.3 kg)
+BALLAST_M = 2.0
 LAG_MAX = 2.0
 
 
@@ -163,13 +167,25 @@ def _tether(p_ref):
 
 def _ballast():
     b = {"ballast_weight": (-BALLAST_W, BALLAST_W), "ballast_x": (-BALLAST_R, BALLAST_R),
-         "ballast_y": (-BALLAST_R, BALLAST_R), "ballast_z": (-BALLAST_R, BALLAST_R)}
-    s = {"ballast_weight": 0.5, "ballast_x": 0.0, "ballast_y": 0.0, "ballast_z": 0.0}
+         "ballast_y": (-BALLAST_R, BALLAST_R), "ballast_z": (-BALLAST_R, BALLAST_R), "ballast_mass": (0.0, BALLAST_M)}
+    s = {"ballast_weight": 0.5, "ballast_x": 0.0, "ballast_y": 0.0, "ballast_z": 0.0, "ballast_mass": 0.0}
     spec = {"type": "ballast", "weight": 0.5}
     return [Candidate("ballast", "xy", spec, ["ballast_weight", "ballast_x", "ballast_y"], b, s,
                       "point weight (or buoyancy) at body height 0"),
             Candidate("ballast", "xyz", spec, ["ballast_weight", "ballast_x", "ballast_y", "ballast_z"], b, s,
-                      "point weight (or buoyancy) anywhere on the frame")]
+                      "point weight (or buoyancy) anywhere on the frame"),
+            Candidate("ballast", "xyz_mass", spec, ["ballast_weight", "ballast_x", "ballast_y", "ballast_z",
+                                                    "ballast_mass"], b, s,
+                      "a piece with its own mass (inertia) anywhere on the frame", {"open_loop": "inertia"})]
+
+
+def inertia_start(c: Candidate, values: Mapping[str, float], g: float) -> dict:
+    """Start of the inertial parameters of an ``open_loop`` variant from the winner's
+    ``values``: a ballast piece of mass ``|w| / g`` (a density of rho / 2 for buoyancy
+    foam, 2 rho for a weight: between syntactic foam and lead, neither assumed)."""
+    if c.effect == "ballast":
+        return {"ballast_mass": float(min(abs(values.get("ballast_weight", 0.0)) / g, BALLAST_M))}
+    return {}
 
 
 def _lag(dt):

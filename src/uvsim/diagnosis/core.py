@@ -36,8 +36,8 @@ import numpy as np
 
 from uvsim.checkpoint import Checkpoint, fingerprint
 from uvsim.diagnosis.candidates import EFFECTS, Candidate
-from uvsim.diagnosis.decision import (LEVEL, MIN_RELATIVE, VAL_LEVEL, WALD_P, alternative_challenger, parsimonious,
-                                      richer_challenger, simplest_sufficient)
+from uvsim.diagnosis.decision import (LEVEL, MIN_RELATIVE, VAL_LEVEL, WALD_P, alternative_challenger,
+                                      inertia_challenger, parsimonious, richer_challenger, simplest_sufficient)
 from uvsim.diagnosis.selector import VARIANT_SHARE, Selector
 from uvsim.errors import CalibrationError, UvsimError
 from uvsim.fitting.evaluate import open_loop, pooled
@@ -174,6 +174,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
             best = richer_challenger(sel, best, st, val_cur) or best
             best = simplest_sufficient(sel, best, st, val_cur) or best
             best = alternative_challenger(sel, best, st, val_cur) or best
+            best = inertia_challenger(sel, best, st, val_cur) or best
         for row in st["fitted"]:
             table.append(_row_report(row, best))
         step_rep = {"step": k, "before_cost_per_entry": val_cur["per_entry"], "screening": st["screening"],
@@ -286,6 +287,8 @@ def _row_report(row, best) -> dict:
         out.update(values=row["values"], std=row["std"], train_cost=row["train_cost"],
                    validation_cost_per_entry=row["val"]["per_entry"], compare=row["compare"],
                    at_bounds=row["at_bounds"])
+    if "open_loop_cost" in row:
+        out["open_loop_cost"] = row["open_loop_cost"]
     return out
 
 

@@ -267,6 +267,10 @@ class Selector:
         z_max = float(max(np.nanmax(z) for z in depths)) if depths else None
         cands = catalogue(input_kind=run0.input_kind, n_thrusters=vehicle_cur.n_thrusters, dt=dt, p_ref=p_ref, has_position=has_pos, z_max=z_max, only=only,
                           exclude=exclude)
+        # variants whose extra parameters act through inertia are not screened: the equation
+        # error cannot separate a piece's mass from the re-tuned added mass (decision.inertia_challenger)
+        held = [c for c in cands if c.tags.get("open_loop")]
+        cands = [c for c in cands if not c.tags.get("open_loop")]
         self.say(f"step {k_step}: screening {len(cands) + 1} candidate variant(s) by equation error")
         want_coupled = "coupled_damping" not in exclude and (only is None or "coupled_damping" in only)
         screened, ee_info = (self.screen(cur, cands, coupled=want_coupled) if cands
@@ -321,7 +325,8 @@ class Selector:
                 fitted.append(row)
                 if row["accepted"]:
                     break
-        return {"screening": ee_info, "screened": rows, "fitted": fitted, "all_screened": screened, "cur": cur}
+        return {"screening": ee_info, "screened": rows, "fitted": fitted, "all_screened": screened, "cur": cur,
+                "held": held}
 
     def fit_candidate(self, c: Candidate, s, cur, val_cur) -> dict:
         """Output-error fit of ``c`` together with the current model's free parameters,

@@ -16,7 +16,8 @@ name                   physics                                       parameters 
                                                                        tether_stiffness (N/m), ...
 ``thruster_lag``       first-order thrust dynamics ``T f' = f_c - f``  thruster_lag_time_constant (s)
 ``thrust_asymmetry``   reverse thrust scaled by a ratio                thrust_asymmetry_ratio (-)
-``ballast``            extra weight/buoyancy at a body point           ballast_weight (N), ballast_x/y/z (m)
+``ballast``            extra weight/buoyancy at a body point, and      ballast_weight (N), ballast_x/y/z (m),
+                       the piece's own mass (inertia only)             ballast_mass (kg)
 ``coupled_damping``    off-diagonal damping derivatives (seed 003      K_vv, M_u, ... (SNAME names)
                        eq. 26)
 ``drag_centre``        translational damping acting at a centre of     drag_centre_x/y/z (m)

@@ -9,11 +9,17 @@ body coordinates::
     f = w k,        tau = [f;  r_p x f]
 
 So the force is constant in NED (always vertical) and the moment depends on the
-attitude.  The small change of mass and inertia of the load is neglected (its
-weight is what changes the trim; a 100 g weight adds < 1 % to the 13 kg
-BlueROV2).  Seed 000 (Table 2, sec. 4.1) measures the BlueROV2's weight,
-buoyancy and CG/CB; a mis-trimmed vehicle (wrong B - W or CB offset) shows
-exactly this residual.
+attitude.  Seed 000 (Table 2, sec. 4.1) measures the BlueROV2's weight, buoyancy and
+CG/CB; a mis-trimmed vehicle (wrong B - W or CB offset) shows exactly this residual.
+
+The piece's own mass ``m_p`` (``mass``, kg; default 0: a massless load) is inertia
+only: it joins the rigid body as a point mass at ``r_p`` (Fossen 2021 eq. 3.44 with
+``m + m_p``, the CG moved to ``(m r_g + m_p r_p) / (m + m_p)`` and ``I_o + m_p (|r_p|^2
+I - r_p r_p^T)``, the parallel-axis theorem), so also ``C_RB``; its weight is already in
+``w`` (``w = m_p g - rho V_p g``).  A 10 g foam block is < 0.1 % of a 13 kg BlueROV2, yet
+on a run whose heading is held by nothing, its ``m_p y_p u_dot`` yaw moment
+(~5e-4 N m) decides which way the vehicle turns (docs/diagnose.md, seed 38).  Added
+mass of the piece is neglected.
 """
 from __future__ import annotations
 
@@ -33,7 +39,17 @@ class Ballast(Effect):
         Field("x", "m", -5.0, 5.0, 0.0, "the body x position of the point load"),
         Field("y", "m", -5.0, 5.0, 0.0, "the body y position of the point load"),
         Field("z", "m", -5.0, 5.0, 0.0, "the body z position of the point load"),
+        Field("mass", "kg", 0.0, 100.0, 0.0, "the mass of the piece itself (inertia only; its weight is in weight)"),
     )
+
+    def fixed_mass_properties(self, params, n):
+        m_p = self.p(params, "mass", n)
+        if not np.any(m_p):
+            return None
+        r = np.stack([self.p(params, k, n) for k in ("x", "y", "z")], -1)
+        # parallel-axis theorem: a point mass at r_p about the body origin
+        dI = m_p[:, None, None] * (np.einsum("ni,ni->n", r, r)[:, None, None] * np.eye(3) - r[:, :, None] * r[:, None, :])
+        return m_p.copy(), m_p[:, None] * r, dI
 
     def prepare(self, params, n):
         w = self.p(params, "weight", n)

@@ -145,6 +145,9 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
         problems, order = build_problems(vehicle, runs, meas, space, horizons[-1], np.array(saved["z_start"]),
                                          gyro_bias=gyro_bias, initial_velocity=initial_velocity)
         res = solve(problems, z, saved["nus"], max_iter=0, workers=workers)
+        # the finished fit's own cost (re-evaluated here in a batch of another size, the sum may
+        # differ in its last bit with the BLAS kernels of some machines)
+        res["cost"] = stages[-1]["cost"]
     for si, H in enumerate(horizons):
         if si < first:
             continue

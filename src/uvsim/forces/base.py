@@ -16,7 +16,9 @@ effects (tether, thruster dynamics, ...).  A term is a small strategy object
 A term may own internal states (``n_states > 0``, e.g. first-order thruster
 dynamics); the model appends them to the state vector and integrates
 ``state_derivative``.  A term may change the mass properties (``changes_mass``),
-e.g. a variable-buoyancy tank; the model then rebuilds ``M_RB`` each stage.
+e.g. a variable-buoyancy tank; the model then rebuilds ``M_RB`` each stage.  A term
+that adds a constant mass (a ballast piece) says so in ``fixed_mass_properties``; the
+model folds it into ``M_RB`` once.
 Terms declare the named scalar parameters they read in ``parameters()`` so that a
 calibration can vary them.
 """
@@ -122,6 +124,13 @@ class ForceTerm:
     def mass_properties(self, ctx: Context, prep: Any, x: np.ndarray):
         """Changes ``(dm (n,), d_first_moment (n, 3), dI (n, 3, 3))`` about the body origin."""
         raise NotImplementedError
+
+    def fixed_mass_properties(self, params: Mapping[str, Any], n: int):
+        """Constant mass the term adds to the rigid body (e.g. a ballast piece's own mass):
+        ``(dm (n,), d_first_moment (n, 3), dI (n, 3, 3))`` about the body origin, or None.
+        :class:`uvsim.model.Model` folds it into ``M_RB`` (and so into ``C_RB``) once, at
+        construction; the term's weight stays in its own :meth:`forces`."""
+        return None
 
     def to_dict(self) -> dict:
         """Vehicle-file representation (inverse of the registry constructor)."""
