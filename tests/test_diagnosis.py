@@ -60,6 +60,24 @@ def test_names_a_current_estimates_it_and_halves_the_validation_error(tmp_path):
     assert any(e.kind == "current" for e in d.vehicle_after.effects)
 
 
+def test_a_lead_piece_is_named_with_its_position_and_mass(tmp_path):
+    """A 1 N lead piece (0.11 kg in the truth, whose pieces have mass): the ballast wins, and
+    its variant with the piece's mass is kept on the open-loop validation cost."""
+    out, truth = _scenario(tmp_path, 5, effects=[{"type": "ballast", "variant": "lead", "magnitude": 1.0}])
+    eff = truth["effects"][0]
+    rep = diagnose(out, retune=list(BASE_RETUNE)).report
+    assert [(e["effect"], e["variant"]) for e in rep["effects"]] == [("ballast", "xyz_mass")]
+    p = rep["effects"][0]["parameters"]
+    assert p["ballast_weight"]["value"] == pytest.approx(eff["weight"], abs=0.03)
+    np.testing.assert_allclose([p["ballast_x"]["value"], p["ballast_y"]["value"]], eff["position"][:2], atol=0.01)
+    assert abs(p["ballast_mass"]["value"] - eff["mass"]) <= max(3 * p["ballast_mass"]["std"], 0.2 * eff["mass"])
+    assert _main_rmse(rep, "rmse_after") <= 0.5 * _main_rmse(rep, "rmse_before")
+    chosen = [c for c in rep["steps"][0]["candidates"] if c["chosen"]]
+    assert chosen[0]["variant"] == "xyz_mass" and "open-loop validation cost" in chosen[0]["why"]
+    assert chosen[0]["open_loop_cost"] < 0.95 * next(c["open_loop_cost"] for c in rep["steps"][0]["candidates"]
+                                                      if c["variant"] in ("xy", "xyz") and "open_loop_cost" in c)
+
+
 def test_names_the_weak_thruster(tmp_path):
     """A PWM-driven vehicle with one thruster at half thrust: the diagnosis names the
     thruster and its gain (issue 14's undeclared per-thruster weakness)."""
