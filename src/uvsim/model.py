@@ -151,12 +151,14 @@ class Model:
         # constant masses that terms add (a ballast piece): into M_RB, not into the weight W
         # = m g of the restoring term (the piece's weight is in its own force)
         fixed = [(t, fm) for t in self.terms if (fm := t.fixed_mass_properties(params, n)) is not None]
-        self.mass, first_moment, dI = m_meas.copy(), m_meas[:, None] * r_g_meas, np.zeros((n, 3, 3))
+        self.fixed_mass, self.fixed_first, self.fixed_dI = np.zeros(n), np.zeros((n, 3)), np.zeros((n, 3, 3))
         for _, (dm, dfirst, dI_t) in fixed:
-            self.mass, first_moment, dI = self.mass + dm, first_moment + dfirst, dI + dI_t
+            self.fixed_mass, self.fixed_first, self.fixed_dI = (self.fixed_mass + dm, self.fixed_first + dfirst,
+                                                                self.fixed_dI + dI_t)
+        self.mass = m_meas + self.fixed_mass
         if np.any(self.mass <= 0):
             raise VehicleError("the rigid body's mass with the terms' fixed masses must be positive")
-        self.r_g = first_moment / self.mass[:, None] if fixed else r_g_meas
+        self.r_g = (m_meas[:, None] * r_g_meas + self.fixed_first) / self.mass[:, None] if fixed else r_g_meas
         # an override that is the same for every row is shared (e.g. values held fixed in a fit)
         varying = {k for k, v in overrides.items()
                    if np.ndim(params[k]) > 0 and np.size(params[k]) > 1 and np.any(params[k] != params[k][0])}
@@ -172,7 +174,7 @@ class Model:
         else:
             inv_idx, first = np.zeros(n, int), np.zeros(1, int)
         inv_idx = np.asarray(inv_idx).ravel()
-        I = inertia_tensor(*(arr(k)[first] for k in INERTIA_NAMES)) + dI[first]
+        I = inertia_tensor(*(arr(k)[first] for k in INERTIA_NAMES)) + self.fixed_dI[first]
         MA = np.broadcast_to(vehicle.added_mass_matrix, (first.size, 6, 6)).copy()
         for i, k in enumerate(ADDED_MASS_NAMES):
             MA[:, i, i] = arr(k)[first]
@@ -196,7 +198,6 @@ class Model:
         self.weight = m_meas * self.g
         # what the restoring term weighs: the vehicle's measured mass at its measured CG
         self.weight_mass, self.weight_r_g = m_meas, r_g_meas
-        self.fixed_mass, self.fixed_first, self.fixed_dI = self.mass - m_meas, first_moment - m_meas[:, None] * r_g_meas, dI
         self.current_ned = np.stack([arr(k) for k in ("current_n", "current_e", "current_d")], -1)
         self.has_current = current is not None or bool(np.any(self.current_ned != 0))
         self.changes_mass = any(t.changes_mass for t in self.terms)
@@ -276,8 +277,6 @@ class Model:
         MRB_mv, Minv_mv = self._MRB_mv, self._Minv_mv
         if self.changes_mass:
             mass, r_g, M_RB, Minv = self._mass_update(t, y, pos, R, nu, nu_r, u)
-            r_g = (mass[:, None] * r_g - self.fixed_first) / (mass - self.fixed_mass)[:, None]
-            mass = mass - self.fixed_mass
             weight = mass * self.g
             MRB_mv, Minv_mv = (lambda x: _matvec(M_RB, x)), (lambda x: _matvec(Minv, x))
         states = {i: y[:, s] for i, s in self.state_slices.items()} if self.state_slices else {}
@@ -335,10 +334,12 @@ class Model:
                 np.array([np.asarray(b, float).reshape(3) for _, b in pairs]))
 
     def _mass_update(self, t, y, pos, R, nu, nu_r, u):
-        """Rebuild M_RB with the mass changes of mass-changing terms (VBS, moving masses)."""
+        """Rebuild M_RB with the mass changes of mass-changing terms (VBS, moving masses).
+        Returns the weighed mass and its CG (the vehicle's with those changes), then ``M_RB``
+        (which adds the terms' fixed masses) and ``(M_RB + M_A)^-1``."""
         n = y.shape[0]
-        mass = self.mass.copy()
-        first = self.mass[:, None] * self.r_g
+        mass = self.weight_mass.copy()
+        first = mass[:, None] * self.weight_r_g
         I = inertia_tensor(*(np.broadcast_to(np.asarray(self.params[k], float), (n,)) for k in INERTIA_NAMES)) + self.fixed_dI
         ctx = Context(t, pos, y[:, 3:7], R, nu, nu_r, u, self.input_kind, self.weight, self.weight_mass, self.weight_r_g,
                       {i: y[:, s] for i, s in self.state_slices.items()}, self.params, False)
@@ -350,7 +351,11 @@ class Model:
                 first = first + dfirst
                 I = I + dI
         r_g = first / mass[:, None]
-        M_RB = rigid_body_mass_matrix(mass, I, r_g)
+        if np.any(self.fixed_mass):
+            m_all = mass + self.fixed_mass
+            M_RB = rigid_body_mass_matrix(m_all, I, (first + self.fixed_first) / m_all[:, None])
+        else:
+            M_RB = rigid_body_mass_matrix(mass, I, r_g)
         Minv = np.linalg.inv(M_RB + self.M_A)
         return mass, r_g, M_RB, Minv
 

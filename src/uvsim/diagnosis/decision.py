@@ -214,12 +214,13 @@ def inertia_challenger(sel, best, st, val_cur):
     if not rows:
         return None
     win = min(rows, key=lambda r: r["open_loop_cost"])
-    if not (np.isfinite(win["open_loop_cost"]) and win["open_loop_cost"] <= (1.0 - MIN_RELATIVE) * best["open_loop_cost"]):
-        win["why"] += (f"; open-loop validation cost {win['open_loop_cost']:.4g} not {100 * MIN_RELATIVE:.0f} % "
-                       f"below {c.variant}'s {best['open_loop_cost']:.4g}")
+    cost, cost_best = win["open_loop_cost"], best["open_loop_cost"]
+    if not (np.isfinite(cost) and cost <= (1.0 - MIN_RELATIVE) * cost_best):
+        win["why"] += (f"; open-loop validation cost {cost:.4g} not {100 * MIN_RELATIVE:.0f} % "
+                       f"below {c.variant}'s {cost_best:.4g}")
         return None
-    win["why"] += (f"; open-loop validation cost {100 * (1 - win['open_loop_cost'] / best['open_loop_cost']):.0f} % "
-                   f"below {c.variant}'s ({win['open_loop_cost']:.4g} against {best['open_loop_cost']:.4g})")
+    win["why"] += (f"; open-loop validation cost {100 * (1 - cost / cost_best):.0f} % "
+                   f"below {c.variant}'s ({cost:.4g} against {cost_best:.4g})")
     return win
 
 
