@@ -151,7 +151,8 @@ def test_cli_writes_report_corrected_vehicle_and_plots(tmp_path, capsys):
     fixed = uvsim.load_vehicle(veh)
     assert [e.kind for e in fixed.effects] == ["current"]
     assert "diagnosed:" in veh.read_text()
-    assert sorted(p.name for p in plots.iterdir()) == ["errors_over_time.png", "steps.png", "validation_runs.png"]
+    assert sorted(p.name for p in plots.iterdir()) == ["errors_over_time.png", "residual.png", "steps.png",
+                                                      "validation_runs.png"]
 
 
 @pytest.mark.parametrize("kw, match", [
@@ -205,7 +206,7 @@ def test_catalogue_variants_follow_the_inputs_and_the_log():
     assert {"thruster_gain:unit_1", "thruster_gain:all", "tether:full", "current:3d",
             "coupled_damping:drag_centre_xz"} <= pwm
     no_pos = {c.effect for c in catalogue(input_kind="pwm", n_thrusters=8, has_position=False, **kw)}
-    assert "tether" not in no_pos  # a tether needs the position it pulls from
+    assert "tether" not in no_pos  # a tether needs the position (or depth) it pulls from
     assert {c.effect for c in catalogue(input_kind="pwm", n_thrusters=8, has_position=True, only=["ballast"],
                                         **kw)} == {"ballast"}
     with pytest.raises(CalibrationError, match="unknown candidate effect"):

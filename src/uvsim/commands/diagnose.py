@@ -90,6 +90,12 @@ def format_table(report: dict) -> str:
     for k, d in report.get("retuned", {}).items():
         lines.append(f"  re-tuned {k}: {d['before']:.5g} -> {d['value']:.5g}")
     lines.append(report["message"])
+    for n in report.get("not_observable") or []:
+        lines.append(f"not observable: {n['effect']} ({n['variants']}): {n['why']}")
+    v = report.get("verdict") or {}
+    if v.get("check"):
+        lines.append(f"verdict: {v['status']}; what to check:")
+        lines += [f"  - {c}" for c in v["check"]]
     lines.append("")
     lines.append(f"{'validation RMSE (open loop)':28s} {'before':>12s} {'after':>12s}")
     for k in report["rmse_before"]:

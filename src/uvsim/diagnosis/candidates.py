@@ -58,6 +58,9 @@ EFFECTS = ("current", "tether", "ballast", "thruster_lag", "thrust_asymmetry", "
 CURRENT_H, CURRENT_V = 0.5, 0.3
 TETHER_K, TETHER_T, ANCHOR_RANGE = 50.0, 50.0, 50.0
 BALLAST_W, BALLAST_R, ATTACH_R = 20.0, 0.5, 0.4
+#: largest lumped cable drag, N s^2/m^2: the whole cross-flow drag 1/2 rho C_d D l of a
+#: 7.6 mm Fathom tether (C_d 1.2, effects.tether) of ANCHOR_RANGE metres moving uniformly
+LUMPED_DRAG_MAX = 0.5 * 1000.0 * 1.2 * 0.0076 * ANCHOR_RANGE
 #: a ballast piece's own mass: up to 2 kg (20 N of lead is 2.3 kg)
 BALLAST_M = 2.0
 LAG_MAX = 2.0
@@ -90,9 +93,10 @@ class Candidate:
         in-sample Wald test of :mod:`uvsim.diagnosis.core` tests against."""
         off = {}
         for n in self.free:
-            if n.startswith(("current_", "drag_centre_")) or n in ("tether_stiffness", "tether_tension",
-                                                                   "ballast_weight", "bottom_effect_damping",
-                                                                   "thruster_lag_time_constant"):
+            if n == "thruster_lag_time_constant":
+                off[n] = self.bounds[n][0]  # the identifiability floor of a lag (_lag)
+            elif n.startswith(("current_", "drag_centre_")) or n in ("tether_stiffness", "tether_tension",
+                                                                     "ballast_weight", "bottom_effect_damping"):
                 off[n] = 0.0
             elif n.startswith(("thruster_gain_", "thruster_reverse_", "force_reverse_", "force_gain_")) \
                     or n == "thrust_asymmetry_ratio":
@@ -126,10 +130,10 @@ def _tether(p_ref):
          "tether_anchor_d": (pd - ANCHOR_RANGE, pd + ANCHOR_RANGE),
          "tether_attach_x": (-ATTACH_R, ATTACH_R), "tether_attach_y": (-ATTACH_R, ATTACH_R),
          "tether_attach_z": (-ATTACH_R, ATTACH_R), "tether_length": (0.0, 2 * ANCHOR_RANGE),
-         "tether_slack_length": (0.0, ANCHOR_RANGE)}
+         "tether_slack_length": (0.0, ANCHOR_RANGE), "tether_lumped_drag": (0.0, LUMPED_DRAG_MAX)}
     s = {"tether_stiffness": 0.5, "tether_tension": 1.0, "tether_anchor_n": pn - 5.0, "tether_anchor_e": pe,
          "tether_anchor_d": pd, "tether_attach_x": 0.0, "tether_attach_y": 0.0, "tether_attach_z": 0.0,
-         "tether_length": 10.0, "tether_slack_length": 0.0}
+         "tether_length": 10.0, "tether_slack_length": 0.0, "tether_lumped_drag": 1.0}
     base = {"type": "tether", "tension": 0.0, "stiffness": 0.5, "slack_length": 0.0, "length": 0.0,
             "anchor_n": pn - 5.0, "anchor_e": pe, "anchor_d": pd}
     tens = {**base, "stiffness": 0.0, "tension": 1.0}
@@ -160,6 +164,12 @@ def _tether(p_ref):
              [t0, k, ls, "tether_anchor_n", "tether_anchor_e"] + at + [ln],
              f"horizontal pull (tension plus elastic beyond a slack length), plus {drag}, attached anywhere "
              "on the frame (a cable trailing on the floor or at the surface)"),
+        cand("horizontal_lumped", {**base, "horizontal": True, "lumped_drag": 1.0},
+             [k, "tether_anchor_n", "tether_anchor_e"] + at + ["tether_lumped_drag"],
+             "elastic line pulling horizontally, attached anywhere on the frame, with the cable's drag lumped at "
+             "the attachment against its velocity in every direction (a slack cable's bight)"),
+        cand("lumped_attach", {**base, "lumped_drag": 1.0}, [k] + a3 + at + ["tether_lumped_drag"],
+             "elastic line in 3-D, attached anywhere on the frame, with the cable's drag lumped at the attachment"),
         cand("full", {**base, "tension": 1.0, "length": 10.0}, [t0, k, ls] + a3 + at + [ln],
              f"tension plus elastic pull beyond a slack length, plus {drag}, attached anywhere on the frame"),
     ]
@@ -179,6 +189,28 @@ def _ballast():
                       "a piece with its own mass (inertia) anywhere on the frame", {"open_loop": "inertia"})]
 
 
+#: Parameters whose lower bound is a physical limit, not a search limit: a fit may end
+#: there (no stiffness, no pre-tension, no slack, no wetted cable, a massless piece) and
+#: the effect still be named; every other bound is the edge of the catalogue's search range.
+PHYSICAL_FLOORS = ("tether_stiffness", "tether_tension", "tether_slack_length", "tether_length",
+                   "tether_lumped_drag", "ballast_mass")
+
+
+def search_bound_hits(c: Candidate, values: Mapping[str, float], at_bounds: Sequence[str]) -> list[str]:
+    """The parameters of ``c`` that ended on the edge of their search range (not on a
+    physical floor, :data:`PHYSICAL_FLOORS`): such an effect is not named, since the data
+    push it beyond what the catalogue considers physical for this vehicle."""
+    out = []
+    for n in at_bounds:
+        if n not in c.free:
+            continue
+        lo, hi = c.bounds[n]
+        if n in PHYSICAL_FLOORS and abs(values.get(n, hi) - lo) <= abs(values.get(n, hi) - hi):
+            continue
+        out.append(n)
+    return out
+
+
 def inertia_start(c: Candidate, values: Mapping[str, float], g: float) -> dict:
     """Start of the inertial parameters of an ``open_loop`` variant from the winner's
     ``values``: a ballast piece of mass ``|w| / g`` (a density of rho / 2 for buoyancy
@@ -189,7 +221,14 @@ def inertia_start(c: Candidate, values: Mapping[str, float], g: float) -> dict:
 
 
 def _lag(dt):
-    lo = max(dt / 2.5, 0.01)  # RK4 at the log's step is stable for T > dt / 2.8 (module thrusters)
+    # The floor is half the log's sample interval: a command held between samples (zero-order
+    # hold) acts like the underlying signal delayed by dt / 2 (Franklin, Powell & Workman,
+    # Digital Control of Dynamic Systems, 3rd ed., sec. 4.3.1: ZOH ~ e^{-s dt/2}), and a
+    # first-order lag T acts like a delay T at low frequency, so a lag of at most dt / 2 is
+    # the logged inputs' unknown timing convention (held before or after the sample, sampled
+    # from a continuous command), not an actuator.  It is also above the RK4 stability limit
+    # at the log's step (T > dt / 2.8, module thrusters).
+    lo = max(dt / 2.0, 0.01)
     b = {"thruster_lag_time_constant": (lo, LAG_MAX)}
     s = {"thruster_lag_time_constant": max(0.2, 2 * lo)}
     return [Candidate("thruster_lag", "steady", {"type": "thruster_lag", "time_constant": s[
@@ -273,9 +312,15 @@ def coupling_terms() -> list[str]:
 
 
 def catalogue(*, input_kind: str, n_thrusters: int, dt: float, p_ref, has_position: bool, z_max: float | None,
-              only: Sequence[str] | None = None, exclude: Sequence[str] = ()) -> list[Candidate]:
+              only: Sequence[str] | None = None, exclude: Sequence[str] = (), has_depth: bool = False
+              ) -> list[Candidate]:
     """The candidate variants that apply to the data (module docstring), except the
-    coupled-damping one, which needs the equation error to pick its derivatives."""
+    coupled-damping one, which needs the equation error to pick its derivatives.
+
+    Without x/y (IMU + depth, as most ROVs log) the tether variants that pull in 3-D are
+    kept when depth is logged: their pull acts on depth, attitude and rates through the
+    attachment point, and the horizontal position they need is the model's own (simulated)
+    one; the horizontal-pull variants are left out (:func:`observability` says so)."""
     if only is not None:
         unknown = sorted(set(only) - set(EFFECTS))
         if unknown:
@@ -286,6 +331,8 @@ def catalogue(*, input_kind: str, n_thrusters: int, dt: float, p_ref, has_positi
         out += _current()
     if "tether" in want and has_position:
         out += _tether(p_ref)
+    elif "tether" in want and has_depth:
+        out += [c for c in _tether(p_ref) if not c.spec.get("horizontal")]
     if "ballast" in want:
         out += _ballast()
     if "thruster_lag" in want:
@@ -298,4 +345,29 @@ def catalogue(*, input_kind: str, n_thrusters: int, dt: float, p_ref, has_positi
         out += _drag_centre()
     if "bottom_effect" in want and z_max is not None and np.isfinite(z_max):
         out += _bottom(z_max)
+    return out
+
+
+def observability(*, has_position: bool, has_depth: bool, has_velocity: bool, z_max: float | None,
+                  n_thrusters: int) -> list[dict]:
+    """What the logged signals cannot show, per effect: ``[{"effect", "variants", "why"}]``
+    (the report's ``not_observable``; an empty list when everything is screened)."""
+    out = []
+    if not has_position:
+        if has_depth:
+            out.append({"effect": "tether", "variants": "horizontal pulls",
+                        "why": "a horizontal pull depends on x/y, which were not logged; the 3-D variants (a spool "
+                               "or float above or beside the vehicle) are screened from depth, attitude and rates"})
+        else:
+            out.append({"effect": "tether", "variants": "all",
+                        "why": "a tether pulls with the distance to its anchor: neither x/y nor depth were logged"})
+        if not has_velocity:
+            out.append({"effect": "current", "variants": "horizontal",
+                        "why": "without x/y or a DVL a horizontal current acts only through the relative-velocity "
+                               "terms (damping, Munk moment) on the rates and attitude; it is screened, but a small "
+                               "current can stay undetected"})
+    if z_max is None or not np.isfinite(z_max):
+        out.append({"effect": "bottom_effect", "variants": "all", "why": "needs depth or z, which were not logged"})
+    if not n_thrusters:
+        out.append({"effect": "thruster_gain", "variants": "all", "why": "the vehicle defines no thrusters"})
     return out

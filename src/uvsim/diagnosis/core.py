@@ -38,6 +38,7 @@ from uvsim.checkpoint import Checkpoint, fingerprint
 from uvsim.diagnosis.candidates import EFFECTS, Candidate
 from uvsim.diagnosis.decision import (LEVEL, MIN_RELATIVE, VAL_LEVEL, WALD_P, alternative_challenger,
                                       inertia_challenger, parsimonious, richer_challenger, simplest_sufficient)
+from uvsim.diagnosis.residual import concentration, verdict
 from uvsim.diagnosis.selector import VARIANT_SHARE, Selector
 from uvsim.errors import CalibrationError, UvsimError
 from uvsim.fitting.evaluate import open_loop, pooled
@@ -160,7 +161,11 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         values = dict(base_fit.values)
     say("validation cost of the baseline")
     val_given = sel.val_cost(veh, {})
-    val_cur = sel.val_cost(veh, values) if values else val_given
+    val_given["open_loop"] = sel.open_loop_blocks(veh, {})
+    val_cur = val_given
+    if values:
+        val_cur = sel.val_cost(veh, values)
+        val_cur["open_loop"] = sel.open_loop_blocks(veh, values)
     accepted: list = []
     accepted_values: list = []
     steps = []
@@ -225,8 +230,13 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
                + ("The model is at the noise level." if at_noise else
                   "The cost is above the noise level: an effect outside the catalogue, or base coefficients to "
                   "calibrate (uvsim calibrate, or --retune)."))
+    verd = verdict(val_cur["per_entry"], names, concentration(sel.meas_va, ol_after, val), AT_NOISE)
+    if verd["status"] in ("partly explained", "not explained"):
+        msg += " " + verd["message"][0].upper() + verd["message"][1:] + "."
     report = {
         "effects": effects_rep,
+        "verdict": verd,
+        "not_observable": sel.not_observable,
         "effect": names[0] if len(names) == 1 else ("none" if not names else "+".join(names)),
         "confidence": confidence,
         "message": msg,

@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.stats import chi2
 
-from uvsim.diagnosis.candidates import inertia_start
+from uvsim.diagnosis.candidates import inertia_start, search_bound_hits
 from uvsim.fitting.compare import bootstrap_improvement
 
 #: One-sided confidence level of "significantly better" (block bootstrap), used to compare
@@ -69,6 +69,16 @@ def judge(row, val_cur) -> tuple[bool, str]:
     cmp = row["compare"]
     if row["problem"]:
         return False, row["problem"]
+    c = row["candidate"]
+    values = row.get("values", {})
+    hits = search_bound_hits(c, values, row.get("at_bounds") or [])
+    if hits:
+        if hits == ["thruster_lag_time_constant"] and values[hits[0]] <= c.bounds[hits[0]][0] * 1.0001:
+            return False, (f"time constant on its floor {c.bounds[hits[0]][0]:.3g} s (half the log's sample "
+                           "interval): indistinguishable from the timing of the logged inputs (candidates._lag)")
+        return False, (f"{', '.join(hits)} on the edge of the search range: the data push this effect beyond "
+                       "what the catalogue considers physical, so it is not named (an effect outside the "
+                       "catalogue or an error of the base model is the likelier cause)")
     w = cmp.get("wald") or {}
     if w.get("p") is not None and not w["p"] < WALD_P:
         return False, (f"not significant in the training runs: robust Wald test p = {w['p']:.2g} "
@@ -80,8 +90,12 @@ def judge(row, val_cur) -> tuple[bool, str]:
         return False, (f"not confirmed on the validation runs: the cost drops {100 * cmp['relative']:.1f} % but "
                        f"the bootstrap over windows finds it better in only {100 * cmp['p_better']:.0f} % of "
                        f"resamples (needs {100 * VAL_LEVEL:.0f} %)")
+    g = cmp.get("guard")
+    if g is not None and not g["ok"]:
+        return False, g["why"]
     return True, (f"significant: Wald p = {w.get('p', float('nan')):.1g} in training, validation cost "
-                  f"-{100 * cmp['relative']:.1f} % (better in {100 * cmp['p_better']:.1f} % of resamples)")
+                  f"-{100 * cmp['relative']:.1f} % (better in {100 * cmp['p_better']:.1f} % of resamples); "
+                  + (g["why"] if g is not None else "open-loop guard not run"))
 
 
 def clearly_better(worse_windows, better_windows) -> bool:

@@ -15,8 +15,9 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from uvsim.checkpoint import fingerprint
-from uvsim.diagnosis.candidates import Candidate, catalogue, coupled_candidate, coupling_terms
+from uvsim.diagnosis.candidates import Candidate, catalogue, coupled_candidate, coupling_terms, observability
 from uvsim.diagnosis.decision import LEVEL, judge, wald
+from uvsim.diagnosis.guard import block_costs, guard
 from uvsim.errors import CalibrationError, UvsimError, VehicleError
 from uvsim.fitting import fit
 from uvsim.fitting.compare import bootstrap_improvement
@@ -65,6 +66,7 @@ class Selector:
             raise CalibrationError(f"retune: unknown base parameter(s) {unknown} of vehicle {vehicle.name}")
         self.retune_bounds = {n: default_bounds(n, p[n], 0.5) for n in self.retune}
         self.fits = 0
+        self.not_observable: list = []
         self.store = {} if store is None else store
         self.on_fit = on_fit
 
@@ -114,20 +116,20 @@ class Selector:
         return {"windows": w, "cost": float(w.sum()), "n": int(res.n_residuals),
                 "per_entry": float(w.sum() / max(res.n_residuals, 1))}
 
-    def open_loop_cost(self, vehicle, values: Mapping) -> float:
-        """Noise-normalized sum of squares of free simulations of the validation runs from
-        their logged starts (:func:`uvsim.fitting.evaluate.open_loop`, the report's
-        before/after RMSE); inf when a simulation diverges."""
+    def open_loop_blocks(self, vehicle, values: Mapping) -> dict:
+        """Free simulations of the validation runs from their logged starts
+        (:func:`uvsim.fitting.evaluate.open_loop`, the report's before/after RMSE), as
+        noise-normalized errors per signal group and block (:func:`uvsim.diagnosis.guard.block_costs`);
+        ``total`` is inf when a simulation diverges."""
         known = vehicle.parameters()
         ol = open_loop(vehicle, self.val, overrides={k: v for k, v in values.items() if k in known},
                        meas=self.meas_va)
-        total = 0.0
-        for m, o in zip(self.meas_va, ol):
-            r = m.normalized(o["pred"], fill=np.nan)
-            if not np.isfinite(r).all():
-                return float("inf")
-            total += float(r @ r)
-        return total
+        return block_costs(self.meas_va, ol)
+
+    def open_loop_cost(self, vehicle, values: Mapping) -> float:
+        """Noise-normalized sum of squares of the free simulations of the validation runs
+        (:meth:`open_loop_blocks`); inf when a simulation diverges."""
+        return self.open_loop_blocks(vehicle, values)["total"]
 
     def seed_retune(self, vehicle) -> dict:
         """Equation-error estimate of the re-tuned base coefficients (the start of the
@@ -265,8 +267,12 @@ class Selector:
         depths = [r.position[:, 2] for r in self.train if r.has_position and np.isfinite(r.position[:, 2]).any()]
         depths += [r.depth for r in self.train if r.has_depth]
         z_max = float(max(np.nanmax(z) for z in depths)) if depths else None
-        cands = catalogue(input_kind=run0.input_kind, n_thrusters=vehicle_cur.n_thrusters, dt=dt, p_ref=p_ref, has_position=has_pos, z_max=z_max, only=only,
-                          exclude=exclude)
+        has_depth = any(r.has_depth or (r.has_position and np.isfinite(r.position[:, 2]).any()) for r in self.train)
+        cands = catalogue(input_kind=run0.input_kind, n_thrusters=vehicle_cur.n_thrusters, dt=dt, p_ref=p_ref,
+                          has_position=has_pos, z_max=z_max, only=only, exclude=exclude, has_depth=has_depth)
+        self.not_observable = observability(
+            has_position=has_pos, has_depth=has_depth, z_max=z_max, n_thrusters=vehicle_cur.n_thrusters,
+            has_velocity=any(np.isfinite(r.velocity[:, :2]).any() for r in self.train))
         # variants whose extra parameters act through inertia are not screened: the equation
         # error cannot separate a piece's mass from the re-tuned added mass (decision.inertia_challenger)
         held = [c for c in cands if c.tags.get("open_loop")]
@@ -362,8 +368,13 @@ class Selector:
         vc = self.val_cost(veh, vals)
         cmp = bootstrap_improvement(val_cur["windows"], vc["windows"], level=LEVEL)
         cmp["wald"] = wald(best, c)
+        # the open-loop guard (uvsim.diagnosis.guard): no logged group may get worse
+        vc["open_loop"] = self.open_loop_blocks(veh, vals)
+        if "open_loop" in val_cur:
+            cmp["guard"] = guard(val_cur["open_loop"], vc["open_loop"])
         row.update(result=best, values={k: best.values[k] for k in c.free}, std={k: best.std.get(k) for k in c.free},
                    train_cost=best.cost, val=vc, compare=cmp, problem=problem,
+                   open_loop_cost=vc["open_loop"]["total"],
                    at_bounds=[n for n in best.at_bounds if n in c.free], vehicle=veh, all_values=vals)
         return row
 

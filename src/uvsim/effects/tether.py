@@ -29,6 +29,13 @@ uniformly; all of it is carried by the vehicle (an upper bound)::
 
     F_drag = -1/2 rho C_d D (l / 3) |v_n| v_n                             (NED)
 
+Lumped drag (``lumped_drag`` = ``c_l``, N s^2/m^2): a slack cable's bight is dragged
+whichever way the attachment moves, so its drag is also modelled lumped at the
+attachment, against the whole attachment velocity (quadratic point drag, the form of
+Fossen 2021 eq. 6.61 for one point)::
+
+    F_lumped = -c_l |v_a| v_a                                            (NED)
+
 Horizontal pull (``horizontal: true``): a cable lying on the tank floor or trailing
 at the surface pulls only horizontally: ``d`` and ``L`` use the horizontal (north,
 east) components only, so ``e`` is horizontal and ``anchor_d`` plays no part.
@@ -53,7 +60,7 @@ from uvsim.rigid_body import cross
 
 @register("tether")
 class Tether(Effect):
-    """Umbilical pull (tension + stiffness beyond slack) and cross-flow drag."""
+    """Umbilical pull (tension + stiffness beyond slack), cross-flow drag and lumped drag."""
 
     FIELDS = (
         Field("attach_x", "m", -5.0, 5.0, 0.0, "the body x position of the tether attachment"),
@@ -69,6 +76,8 @@ class Tether(Effect):
         Field("diameter", "m", 0.0, 0.2, 0.0076, "the cable diameter"),
         Field("length", "m", 0.0, 1.0e4, 0.0, "the wetted cable length"),
         Field("rho", "kg/m^3", 900.0, 1100.0, 1000.0, "the water density"),
+        Field("lumped_drag", "N s^2/m^2", 0.0, 1.0e3, 0.0,
+              "the quadratic drag of the cable lumped at the attachment, against its velocity in every direction"),
     )
 
     OPTIONS = {"horizontal": False}
@@ -89,14 +98,15 @@ class Tether(Effect):
             p0 = p0[:, :2]  # the pull direction uses the north and east components only
         c_drag = 0.5 * g["rho"] * g["cd"] * g["diameter"] * g["length"] / 3.0
         attached = bool(np.any(r_a))
-        return r_a, p0, g["tension"], g["stiffness"], g["slack_length"], c_drag, bool(np.any(c_drag)), attached
+        return (r_a, p0, g["tension"], g["stiffness"], g["slack_length"], c_drag, bool(np.any(c_drag)), attached,
+                g["lumped_drag"], bool(np.any(g["lumped_drag"])))
 
     def forces(self, ctx, prep):
         # evaluated in the body frame (one rotation instead of three; the tether is evaluated
         # at every RK4 stage of every diagnosis fit, docs/performance.md):
         #   3-D:        d_b = R^T (p_0 - p) - r_a,  e_b = d_b / L
         #   horizontal: d = (p_0 - p - R r_a) north/east only (NED),  e_b = R^T e
-        r_a, p0, T0, k, Ls, c_drag, has_drag, attached = prep
+        r_a, p0, T0, k, Ls, c_drag, has_drag, attached, c_l, has_lumped = prep
         R = ctx.R
         if p0.shape[1] == 3:
             dn = p0 - ctx.pos
@@ -113,12 +123,15 @@ class Tether(Effect):
             en = d / np.maximum(L, 1e-9)[:, None]
             e = R[:, 0, :] * en[:, :1] + R[:, 1, :] * en[:, 1:2]
         f = (T0 + k * np.maximum(0.0, L - Ls))[:, None] * e
-        if has_drag:
+        if has_drag or has_lumped:
             v = ctx.nu_r[:, :3]
             if attached:
                 v = v + cross(ctx.nu_r[:, 3:], r_a)
-            v_n = v - (v * e).sum(1)[:, None] * e
-            f = f - (c_drag * np.sqrt((v_n * v_n).sum(1)))[:, None] * v_n
+            if has_drag:
+                v_n = v - (v * e).sum(1)[:, None] * e
+                f = f - (c_drag * np.sqrt((v_n * v_n).sum(1)))[:, None] * v_n
+            if has_lumped:
+                f = f - (c_l * np.sqrt((v * v).sum(1)))[:, None] * v
         tau = np.empty((f.shape[0], 6))
         tau[:, :3] = f
         if attached:

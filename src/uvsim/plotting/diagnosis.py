@@ -4,7 +4,9 @@
   measured, simulated with the given model and with the corrected one (open loop);
 * ``errors_over_time.png``: the error of each logged signal group before / after;
 * ``steps.png``: the validation cost of the given model, the baseline and after each
-  accepted effect, with every fitted candidate of each step.
+  accepted effect, with every fitted candidate of each step;
+* ``residual.png``: where the corrected model's remaining error lies (by channel, run and
+  part of the run), the picture behind the report's ``verdict``.
 
 Part of :mod:`uvsim.plotting`, the only package that imports matplotlib.
 """
@@ -137,9 +139,32 @@ def plot_steps(diag, path) -> Path:
     return Path(path)
 
 
+def plot_residual(diag, path) -> Path:
+    """Where the corrected model's open-loop validation error lies (the report's
+    ``verdict``, :mod:`uvsim.diagnosis.residual`): shares by channel, run and third of the run."""
+    from uvsim.diagnosis.residual import concentration
+
+    conc = concentration(diag.measurements_validation, diag.open_loop_after, diag.validation)
+    v = diag.report.get("verdict", {})
+    fig, axes = plt.subplots(1, 3, figsize=(12, 3.4), gridspec_kw={"width_ratios": [2, 2, 1]})
+    for ax, key, title in zip(axes, ("by_channel", "by_run", "by_part"), ("channel", "validation run", "part of run")):
+        rows = conc[key][:12]
+        ax.barh([r["name"] for r in rows][::-1], [100 * r["share"] for r in rows][::-1], color="tab:purple")
+        ax.set_xlabel("share of the open-loop error [%]")
+        ax.set_title(f"by {title}", fontsize=9)
+        ax.tick_params(labelsize=7)
+        ax.grid(alpha=0.3, axis="x")
+    fig.suptitle(f"Residual after diagnosis: {v.get('status', '?')} ({v.get('cost_per_entry', float('nan')):.2f} "
+                 f"squared noise sigmas per residual; noise level {v.get('at_noise', float('nan')):g})", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return Path(path)
+
+
 def plot_diagnosis(diag, out_dir) -> list[Path]:
     """All diagnosis plots into ``out_dir`` (created); returns the files."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     return [plot_validation_runs(diag, out / "validation_runs.png"), plot_errors(diag, out / "errors_over_time.png"),
-            plot_steps(diag, out / "steps.png")]
+            plot_steps(diag, out / "steps.png"), plot_residual(diag, out / "residual.png")]

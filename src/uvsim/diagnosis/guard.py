@@ -1,0 +1,122 @@
+"""The open-loop guard: a change to the model must not make any logged group worse.
+
+The windowed prediction error that the fits minimize restarts every window from
+estimated node states, so it rewards a change that explains the next few seconds even
+when the free simulation of a whole run drifts further away (issue 22: per-thruster
+reverse ratios that cut the windowed cost by 5 % while the open-loop depth error grew
+from 664 to 1011 mm).  The guard therefore simulates the validation runs from their
+logged starts (:func:`uvsim.fitting.evaluate.open_loop`, the report's before/after
+RMSE) with the current model and with the candidate, and compares them **per logged
+signal group** (position, depth, attitude, velocity, rates, acceleration).
+
+Per group the noise-normalized squared errors are summed over blocks of
+:data:`BLOCK_S` seconds of each run; the candidate's change of the group total is judged
+by a block bootstrap over these blocks (Kunsch 1989; the same resampling as
+:func:`uvsim.fitting.compare.bootstrap_improvement`).  A group is *worse* when
+
+* its error grows by more than :data:`TOLERANCE` and the growth is confirmed in at least
+  :data:`WORSE_LEVEL` of the resamples (worse beyond the comparison's noise), or
+* its error grows by more than :data:`MAX_WORSE`, whatever the resampling says (a few
+  long validation runs cannot make a large loss "significant", and a model that is 10 %
+  worse at something it was told to predict is not a diagnosis a user can trust).
+
+A candidate with a worse group is not accepted, whatever its windowed cost.
+"""
+from __future__ import annotations
+
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from uvsim.fitting.compare import bootstrap_improvement
+
+#: Block length of the bootstrap, s: as long as a diagnosis window (core.DEFAULT_HORIZON),
+#: so neighbouring blocks of a drifting free simulation are only weakly dependent.
+BLOCK_S = 3.0
+#: Relative growth of a group's open-loop error below which it is not called worse (the
+#: validation runs' own spread: a few per cent between equally good models).
+TOLERANCE = 0.02
+#: Share of bootstrap resamples in which the group must be worse for a growth beyond
+#: TOLERANCE to count (one-sided, as VAL_LEVEL for the improvements, decision.py).
+WORSE_LEVEL = 0.9
+#: Growth that counts as worse without resampling (issue 22's acceptance bar: no accepted
+#: effect may worsen a group's open-loop validation by more than 10 %).
+MAX_WORSE = 0.10
+
+
+def block_costs(meas: Sequence, results: Sequence[dict], block_s: float = BLOCK_S) -> dict:
+    """Open-loop errors by group and block.
+
+    Parameters
+    ----------
+    meas : the validation runs' measurement models (:mod:`uvsim.measurements`).
+    results : :func:`uvsim.fitting.evaluate.open_loop` of those runs (same order).
+
+    Returns
+    -------
+    dict with ``groups``: group -> (B,) noise-normalized sums of squares per block (blocks
+    of every run, in run order), ``runs``: run name -> group -> sum, ``total`` (inf when a
+    simulation diverged) and ``rmse``: group -> pooled RMSE in the group's unit.
+    """
+    groups: dict[str, list] = {}
+    runs: dict[str, dict] = {}
+    sq: dict[str, list] = {}
+    total = 0.0
+    for m, o in zip(meas, results):
+        res = m.residuals(o["pred"])
+        t = np.asarray(m.t, float)
+        blk = np.floor((t - t[0]) / block_s).astype(int)
+        n_blk = int(blk.max()) + 1 if blk.size else 0
+        runs[m.name] = {}
+        for g, e in res.items():
+            grp = m.groups[g]
+            used = m.used(g)
+            if not used.any():
+                continue
+            sig = np.where(grp.logged, grp.sigma, 1.0)
+            z = np.where(used, e / sig, 0.0)
+            bad = used & ~np.isfinite(z)
+            if bad.any():
+                total = float("inf")
+                z = np.where(bad, 1e6, z)  # a diverged simulation: a huge but finite error
+            per_row = (z ** 2).sum(axis=1)
+            per_blk = np.bincount(blk, weights=per_row, minlength=n_blk)
+            groups.setdefault(g, []).append(per_blk)
+            runs[m.name][g] = float(per_row.sum())
+            sq.setdefault(g, []).append((float(np.nansum(np.where(used, e, 0.0) ** 2)), int(used.sum())))
+            if np.isfinite(total):
+                total += float(per_row.sum())
+    rmse = {g: float(np.sqrt(sum(s for s, _ in v) / max(sum(n for _, n in v), 1))) for g, v in sq.items()}
+    return {"groups": {g: np.concatenate(v) for g, v in groups.items()}, "runs": runs, "total": total,
+            "rmse": rmse}
+
+
+def guard(before: Mapping, after: Mapping) -> dict:
+    """Compare the open-loop block costs of the current model (``before``) and a candidate
+    (``after``), both from :func:`block_costs`; ``ok`` is False when any group is worse
+    (module docstring).  Returns ``{"ok", "worse": [group, ...], "groups": {group:
+    {"before", "after", "relative", "p_worse", "worse"}}, "why"}``."""
+    out: dict = {"groups": {}, "worse": []}
+    for g, a in before["groups"].items():
+        b = after["groups"].get(g)
+        if b is None or b.shape != a.shape:
+            continue
+        # improvement of `before` over `after` = how much worse the candidate is
+        cmp = bootstrap_improvement(b, a, level=WORSE_LEVEL)
+        rel = float(b.sum() / a.sum() - 1.0) if a.sum() > 0 else 0.0
+        worse = bool(rel > MAX_WORSE or (rel > TOLERANCE and cmp["p_better"] >= WORSE_LEVEL))
+        out["groups"][g] = {"before": float(a.sum()), "after": float(b.sum()), "relative": rel,
+                            "p_worse": cmp["p_better"], "worse": worse,
+                            "rmse_before": before["rmse"].get(g), "rmse_after": after["rmse"].get(g)}
+        if worse:
+            out["worse"].append(g)
+    out["ok"] = not out["worse"]
+    if out["worse"]:
+        parts = [f"{g} {100 * out['groups'][g]['relative']:+.0f} % (worse in "
+                 f"{100 * out['groups'][g]['p_worse']:.0f} % of resamples)" for g in out["worse"]]
+        out["why"] = ("makes the open-loop validation worse: " + ", ".join(parts)
+                      + f" (the guard allows +{100 * TOLERANCE:.0f} % within the noise, never "
+                        f"+{100 * MAX_WORSE:.0f} %)")
+    else:
+        out["why"] = "no logged group's open-loop validation error is worse"
+    return out

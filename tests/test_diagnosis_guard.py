@@ -1,0 +1,125 @@
+"""Issue 22: the open-loop guard, the "not explained" verdict, effects on search bounds
+and the lag floor, and the depth-only tether (units here; end-to-end cases on data made
+by the independent truth generator of uvsim.scenarios)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from uvsim.diagnosis import diagnose
+from uvsim.diagnosis.candidates import catalogue, observability, search_bound_hits
+from uvsim.diagnosis.decision import judge
+from uvsim.diagnosis.guard import MAX_WORSE, TOLERANCE, guard
+from uvsim.diagnosis.residual import UNEXPLAINED, verdict
+from uvsim.scenarios import generate, load_truth, sample_scenario
+
+
+def _blocks(**groups):
+    return {"groups": {g: np.asarray(v, float) for g, v in groups.items()}, "rmse": {}, "total": 0.0}
+
+
+# ----------------------------------------------------------------------------- the guard
+def test_guard_refuses_a_candidate_that_makes_one_group_worse():
+    """A candidate that halves the position error but makes depth 30 % worse in every
+    block is refused, and the reason names the group."""
+    rng = np.random.default_rng(0)
+    pos, dep = rng.uniform(80, 120, 20), rng.uniform(80, 120, 20)
+    g = guard(_blocks(position=pos, depth=dep), _blocks(position=0.5 * pos, depth=1.3 * dep))
+    assert not g["ok"] and g["worse"] == ["depth"]
+    assert "depth +30 %" in g["why"]
+    assert g["groups"]["position"]["relative"] == pytest.approx(-0.5)
+
+
+def test_guard_tolerates_noise_but_never_more_than_max_worse():
+    rng = np.random.default_rng(1)
+    a = rng.uniform(80, 120, 20)
+    # within the tolerance: accepted even if every block is a little worse
+    assert guard(_blocks(depth=a), _blocks(depth=a * (1 + 0.5 * TOLERANCE)))["ok"]
+    # 6 % worse, carried by one block of twenty: not beyond the bootstrap noise
+    b = a.copy()
+    b[3] += 0.06 * a.sum()
+    g = guard(_blocks(depth=a), _blocks(depth=b))
+    assert g["ok"] and g["groups"]["depth"]["p_worse"] < 0.9
+    # beyond MAX_WORSE it is refused whatever the resampling says
+    b[3] += MAX_WORSE * a.sum()
+    assert not guard(_blocks(depth=a), _blocks(depth=b))["ok"]
+
+
+def _row(c, values, at_bounds=(), guard_ok=True):
+    cmp = {"wald": {"p": 1e-9}, "relative": 0.3, "p_better": 1.0,
+           "guard": {"ok": guard_ok, "why": "makes the open-loop validation worse: depth +40 %"}}
+    return {"candidate": c, "compare": cmp, "problem": None, "values": values, "at_bounds": list(at_bounds)}
+
+
+def test_judge_needs_the_guard_and_parameters_inside_their_search_range():
+    cands = {c.label: c for c in catalogue(input_kind="pwm", n_thrusters=8, dt=0.02, p_ref=np.zeros(3),
+                                           has_position=True, z_max=None)}
+    bal = cands["ballast:xy"]
+    ok_vals = {"ballast_weight": 1.0, "ballast_x": 0.1, "ballast_y": 0.0}
+    assert judge(_row(bal, ok_vals), None)[0]
+    ok, why = judge(_row(bal, ok_vals, guard_ok=False), None)
+    assert not ok and "open-loop" in why
+    # a weight at the edge of the frame's search range is not named
+    ok, why = judge(_row(bal, {**ok_vals, "ballast_x": 0.5}, at_bounds=["ballast_x"]), None)
+    assert not ok and "ballast_x" in why and "search range" in why
+    # a tether without stiffness sits on a physical floor, not on a search bound
+    teth = cands["tether:3d"]
+    assert search_bound_hits(teth, {"tether_stiffness": 0.0}, ["tether_stiffness"]) == []
+    assert search_bound_hits(teth, {"tether_anchor_d": 51.0}, ["tether_anchor_d"]) == ["tether_anchor_d"]
+
+
+def test_a_lag_of_half_a_sample_is_the_input_timing_not_an_actuator():
+    """A zero-order hold delays a command by dt / 2 (Franklin, Powell & Workman sec. 4.3.1),
+    so a lag's floor and the Wald test's null are dt / 2."""
+    lag = catalogue(input_kind="force", n_thrusters=8, dt=0.02, p_ref=np.zeros(3), has_position=True, z_max=None,
+                    only=["thruster_lag"])[0]
+    assert lag.bounds["thruster_lag_time_constant"][0] == pytest.approx(0.01)
+    assert lag.null == {"thruster_lag_time_constant": pytest.approx(0.01)}
+    ok, why = judge(_row(lag, {"thruster_lag_time_constant": 0.01}, at_bounds=["thruster_lag_time_constant"]), None)
+    assert not ok and "timing of the logged inputs" in why
+    assert judge(_row(lag, {"thruster_lag_time_constant": 0.2}), None)[0]
+
+
+# ----------------------------------------------------------------------------- verdict
+def test_verdict_says_not_explained_and_where():
+    conc = {"by_channel": [{"name": "depth", "share": 0.7}, {"name": "pitch", "share": 0.2},
+                           {"name": "x", "share": 0.1}],
+            "by_run": [{"name": "val_1", "share": 1.0}],
+            "by_part": [{"name": "end", "share": 0.6}, {"name": "middle", "share": 0.3},
+                        {"name": "start", "share": 0.1}]}
+    v = verdict(40.0, [], conc, 1.5)
+    assert v["status"] == "not explained" and v["unexplained"]
+    assert [x["name"] for x in v["where"]["by_channel"]] == ["depth", "pitch"]
+    assert any(c.startswith("depth:") for c in v["check"]) and any("slowly acting" in c for c in v["check"])
+    assert "not explained by the catalogue" in v["message"]
+    assert verdict(40.0, ["tether"], conc, 1.5)["status"] == "partly explained"
+    assert verdict(1.2, ["tether"], conc, 1.5)["status"] == "explained"
+    assert verdict(1.2, [], conc, 1.5)["status"] == "at noise"
+    assert verdict(0.5 * (1.5 + UNEXPLAINED), [], conc, 1.5)["status"] == "between"
+
+
+def test_observability_is_reported_not_silent():
+    notes = observability(has_position=False, has_depth=True, has_velocity=False, z_max=2.0, n_thrusters=8)
+    assert {n["effect"] for n in notes} == {"tether", "current"}
+    no_pos = {c.variant for c in catalogue(input_kind="pwm", n_thrusters=8, dt=0.01, p_ref=np.zeros(3),
+                                           has_position=False, has_depth=True, z_max=2.0, only=["tether"])}
+    assert "3d" in no_pos and "tension" in no_pos and not any(v.startswith("horizontal") for v in no_pos)
+    assert observability(has_position=True, has_depth=True, has_velocity=False, z_max=2.0, n_thrusters=8) == []
+
+
+# ----------------------------------------------------------------------------- end to end
+def test_an_out_of_catalogue_force_is_not_explained(tmp_path):
+    """A periodic force (outside the catalogue) on otherwise exact data: the verdict says the
+    residual is not explained and where it lies; whatever is named passed the guard."""
+    spec = sample_scenario(7, profile="diagnose", n_runs=10, duration=[8, 10], rate_hz=20.0,
+                           effects=[{"type": "periodic_force", "magnitude": 2.0}])
+    out = generate(spec, tmp_path / "s7")
+    assert load_truth(out)["effects"][0]["type"] == "periodic_force"
+    rep = diagnose(out).report
+    v = rep["verdict"]
+    assert v["unexplained"] and v["status"] in ("not explained", "partly explained"), v
+    assert v["where"]["by_channel"] and v["check"]
+    for st in rep["steps"]:
+        for c in st["candidates"]:
+            if c["chosen"]:
+                assert "no logged group's open-loop validation error is worse" in c["why"]
