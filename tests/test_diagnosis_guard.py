@@ -123,3 +123,16 @@ def test_an_out_of_catalogue_force_is_not_explained(tmp_path):
         for c in st["candidates"]:
             if c["chosen"]:
                 assert "no logged group's open-loop validation error is worse" in c["why"]
+
+
+def test_a_thrust_curve_at_another_voltage_is_the_base_model_not_a_thruster_fault(tmp_path):
+    """Issue 22 class 5: PWM runs through the T200 curve measured at 12 V while the model's
+    file says 16 V, nothing else wrong: no effect is named; the base model's thrust scale
+    (not per-thruster gains) takes the curve, below 1 (less thrust at 12 V)."""
+    from uvsim.benchmarks.structural import run_one
+
+    rec = run_one("curve_mismatch", 10000, tmp=tmp_path)
+    assert rec["curve"] == "t200_12v_measured" and rec["truth"] == []
+    assert rec["named"] == [] and rec["correct"]
+    assert rec["base_model"] == "thrust_scale"
+    assert rec["worst_group_change"] is not None and rec["worst_group_change"] <= 0.10

@@ -551,3 +551,32 @@ def test_issue10_timing_dataset_generates(tmp_path):
     ds = read_dataset(out)
     assert len(ds.runs) == 49 and len(ds.runs[0].t) == 701
     assert load_truth(out)["effects"][0]["effect_snr"] > 0
+
+
+def test_payload_pod_and_truth_curve_voltage():
+    """Issue 22's generator classes: a payload pod adds a moment and no net force; the truth
+    may follow the T200 curve measured at another voltage (less thrust at 12 V)."""
+    from uvsim.scenarios.effects import EFFECTS, UNCATALOGUED
+    from uvsim.scenarios.generate import vehicles
+    from uvsim.scenarios.truth import base_parts
+    from uvsim.scenarios import sample_scenario
+    from uvsim.scenarios.effects import ScenarioError
+
+    assert "payload_pod" in UNCATALOGUED and "payload_pod" in EFFECTS
+    spec = sample_scenario(3, profile="diagnose", effects=[{"type": "payload_pod", "magnitude": 5.0}], n_runs=2)
+    pod = EFFECTS["payload_pod"](**{k: v for k, v in spec.effects[0].items()
+                                    if k in EFFECTS["payload_pod"].__dataclass_fields__ and k != "type"})
+    _, veh = vehicles(spec)
+    parts = base_parts(veh, 1, 1)
+    load0, m0 = parts["load"].copy(), parts["load_moment"].copy()
+    pod.modify(parts, np.array([True]))
+    assert np.array_equal(parts["load"], load0)
+    d = np.asarray(pod.weight_at) - np.asarray(pod.float_at)
+    assert np.allclose(parts["load_moment"][:, 0] - m0[:, 0], 5.0 * d) and np.linalg.norm(d) > 0.05
+    spec = sample_scenario(3, profile="diagnose", curve_voltage=12, n_runs=2)
+    nominal, truth = vehicles(spec)
+    assert spec.input_kind == "pwm" and truth.curve.name == "t200_12v_measured"
+    pwm = np.array([1300.0, 1700.0])
+    assert np.all(np.abs(truth.curve.thrust(pwm)) < 0.8 * np.abs(nominal.curve.thrust(pwm)))
+    with pytest.raises(ScenarioError, match="curve_voltage"):
+        sample_scenario(3, profile="diagnose", curve_voltage=15)

@@ -12,8 +12,9 @@ import platform
 
 def register(sub) -> None:
     p = sub.add_parser("bench", help="measure simulator / calibration speed; 'bench diagnose': scenario benchmark")
-    p.add_argument("suite", nargs="?", choices=["diagnose"], default=None,
-                   help="'diagnose': diagnose randomized scenarios (default: the speed figures)")
+    p.add_argument("suite", nargs="?", choices=["diagnose", "diagnose-structural"], default=None,
+                   help="'diagnose': diagnose randomized scenarios; 'diagnose-structural': scenarios whose data "
+                        "differ from the model in structure, N per class (default: the speed figures)")
     p.add_argument("--scenarios", type=int, default=20, help="(diagnose) single-effect or clean scenarios")
     p.add_argument("--two-effects", type=int, default=0, help="(diagnose) two-effect scenarios")
     p.add_argument("--seed", type=int, default=0, help="(diagnose) first scenario seed")
@@ -33,6 +34,8 @@ def _run(args) -> int:
 
     if args.suite == "diagnose":
         return _diagnose(args)
+    if args.suite == "diagnose-structural":
+        return _structural(args)
     mods = available()
     if args.only:
         want = [a.strip() for a in args.only.split(",") if a.strip()]
@@ -89,4 +92,28 @@ def _diagnose(args) -> int:
     print("confusion (true -> named: count):")
     for c in s["confusion"]:
         print(f"  {c['true']:32s} -> {c['named']:32s} {c['count']}")
+    return 0
+
+
+def _structural(args) -> int:
+    from uvsim.benchmarks.structural import CLASSES, run_benchmark
+    from uvsim.commands.checks import check_outputs
+
+    check_outputs({"--results": args.results})
+    classes = [c.strip() for c in args.only.split(",") if c.strip()] if args.only else list(CLASSES)
+    out = run_benchmark(args.scenarios, args.seed, classes=classes, workers=args.workers, results=args.results,
+                        progress=None if args.json else (lambda m: print(m, flush=True)))
+    s = out["summary"]
+    if args.json:
+        print(json.dumps(out, indent=2, default=float))
+        return 0
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}")
+    for cls, d in s["classes"].items():
+        print(f"{cls:18s} right {d['correct']}/{d['n']} ({100 * d['rate']:.0f} %); clean {d['clean']}, false positives "
+              f"{d['false_positives_clean']}; named anything {d['named_anything']}; base model off "
+              f"{d['base_model_answers']}; seconds mean {d['seconds_mean']:.1f}, max {d['seconds_max']:.1f}")
+    w = s["worst_group_change_of_an_accepted_candidate"]
+    print(f"largest open-loop worsening of a logged group by an accepted candidate: "
+          + ("none accepted" if w is None else f"{100 * w:+.1f} %")
+          + f"; accepted candidates worsening a group by > 10 %: {s['accepted_candidates_worsening_a_group_over_10pct']}")
     return 0

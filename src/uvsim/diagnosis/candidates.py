@@ -37,6 +37,9 @@ coupled_damping       drag_centre_z / _xz / _xyz (the translational damping     
                       eq. 25); or the named off-diagonal derivatives that a
                       forward stepwise regression of the equation error picks
 bottom_effect         drag coefficient and floor depth                          depth
+base_model            thrust_scale (every curve scaled); damping (the 12        -
+                      diagonal damping coefficients re-tuned); damping_thrust
+                      (both): "the base model is off", not an effect
 ====================  ======================================================  ==========
 """
 from __future__ import annotations
@@ -49,7 +52,18 @@ import numpy as np
 from uvsim.errors import CalibrationError
 
 EFFECTS = ("current", "tether", "ballast", "thruster_lag", "thrust_asymmetry", "thruster_gain",
-           "coupled_damping", "bottom_effect")
+           "coupled_damping", "bottom_effect", "base_model")
+#: The "effect" whose acceptance means that the base model, not a missing effect, is off
+#: (its variants re-tune base coefficients or the thrust curve; never reported as an effect).
+BASE_MODEL = "base_model"
+#: The base coefficients a ``base_model:damping`` variant re-tunes (diagonal damping,
+#: seed 000 Table 5; the added masses move little against damping in tank runs).
+BASE_DAMPING = ("X_u", "Y_v", "Z_w", "K_p", "M_q", "N_r", "X_uu", "Y_vv", "Z_ww", "K_pp", "M_qq", "N_rr")
+#: Search range of the base model's re-tune, relative (as uvsim diagnose --retune).
+BASE_MARGIN = 0.5
+#: Search range of the thrust curve's scale: 0.5-1.5 (the T200 between 12 and 20 V at one
+#: PWM spans about 0.6-1.5 of its 16 V thrust, thrust ~ V^2; Blue Robotics T200 data).
+THRUST_SCALE_RANGE = (0.5, 1.5)
 #: Search ranges (stated assumptions of this library, wide against what an ROV meets in a
 #: tank or near a dock): currents up to 0.5 m/s horizontally and 0.3 m/s vertically;
 #: tether stiffness up to 50 N/m and tension up to 50 N (the BlueROV2's thrusters give
@@ -103,6 +117,8 @@ class Candidate:
                 off[n] = 1.0
             elif self.effect == "coupled_damping":
                 off[n] = 0.0
+            elif self.effect == BASE_MODEL:
+                off[n] = 1.0 if n == "thrust_scale_scale" else self.start[n]  # the vehicle file's values
         return off
 
 
@@ -281,6 +297,31 @@ def _bottom(z_max):
                       "(the BlueROV2's height)")]
 
 
+def _base_model(base: Mapping[str, float], n_thrusters: int, input_kind: str):
+    """"The base model is off": the diagonal damping re-tuned, the thrust curve scaled
+    (thrusters: every curve; force inputs: the logged forces), or both.  Compared with the
+    effects like an effect, and fitted before any actuator fault is judged (parsimony:
+    one scale beats per-thruster gains that say the same)."""
+    from uvsim.fitting.parameters import default_bounds
+
+    out = []
+    scale_spec = {"type": "thrust_scale", "scale": 1.0}
+    sb = {"thrust_scale_scale": THRUST_SCALE_RANGE}
+    ss = {"thrust_scale_scale": 1.0}
+    what = "every thruster's curve" if input_kind != "force" else "the logged generalized forces"
+    out.append(Candidate(BASE_MODEL, "thrust_scale", scale_spec, ["thrust_scale_scale"], sb, ss,
+                         f"{what} scaled (another supply voltage, propeller or ESC than the vehicle file's)"))
+    damp = [n for n in BASE_DAMPING if n in base and base[n] != 0.0]
+    if damp:
+        b = {n: default_bounds(n, base[n], BASE_MARGIN) for n in damp}
+        st = {n: float(base[n]) for n in damp}
+        out.append(Candidate(BASE_MODEL, "damping", None, damp, b, st,
+                             f"the diagonal damping re-tuned within +-{100 * BASE_MARGIN:.0f} % of the vehicle file"))
+        out.append(Candidate(BASE_MODEL, "damping_thrust", scale_spec, damp + ["thrust_scale_scale"], {**b, **sb},
+                             {**st, **ss}, f"the diagonal damping re-tuned and {what} scaled"))
+    return out
+
+
 def _drag_centre():
     b = {"drag_centre_x": (-0.5, 0.5), "drag_centre_y": (-0.5, 0.5), "drag_centre_z": (-0.5, 0.5)}
     s = {"drag_centre_x": 0.0, "drag_centre_y": 0.0, "drag_centre_z": 0.0}
@@ -312,8 +353,8 @@ def coupling_terms() -> list[str]:
 
 
 def catalogue(*, input_kind: str, n_thrusters: int, dt: float, p_ref, has_position: bool, z_max: float | None,
-              only: Sequence[str] | None = None, exclude: Sequence[str] = (), has_depth: bool = False
-              ) -> list[Candidate]:
+              only: Sequence[str] | None = None, exclude: Sequence[str] = (), has_depth: bool = False,
+              base: Mapping[str, float] | None = None) -> list[Candidate]:
     """The candidate variants that apply to the data (module docstring), except the
     coupled-damping one, which needs the equation error to pick its derivatives.
 
@@ -345,6 +386,8 @@ def catalogue(*, input_kind: str, n_thrusters: int, dt: float, p_ref, has_positi
         out += _drag_centre()
     if "bottom_effect" in want and z_max is not None and np.isfinite(z_max):
         out += _bottom(z_max)
+    if BASE_MODEL in want and base is not None:
+        out += _base_model(base, n_thrusters, input_kind)
     return out
 
 

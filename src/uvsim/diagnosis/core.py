@@ -35,7 +35,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from uvsim.checkpoint import Checkpoint, fingerprint
-from uvsim.diagnosis.candidates import EFFECTS, Candidate
+from uvsim.diagnosis.candidates import BASE_MODEL, EFFECTS, Candidate
 from uvsim.diagnosis.decision import (LEVEL, MIN_RELATIVE, VAL_LEVEL, WALD_P, alternative_challenger,
                                       inertia_challenger, parsimonious, richer_challenger, simplest_sufficient)
 from uvsim.diagnosis.residual import concentration, verdict
@@ -210,32 +210,46 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     ol_before = open_loop(veh, val, meas=sel.meas_va)
     ol_after = open_loop(veh_after, val, meas=sel.meas_va)
     final = accepted_values[-1] if accepted_values else None
-    effects_rep = []
+    effects_rep, base_rep = [], None
     for c in accepted:
-        effects_rep.append({"effect": c.effect, "variant": c.variant, "notes": c.notes,
-                            "parameters": {n: {"value": values[n], "std": (final.std.get(n) if final else None),
-                                               "unit": _unit(c, n)} for n in c.free}})
+        params = {n: {"value": values[n], "std": (final.std.get(n) if final else None), "unit": _unit(c, n)}
+                  for n in c.free}
+        if c.effect == BASE_MODEL:
+            for n in c.free:
+                params[n]["before"] = veh.parameters().get(n, 1.0)
+            base_rep = {"variant": c.variant, "notes": c.notes, "parameters": params}
+        else:
+            effects_rep.append({"effect": c.effect, "variant": c.variant, "notes": c.notes, "parameters": params})
     at_noise = val_cur["per_entry"] <= AT_NOISE
-    names = [c.effect for c in accepted]
-    if accepted:
+    names = [c.effect for c in accepted if c.effect != BASE_MODEL]
+    base_msg = ""
+    if base_rep is not None:
+        base_msg = (f"The base model is off: {base_rep['notes']} (base_model:{base_rep['variant']}, "
+                    + ", ".join(f"{n} {d['before']:.4g} -> {d['value']:.4g}" for n, d in base_rep["parameters"].items())
+                    + "); calibrate it (uvsim calibrate) rather than add an effect. ")
+    if names:
         confidence = "high" if at_noise else "partial"
-        msg = (f"{' + '.join(c.label for c in accepted)}: validation cost {val_given['per_entry']:.2f} -> "
-               f"{val_cur['per_entry']:.2f} squared noise sigmas per residual. "
-               + ("The residual is now at the noise level." if at_noise else
-                  "Something the catalogue does not explain remains (the cost is above the noise level)."))
+        msg = base_msg + (
+            f"{' + '.join(c.label for c in accepted if c.effect != BASE_MODEL)}: validation cost "
+            f"{val_given['per_entry']:.2f} -> {val_cur['per_entry']:.2f} squared noise sigmas per residual. "
+            + ("The residual is now at the noise level." if at_noise else
+               "Something the catalogue does not explain remains (the cost is above the noise level)."))
     else:
         confidence = "none"
-        msg = ("none: no catalogue effect removes a significant part of the validation cost "
-               f"({val_cur['per_entry']:.2f} squared noise sigmas per residual). "
-               + ("The model is at the noise level." if at_noise else
-                  "The cost is above the noise level: an effect outside the catalogue, or base coefficients to "
-                  "calibrate (uvsim calibrate, or --retune)."))
-    verd = verdict(val_cur["per_entry"], names, concentration(sel.meas_va, ol_after, val), AT_NOISE)
+        msg = base_msg + (
+            "none: no catalogue effect removes a significant part of the validation cost "
+            f"({val_cur['per_entry']:.2f} squared noise sigmas per residual). "
+            + ("The model is at the noise level." if at_noise else
+               "The cost is above the noise level: an effect outside the catalogue, or base coefficients to "
+               "calibrate (uvsim calibrate, or --retune)."))
+    verd = verdict(val_cur["per_entry"], names, concentration(sel.meas_va, ol_after, val), AT_NOISE,
+                   base_model_off=base_rep is not None)
     if verd["status"] in ("partly explained", "not explained"):
         msg += " " + verd["message"][0].upper() + verd["message"][1:] + "."
     report = {
         "effects": effects_rep,
         "verdict": verd,
+        "base_model": base_rep,
         "not_observable": sel.not_observable,
         "effect": names[0] if len(names) == 1 else ("none" if not names else "+".join(names)),
         "confidence": confidence,

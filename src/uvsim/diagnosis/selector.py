@@ -269,7 +269,10 @@ class Selector:
         z_max = float(max(np.nanmax(z) for z in depths)) if depths else None
         has_depth = any(r.has_depth or (r.has_position and np.isfinite(r.position[:, 2]).any()) for r in self.train)
         cands = catalogue(input_kind=run0.input_kind, n_thrusters=vehicle_cur.n_thrusters, dt=dt, p_ref=p_ref,
-                          has_position=has_pos, z_max=z_max, only=only, exclude=exclude, has_depth=has_depth)
+                          has_position=has_pos, z_max=z_max, only=only, exclude=exclude, has_depth=has_depth,
+                          base=vehicle_cur.parameters())
+        # a base-model variant re-tunes nothing the model already frees (--retune, an accepted re-tune)
+        cands = [c for c in cands if not set(c.free) & set(cur["free"])]
         self.not_observable = observability(
             has_position=has_pos, has_depth=has_depth, z_max=z_max, n_thrusters=vehicle_cur.n_thrusters,
             has_velocity=any(np.isfinite(r.velocity[:, :2]).any() for r in self.train))

@@ -16,6 +16,7 @@ name                   physics                                       parameters 
                                                                        tether_stiffness (N/m), ...
 ``thruster_lag``       first-order thrust dynamics ``T f' = f_c - f``  thruster_lag_time_constant (s)
 ``thrust_asymmetry``   reverse thrust scaled by a ratio                thrust_asymmetry_ratio (-)
+``thrust_scale``       the whole thrust curve scaled                   thrust_scale_scale (-)
 ``ballast``            extra weight/buoyancy at a body point, and      ballast_weight (N), ballast_x/y/z (m),
                        the piece's own mass (inertia only)             ballast_mass (kg)
 ``coupled_damping``    off-diagonal damping derivatives (seed 003      K_vv, M_u, ... (SNAME names)
@@ -33,11 +34,11 @@ from uvsim.effects.base import Effect, Field  # noqa: F401
 from uvsim.effects.current import Current  # noqa: F401
 from uvsim.effects.ballast import Ballast  # noqa: F401
 from uvsim.effects.tether import Tether  # noqa: F401
-from uvsim.effects.thrusters import ThrusterLag, ThrustAsymmetry  # noqa: F401
+from uvsim.effects.thrusters import ThrusterLag, ThrustAsymmetry, ThrustScale  # noqa: F401
 from uvsim.effects.coupled_damping import CoupledDampingEffect  # noqa: F401
 from uvsim.effects.drag_centre import DragCentre  # noqa: F401
 from uvsim.effects.bottom import BottomEffect  # noqa: F401
 
 #: The catalogue, in the order diagnosis tries it.
-CATALOGUE = ("current", "tether", "thruster_lag", "thrust_asymmetry", "ballast", "coupled_damping", "drag_centre",
+CATALOGUE = ("current", "tether", "thruster_lag", "thrust_asymmetry", "thrust_scale", "ballast", "coupled_damping", "drag_centre",
              "bottom_effect")

@@ -1,5 +1,6 @@
-"""Thruster effects: ``thruster_lag`` (first-order actuator dynamics) and
-``thrust_asymmetry`` (reverse thrust weaker than forward).
+"""Thruster effects: ``thruster_lag`` (first-order actuator dynamics),
+``thrust_asymmetry`` (reverse thrust weaker than forward) and ``thrust_scale`` (the
+whole thrust curve scaled).
 
 Both act on what the actuators deliver, so they are bound to the vehicle's
 thruster allocation ``B`` (6 x n, :mod:`uvsim.forces.actuators`) when a
@@ -38,6 +39,17 @@ scaled by ``ratio``::
 
 A ``ratio`` below 1 means reverse thrust is weaker than the thrust curve (or the
 force inputs) claim.  The residual it leaves is "sign-dependent on the input".
+
+``thrust_scale``: every thruster delivers ``scale`` times its curve, both ways::
+
+    contribution = (scale - 1) B f_c
+
+the first-order difference between the vehicle's curve and the one its thrusters
+follow on the day: another supply voltage (at a given PWM the T200's thrust grows
+roughly with the square of the voltage: rpm ~ V x duty, thrust ~ rpm^2, Blue Robotics
+T200 data at 10-20 V, ``data/external`` SOURCE notes), another propeller or ESC.
+Diagnosis fits it as part of "the base model is off" (``base_model:thrust_scale``),
+before any thruster fault is judged.
 """
 from __future__ import annotations
 
@@ -174,3 +186,21 @@ class ThrustAsymmetry(_ActuatorEffect):
     def forces(self, ctx, prep):
         fc = self.commanded(ctx, prep)
         return self.to_tau(ctx, (prep["ratio"] - 1.0) * np.minimum(fc, 0.0))
+
+
+@register("thrust_scale")
+class ThrustScale(_ActuatorEffect):
+    """Every thruster's curve scaled by ``scale`` (see module docstring)."""
+
+    FIELDS = (
+        Field("scale", "-", 0.0, 3.0, None, "the ratio of actual to modelled thrust", lo_open=True),
+    )
+
+    def prepare(self, params, n):
+        prep = self._command_prep(params, n)
+        prep["scale"] = self.p(params, "scale", n)[:, None]
+        return prep
+
+    def forces(self, ctx, prep):
+        fc = self.commanded(ctx, prep)
+        return self.to_tau(ctx, (prep["scale"] - 1.0) * fc)

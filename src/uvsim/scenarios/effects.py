@@ -40,6 +40,7 @@ MAGNITUDE_MEANING = {
     "weak_thruster": "thrust loss 1 - gain of the weak thruster",
     "coupled_damping": "offset of the translational drag centre from the origin, m",
     "periodic_force": "force amplitude, N",
+    "payload_pod": "weight of the pod (= lift of its float), N",
 }
 #: (low, high) of each effect's magnitude per sensor suite: ``mocap`` (position and attitude;
 #: profiles diagnose, issue10_timing) and ``imu`` (gyro, accelerometer, lagged roll/pitch,
@@ -51,10 +52,10 @@ MAGNITUDE_MEANING = {
 MAGNITUDE_RANGES = {
     "mocap": {"current": (0.01, 0.1), "tether": (0.1, 1.0), "ballast": (0.1, 1.0), "thruster_lag": (0.03, 0.3),
               "thrust_asymmetry": (0.05, 0.5), "weak_thruster": (0.07, 0.7), "coupled_damping": (0.012, 0.12),
-              "periodic_force": (0.3, 3.0)},
+              "periodic_force": (0.3, 3.0), "payload_pod": (2.0, 10.0)},
     "imu": {"current": (0.1, 1.0), "tether": (0.1, 1.0), "ballast": (0.3, 3.0), "thruster_lag": (0.03, 0.3),
             "thrust_asymmetry": (0.05, 0.5), "weak_thruster": (0.07, 0.7), "coupled_damping": (0.012, 0.12),
-            "periodic_force": (0.3, 3.0)},
+            "periodic_force": (0.3, 3.0), "payload_pod": (2.0, 10.0)},
 }
 #: Effects a diagnosis catalogue is expected to know; ``periodic_force`` is not one of them.
 CATALOGUED = ("current", "tether", "ballast", "thruster_lag", "thrust_asymmetry", "weak_thruster",
@@ -411,8 +412,41 @@ class PeriodicForce(Effect):
         return periodic
 
 
+@dataclass
+class PayloadPod(Effect):
+    """Uncatalogued: a neutrally buoyant payload (a camera pod, a sample box) whose weight
+    ``w`` acts at ``r_w`` and whose float (``-w``) at ``r_f`` (m, body): no net force, a
+    restoring moment ``w (r_w - r_f) x k`` that no single catalogue ballast (one point, a
+    net weight) describes.  The pod's mass and added mass are neglected (a few hundred
+    grams against the vehicle's 13.2 kg, seed 000 Table 2)."""
+
+    type: ClassVar[str] = "payload_pod"
+    variants: ClassVar[tuple] = ("weight_below", "weight_aft")
+    weight: float = 0.0                                          # N, the pod's weight (= its float's lift)
+    weight_at: list = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    float_at: list = field(default_factory=lambda: [0.0, 0.0, 0.0])
+
+    @classmethod
+    def sample(cls, rng, variant, magnitude, **_):
+        rw = np.asarray(frame_point(rng))
+        rf = rw.copy()
+        if variant == "weight_below":  # the weight hangs below its float (a pod under the frame)
+            rf[2] = rw[2] - float(rng.uniform(0.1, 0.2))
+        else:                          # the weight aft of its float (a sampler on a boom)
+            rf[0] = rw[0] + float(rng.uniform(0.1, 0.3))
+            rf[2] = rw[2] - float(rng.uniform(0.0, 0.1))
+        return cls(variant=variant, magnitude=magnitude, weight=magnitude, weight_at=rw.tolist(),
+                   float_at=rf.tolist())
+
+    def modify(self, parts, rows):
+        d = np.asarray(self.weight_at, dtype=float) - np.asarray(self.float_at, dtype=float)
+        parts["load_moment"][:, rows] += self.weight * d[:, None]
+
+
 EFFECTS = {cls.type: cls for cls in (Current, Tether, Ballast, ThrusterLag, ThrustAsymmetry, WeakThruster,
-                                     CoupledDamping, PeriodicForce)}
+                                     CoupledDamping, PeriodicForce, PayloadPod)}
+#: Effects outside any diagnosis catalogue (for the "not explained" benchmark).
+UNCATALOGUED = ("periodic_force", "payload_pod")
 #: Order in which command maps are applied (asymmetry of the curve, then the thruster's gain).
 COMMAND_ORDER = ("thrust_asymmetry", "weak_thruster")
 

@@ -18,6 +18,7 @@ signal on the validation runs is at least twice the noise RMS (docs/scenarios.md
 """
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -34,7 +35,7 @@ from uvsim.scenarios.sensors import GROUPS, columns, deviation_snr, measure
 from uvsim.scenarios.spec import ScenarioSpec, sensor_suite
 from uvsim.scenarios.truth import base_parts, equilibrium_attitude, simulate_truth
 from uvsim.scenarios.vehicle_data import (ADDED_MASS_NAMES, INERTIA_NAMES, LINEAR_NAMES, PACKAGE_DIR,
-                                          QUADRATIC_NAMES, load_vehicle_data)
+                                          QUADRATIC_NAMES, load_thrust_table, load_vehicle_data)
 
 #: ``effect_snr`` at or above which an effect counts as detectable.
 DETECTABLE_SNR = 2.0
@@ -69,6 +70,8 @@ def vehicles(spec: ScenarioSpec):
     r_b = nominal.r_b.copy()
     r_b[2] = float(spec.vehicle.get("z_b", r_b[2]))
     truth = truth.with_rigid_body(buoyancy=nominal.weight + float(spec.vehicle.get("net_buoyancy", 0.0)), r_b=r_b)
+    if spec.vehicle.get("truth_curve"):  # the truth's thrusters follow another curve than the file's
+        truth = dataclasses.replace(truth, curve=load_thrust_table(str(spec.vehicle["truth_curve"])))
     return nominal, truth
 
 

@@ -68,6 +68,8 @@ OVERRIDES = {
     "dvl": "realsensor: add a DVL (u, v, w)",
     "perturb_z_b": "realsensor: move the truth's CB height by up to +-30 %",
     "max_step": "RK4 step bound, s",
+    "curve_voltage": "diagnose: the truth's T200s run at this supply voltage (10-20 V, measured curves) while the "
+                     "model's file says 16 V; PWM inputs",
 }
 
 
@@ -163,6 +165,9 @@ def _check_overrides(over: dict) -> None:
                         ("sigma_position", 1e-5, 0.1), ("sigma_attitude", 1e-5, 0.2), ("max_step", 1e-4, 0.02)):
         if key in over and not (isinstance(over[key], (int, float)) and lo <= over[key] <= hi):
             raise ScenarioError(f"sample_scenario: {key} = {over[key]!r}; expected a number in [{lo:g}, {hi:g}]")
+    if "curve_voltage" in over and over["curve_voltage"] not in (10, 12, 14, 16, 18, 20):
+        raise ScenarioError(f"sample_scenario: curve_voltage = {over['curve_voltage']!r}; expected one of the measured "
+                            "T200 voltages 10, 12, 14, 16, 18, 20 V")
     if "duration" in over:
         d = np.atleast_1d(np.asarray(over["duration"], dtype=float))
         if d.size not in (1, 2) or not np.all((d >= 1.0) & (d <= 600.0)):
@@ -187,8 +192,11 @@ def _vehicle(rng, over, *, buoyancy, net=None, perturb_z_b=False) -> dict:
     z_b = float(nominal.r_b[2])
     if over.get("perturb_z_b", perturb_z_b):
         z_b = _r(z_b * rng.uniform(0.7, 1.3))
-    return {"file": nominal.name, "perturbation": p, "factors": factors, "buoyancy": mode,
-            "net_buoyancy": _r(net), "z_b": z_b, "model_name": "myrov"}
+    out = {"file": nominal.name, "perturbation": p, "factors": factors, "buoyancy": mode,
+           "net_buoyancy": _r(net), "z_b": z_b, "model_name": "myrov"}
+    if "curve_voltage" in over:
+        out["truth_curve"] = f"t200_{int(over['curve_voltage'])}v_measured"
+    return out
 
 
 def _effects(rng, over, kind, default_n, pool, context, forced=(), suite="mocap") -> list:
@@ -256,6 +264,8 @@ def _runs(rng, shapes_train, shapes_val, durations, rate, veh, trim, imu=False) 
 
 def _diagnose(seed, rng, over) -> ScenarioSpec:
     kind = over.get("input_kind", str(rng.choice(INPUT_KINDS)))
+    if "curve_voltage" in over:
+        kind = over.get("input_kind", "pwm")  # a curve mismatch is a PWM matter
     rate = float(over.get("rate_hz", rng.choice(MOCAP_RATES)))
     vehicle = _vehicle(rng, over, buoyancy=str(rng.choice(["neutral", "trimmed"])))
     veh = load_vehicle_data()

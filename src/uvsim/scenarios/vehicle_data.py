@@ -27,6 +27,10 @@ PACKAGE_DIR = Path(__file__).resolve().parents[1]
 DEFAULT_VEHICLE_FILE = PACKAGE_DIR / "vehicles" / "bluerov2_heavy.yaml"
 #: Blue Robotics T200 bollard thrust at 16 V (data/thrusters/SOURCE.md).
 THRUST_TABLES = {"t200_16v": PACKAGE_DIR / "data" / "thrusters" / "t200_16v.csv"}
+#: Blue Robotics T200 bollard thrust at 10-20 V (data/thrusters/t200_voltage/SOURCE.md): the
+#: curves a truth may follow when its supply voltage is not the vehicle file's.
+THRUST_TABLES.update({f"t200_{v}v_measured": PACKAGE_DIR / "data" / "thrusters" / "t200_voltage" / f"t200_{v}v.csv"
+                      for v in (10, 12, 14, 16, 18, 20)})
 
 INERTIA_NAMES = ("I_xx", "I_yy", "I_zz")
 ADDED_MASS_NAMES = ("X_udot", "Y_vdot", "Z_wdot", "K_pdot", "M_qdot", "N_rdot")
@@ -89,7 +93,11 @@ def load_thrust_table(name: str) -> ThrustTable:
     """Read a shipped thrust table (CSV ``pwm_us, thrust_N``)."""
     if name not in THRUST_TABLES:
         raise VehicleError(f"thrust curve {name!r}: the scenario generator knows {sorted(THRUST_TABLES)}")
-    a = np.loadtxt(THRUST_TABLES[name], delimiter=",", skiprows=1)
+    path = THRUST_TABLES[name]
+    header = path.read_text().splitlines()[0].split(",")
+    a = np.loadtxt(path, delimiter=",", skiprows=1)
+    if "thrust_kgf" in header:  # Blue Robotics' measurement sheets: kgf (1 kgf = 9.80665 N by definition)
+        return ThrustTable(name, a[:, header.index("pwm_us")].copy(), 9.80665 * a[:, header.index("thrust_kgf")])
     return ThrustTable(name, a[:, 0].copy(), a[:, 1].copy())
 
 
