@@ -37,9 +37,11 @@ coupled_damping       drag_centre_z / _xz / _xyz (the translational damping     
                       eq. 25); or the named off-diagonal derivatives that a
                       forward stepwise regression of the equation error picks
 bottom_effect         drag coefficient and floor depth                          depth
-base_model            thrust_scale (every curve scaled); damping (the 12        -
-                      diagonal damping coefficients re-tuned); damping_thrust
-                      (both): "the base model is off", not an effect
+base_model            thrust_scale (every curve scaled); damping (the 6         -
+                      diagonal quadratic damping terms re-tuned); damping_thrust
+                      (both); hydrodynamics (the 18 added-mass and damping
+                      terms), hydrodynamics_thrust: "the base model is off",
+                      not an effect
 ====================  ======================================================  ==========
 """
 from __future__ import annotations
@@ -56,9 +58,14 @@ EFFECTS = ("current", "tether", "ballast", "thruster_lag", "thrust_asymmetry", "
 #: The "effect" whose acceptance means that the base model, not a missing effect, is off
 #: (its variants re-tune base coefficients or the thrust curve; never reported as an effect).
 BASE_MODEL = "base_model"
-#: The base coefficients a ``base_model:damping`` variant re-tunes (diagonal damping,
-#: seed 000 Table 5; the added masses move little against damping in tank runs).
-BASE_DAMPING = ("X_u", "Y_v", "Z_w", "K_p", "M_q", "N_r", "X_uu", "Y_vv", "Z_ww", "K_pp", "M_qq", "N_rr")
+#: The base coefficients a ``base_model:damping`` variant re-tunes: the diagonal quadratic
+#: damping (seed 000 Table 5), which dominates the drag at tank speeds; the linear terms are
+#: an order smaller there and ill-determined next to them, and the added masses move little.
+BASE_DAMPING = ("X_uu", "Y_vv", "Z_ww", "K_pp", "M_qq", "N_rr")
+#: ... and a ``base_model:hydrodynamics`` variant every added mass and diagonal damping term
+#: (the 18 coefficients of seed 000 Table 5 that ``uvsim bench diagnose`` re-tunes).
+BASE_HYDRO = ("X_udot", "Y_vdot", "Z_wdot", "K_pdot", "M_qdot", "N_rdot", "X_u", "Y_v", "Z_w", "K_p", "M_q", "N_r",
+              *BASE_DAMPING)
 #: Search range of the base model's re-tune, relative (as uvsim diagnose --retune).
 BASE_MARGIN = 0.5
 #: Search range of the thrust curve's scale: 0.5-1.5 (the T200 between 12 and 20 V at one
@@ -217,6 +224,8 @@ def search_bound_hits(c: Candidate, values: Mapping[str, float], at_bounds: Sequ
     physical floor, :data:`PHYSICAL_FLOORS`): such an effect is not named, since the data
     push it beyond what the catalogue considers physical for this vehicle."""
     out = []
+    if c.effect == BASE_MODEL:  # a re-tune is not an effect: a coefficient at +-50 % says "far off", not "unphysical"
+        return out
     for n in at_bounds:
         if n not in c.free:
             continue
@@ -316,9 +325,19 @@ def _base_model(base: Mapping[str, float], n_thrusters: int, input_kind: str):
         b = {n: default_bounds(n, base[n], BASE_MARGIN) for n in damp}
         st = {n: float(base[n]) for n in damp}
         out.append(Candidate(BASE_MODEL, "damping", None, damp, b, st,
-                             f"the diagonal damping re-tuned within +-{100 * BASE_MARGIN:.0f} % of the vehicle file"))
+                             f"the diagonal quadratic damping re-tuned within +-{100 * BASE_MARGIN:.0f} % of the vehicle "
+                             "file"))
         out.append(Candidate(BASE_MODEL, "damping_thrust", scale_spec, damp + ["thrust_scale_scale"], {**b, **sb},
                              {**st, **ss}, f"the diagonal damping re-tuned and {what} scaled"))
+    hydro = [n for n in BASE_HYDRO if n in base and base[n] != 0.0]
+    if len(hydro) > len(damp):
+        b = {n: default_bounds(n, base[n], BASE_MARGIN) for n in hydro}
+        st = {n: float(base[n]) for n in hydro}
+        out.append(Candidate(BASE_MODEL, "hydrodynamics", None, hydro, b, st,
+                             f"every added mass and diagonal damping term re-tuned within +-{100 * BASE_MARGIN:.0f} % "
+                             "of the vehicle file"))
+        out.append(Candidate(BASE_MODEL, "hydrodynamics_thrust", scale_spec, hydro + ["thrust_scale_scale"],
+                             {**b, **sb}, {**st, **ss}, f"every added mass and damping term re-tuned and {what} scaled"))
     return out
 
 

@@ -170,8 +170,14 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     accepted_values: list = []
     steps = []
     exclude: set = set()
-    for k in range(1, max_effects + 1):
-        st = sel.step(accepted, values, val_cur, exclude=exclude, only=only, top=top, k_step=k)
+    # step 0: the base model first (thrust curve, damping), judged like an effect; step 1..: effects
+    base_first = only is None or BASE_MODEL in only
+    plan = ([0] if base_first else []) + list(range(1, max_effects + 1))
+    if not base_first:
+        exclude.add(BASE_MODEL)
+    for k in plan:
+        st = sel.step(accepted, values, val_cur, exclude=exclude, only=[BASE_MODEL] if k == 0 else only, top=top,
+                      k_step=k)
         table = []
         winners = [row for row in st["fitted"] if row.get("accepted")]
         best = parsimonious(winners)
@@ -182,10 +188,13 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
             best = inertia_challenger(sel, best, st, val_cur) or best
         for row in st["fitted"]:
             table.append(_row_report(row, best))
-        step_rep = {"step": k, "before_cost_per_entry": val_cur["per_entry"], "screening": st["screening"],
+        step_rep = {"step": k, "model": " + ".join(c.label for c in accepted) or "the given model",
+                    "before_cost_per_entry": val_cur["per_entry"], "screening": st["screening"],
                     "screened": st["screened"], "candidates": table, "chosen": None}
         if best is None:
             steps.append(step_rep)
+            if k == 0:
+                continue
             break
         c = best["candidate"]
         accepted.append(c)

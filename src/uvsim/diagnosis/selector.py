@@ -42,6 +42,9 @@ CLOSE_SHARE = 0.8
 #: by percents (MIN_RELATIVE = 5 %), so 1e-4 is ample (1e-5 cost two more linearizations per fit for changes in the fifth digit;
 #: docs/performance.md).
 FTOL = 1e-4
+#: Effects that act mainly as forces (not moments): without linear velocities in the log
+#: the equation error cannot rank them, so they are fitted through the simulator anyway.
+FORCE_EFFECTS = ("tether", "ballast", "current")
 
 
 class Selector:
@@ -307,6 +310,16 @@ class Selector:
         if ee_info.get("available"):
             lead = choice[0][2] if choice else 0.0
             picked = [x for x in choice if x[2] >= max(SCREEN_SHARE * lead, SCREEN_FLOOR)][: max(top, 1)]
+            if not any(m.have[:3].any() for m in self.motions if m is not None):
+                # no linear velocities in the log (IMU + depth): the equation error has only the
+                # rotational DOFs and cannot rank effects that act mainly as forces, so the
+                # simplest variant of each of them is fitted through the simulator as well
+                have = {x[0].effect for x in picked}
+                for eff in FORCE_EFFECTS:
+                    lst = [(c, s) for c, s in by_effect.get(eff, []) if eff not in have]
+                    if lst:
+                        c, s = min(lst, key=lambda cs: cs[0].complexity)
+                        picked.append((c, s, 0.0))
         else:
             picked = choice
         # through the simulator in screening order; stop at the first accepted candidate unless

@@ -113,8 +113,7 @@ def plot_steps(diag, path) -> Path:
     fig, ax = plt.subplots(figsize=(7.5, 3.8))
     xs, labels = [0], ["given"]
     ys = [rep["validation_cost_per_entry"]["given"]]
-    for st in rep["steps"]:
-        x = st["step"]
+    for x, st in enumerate(rep["steps"], 1):
         for c in st["candidates"]:
             if "validation_cost_per_entry" in c:
                 col = "tab:green" if c["chosen"] else ("tab:olive" if c["accepted"] else "tab:gray")
@@ -128,8 +127,9 @@ def plot_steps(diag, path) -> Path:
     ax.plot(xs, ys, "-s", color="tab:blue", label="model after each step")
     ax.axhline(1.0, color="k", ls="--", lw=0.8, label="noise level")
     ax.set_yscale("log")
-    ax.set_xticks(range(0, len(rep["steps"]) + 1))
-    ax.set_xlabel("forward-selection step")
+    ax.set_xticks(range(0, len(rep["steps"]) + 1),
+                  ["given"] + [("base model" if st["step"] == 0 else f"step {st['step']}") for st in rep["steps"]])
+    ax.set_xlabel("forward-selection step (step 0: the base model's thrust curve and damping)")
     ax.set_ylabel("validation cost per residual\n[squared noise sigmas]")
     ax.legend(fontsize=8)
     ax.set_title(f"Diagnosis: {rep['effect']} ({rep['confidence']})", fontsize=10)
