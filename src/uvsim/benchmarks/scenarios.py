@@ -77,7 +77,23 @@ def run_scenario(seed: int, n_effects: int, *, workers: int = 1, retune=BASE_RET
             "halved": (after is not None and before is not None and after <= 0.5 * before) if true else None,
             "validation_cost_per_entry": rep["validation_cost_per_entry"],
             "confidence": rep["confidence"], "seconds": seconds, "fits": rep["fits"],
+            "verdict": (rep.get("verdict") or {}).get("status"), "base_model": (rep.get("base_model") or {}).get("variant"),
+            "worst_group_change": worst_group_change(rep),
             "steps": [_step_digest(st) for st in rep["steps"]]}
+
+
+def worst_group_change(rep: dict) -> float | None:
+    """Largest relative change of a logged group's open-loop validation error caused by a
+    chosen candidate (the guard's numbers, uvsim.diagnosis.guard; > 0: worse); None when
+    nothing was chosen."""
+    worst = None
+    for st in rep["steps"]:
+        for c in st["candidates"]:
+            g = (c.get("compare") or {}).get("guard")
+            if c.get("chosen") and g:
+                for d in g["groups"].values():
+                    worst = d["relative"] if worst is None else max(worst, d["relative"])
+    return worst
 
 
 def _step_digest(st: dict) -> dict:
@@ -119,6 +135,9 @@ def summarize(records: list[dict]) -> dict:
                                 "median": float(np.median(secs)) if secs.size else None,
                                 "max": float(secs.max()) if secs.size else None},
         "confusion": [{"true": t, "named": n, "count": c} for (t, n), c in sorted(conf.items())],
+        "worst_group_change": max((r["worst_group_change"] for r in records
+                                   if r.get("worst_group_change") is not None), default=None),
+        "accepted_worsening_a_group_over_10pct": sum((r.get("worst_group_change") or 0.0) > 0.10 for r in records),
     }
 
 

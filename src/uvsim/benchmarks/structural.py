@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from uvsim.benchmarks.scenarios import BASE_RETUNE, TRUTH_TO_CATALOGUE
+from uvsim.benchmarks.scenarios import BASE_RETUNE, TRUTH_TO_CATALOGUE, worst_group_change
 from uvsim.errors import UvsimError
 
 CLASSES = ("base_error", "curve_mismatch", "out_of_catalogue", "imu_depth")
@@ -61,18 +61,6 @@ def _overrides(cls: str, seed: int) -> tuple[str, dict, list]:
     raise UvsimError(f"structural benchmark: class {cls!r}; expected one of {list(CLASSES)}")
 
 
-def _worst_group(rep: dict) -> float | None:
-    """Largest relative open-loop worsening of a logged group caused by a chosen candidate."""
-    worst = None
-    for st in rep["steps"]:
-        for c in st["candidates"]:
-            g = (c.get("compare") or {}).get("guard")
-            if c.get("chosen") and g:
-                for d in g["groups"].values():
-                    worst = d["relative"] if worst is None else max(worst, d["relative"])
-    return worst
-
-
 def run_one(cls: str, seed: int, *, workers: int = 1, tmp: Path | None = None) -> dict:
     """Generate and diagnose one scenario of class ``cls``; returns its record."""
     from uvsim.diagnosis import diagnose
@@ -100,7 +88,7 @@ def run_one(cls: str, seed: int, *, workers: int = 1, tmp: Path | None = None) -
             "true": true, "out_of_catalogue": ooc, "named": named,
             "named_variants": [f"{e['effect']}:{e['variant']}" for e in rep["effects"]],
             "base_model": (rep.get("base_model") or {}).get("variant"), "verdict": v.get("status"),
-            "unexplained": v.get("unexplained"), "correct": ok, "worst_group_change": _worst_group(rep),
+            "unexplained": v.get("unexplained"), "correct": ok, "worst_group_change": worst_group_change(rep),
             "rmse_before": rep["rmse_before"], "rmse_after": rep["rmse_after"], "seconds": seconds,
             "fits": rep["fits"]}
 

@@ -89,6 +89,10 @@ def _diagnose(args) -> int:
     print("detection rate per effect: " + ", ".join(f"{e} {d['found']}/{d['of']}" for e, d in s["detection_rate"].items()))
     sec = s["seconds_per_dataset"]
     print(f"seconds per dataset: mean {sec['mean']:.1f}, median {sec['median']:.1f}, max {sec['max']:.1f}")
+    w = s.get("worst_group_change")
+    print("largest open-loop worsening of a logged group by a chosen candidate: "
+          + ("none chosen" if w is None else f"{100 * w:+.1f} %")
+          + f"; scenarios with a group worsened by > 10 %: {s.get('accepted_worsening_a_group_over_10pct', 0)}")
     print("confusion (true -> named: count):")
     for c in s["confusion"]:
         print(f"  {c['true']:32s} -> {c['named']:32s} {c['count']}")

@@ -57,7 +57,7 @@ def format_table(report: dict) -> str:
     """Each step's candidates and the before/after lines as text."""
     lines = []
     for st in report["steps"]:
-        what = " (the base model: thrust curve and damping)" if st["step"] == 0 else ""
+        what = " (the base model: thrust curve)" if st["step"] == 0 else ""
         lines.append(f"step {st['step']}{what}: validation cost {st['before_cost_per_entry']:.3f} (squared noise "
                      f"sigmas per residual) with {st.get('model', 'the given model')}")
         lines.append(f"  {'candidate':30s} {'screen':>7s} {'Wald p':>8s} {'val cost':>9s} {'change':>8s} {'P(better)':>9s}  "

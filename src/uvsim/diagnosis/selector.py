@@ -259,7 +259,7 @@ class Selector:
         bounds = {**self.retune_bounds, **{n: a.bounds[n] for a in accepted for n in a.free}}
         return {"vehicle": self.vehicle_for(accepted), "values": dict(values), "free": free, "bounds": bounds}
 
-    def step(self, accepted, values_cur, val_cur, *, exclude, only, top, k_step) -> dict:
+    def step(self, accepted, values_cur, val_cur, *, exclude, only, top, k_step, variants=None) -> dict:
         cur = self.current(accepted, values_cur)
         vehicle_cur = cur["vehicle"]
         run0 = self.train[0]
@@ -276,6 +276,8 @@ class Selector:
                           base=vehicle_cur.parameters())
         # a base-model variant re-tunes nothing the model already frees (--retune, an accepted re-tune)
         cands = [c for c in cands if not set(c.free) & set(cur["free"])]
+        if variants is not None:  # e.g. step 0: the thrust curve alone
+            cands = [c for c in cands if c.variant in variants]
         self.not_observable = observability(
             has_position=has_pos, has_depth=has_depth, z_max=z_max, n_thrusters=vehicle_cur.n_thrusters,
             has_velocity=any(np.isfinite(r.velocity[:, :2]).any() for r in self.train))
