@@ -71,7 +71,7 @@ def test_gz_sdf_round_trip_every_coefficient(coupled):
 
 
 def test_gz_cross_terms_flip_sign_under_the_frame_change(coupled):
-    text, _ = gz_sdf(coupled)
+    text, _ = gz_sdf(coupled, added_mass="plugin")
     hyd = ET.fromstring(text).find("model/plugin")
     MA = coupled.added_mass_matrix
     for (i, j, name) in ((0, 1, "xDotV"), (1, 2, "yDotW"), (3, 4, "kDotQ"), (4, 5, "mDotR"), (0, 3, "xDotP"),
@@ -89,9 +89,10 @@ def test_gz_cross_terms_flip_sign_under_the_frame_change(coupled):
 
 def test_bluerov2_heavy_gz_export_and_warning():
     veh = load_vehicle("bluerov2_heavy")
-    text, warnings = gz_sdf(veh)
-    assert len(warnings) == 1 and "#1923" in warnings[0] and "--added-mass fluid" in warnings[0]
-    assert "surge: added mass 15.64 >= rigid 13.17" in warnings[0]
+    assert gz_sdf(veh)[1] == []  # the default (fluid added mass) needs no warning
+    text, warnings = gz_sdf(veh, added_mass="plugin")
+    heavy = [w for w in warnings if "#1923" in w]
+    assert len(heavy) == 1 and "surge: added mass 15.64 >= rigid 13.17" in heavy[0]
     hyd = ET.fromstring(text).find("model/plugin")
     # Orjales et al. 2025 Table 5 values with the gz-sim signs
     assert float(hyd.find("xDotU").text) == -15.638 and float(hyd.find("zWabsW").text) == -70.209
@@ -149,11 +150,15 @@ def test_cli_export_all_targets(tmp_path, capsys):
     for to, name in (("gz-sim", "m.sdf"), ("uuv-simulator", "m.xacro"), ("json", "m.json")):
         assert main(["export", "bluerov2_heavy", "--to", to, "--out", str(tmp_path / name)]) == 0
     err = capsys.readouterr().err
-    assert err.count("#1923") == 1  # only gz-sim with plugin added mass warns
+    assert "#1923" not in err  # the default gz-sim export (fluid added mass) does not warn
+    assert main(["export", "bluerov2_heavy", "--to", "gz-sim", "--added-mass", "plugin",
+                 "--out", str(tmp_path / "p.sdf")]) == 0
+    err = capsys.readouterr().err
+    assert "#1923" in err and "HydrodynamicsUtils.hh:45-72" in err
     doc = json.loads((tmp_path / "m.json").read_text())
     assert doc == json.loads(json.dumps(vehicle_json(load_vehicle("bluerov2_heavy"))))
     assert doc["damping"]["quadratic"][2][2] == -70.209
-    assert main(["export", "bluerov2_heavy", "--to", "uuv-simulator", "--added-mass", "fluid",
+    assert main(["export", "bluerov2_heavy", "--to", "uuv-simulator", "--added-mass", "plugin",
                  "--out", str(tmp_path / "x.xacro")]) == 2
     assert "gz-sim option" in capsys.readouterr().err
     assert main(["export", "no_such_vehicle", "--to", "json", "--out", str(tmp_path / "n.json")]) == 2

@@ -57,20 +57,21 @@ def vehicle_json(vehicle) -> dict:
     }
 
 
-def export_vehicle(vehicle, to: str, out, *, added_mass: str = "plugin") -> tuple[Path, list[str], str]:
+def export_vehicle(vehicle, to: str, out, *, added_mass: str | None = None) -> tuple[Path, list[str], str]:
     """Render ``vehicle`` for ``to`` (one of :data:`TARGETS`).
 
+    ``added_mass``: gz-sim only, "fluid" (default) or "plugin" (:func:`uvsim.export.gz_sim.gz_sdf`).
     Returns ``(path, warnings, text)``; the caller prints the warnings and writes ``text``."""
+    if added_mass is not None and to != "gz-sim":
+        raise VehicleError(f"--added-mass is a gz-sim option; {to} takes the added mass in its own model")
     out = Path(out)
     if to == "gz-sim":
         from uvsim.export.gz_sim import gz_sdf
 
-        text, warnings = gz_sdf(vehicle, added_mass=added_mass)
+        text, warnings = gz_sdf(vehicle, added_mass=added_mass or "fluid")
     elif to == "uuv-simulator":
         from uvsim.export.uuv_simulator import uuv_xacro
 
-        if added_mass != "plugin":
-            raise VehicleError("--added-mass fluid is a gz-sim option; UUV Simulator takes <added_mass> in its model")
         text, warnings = uuv_xacro(vehicle)
     elif to == "json":
         text, warnings = json.dumps(vehicle_json(vehicle), indent=2) + "\n", []

@@ -7,15 +7,19 @@ What is written (frames and signs: :mod:`uvsim.export.frames`):
 * a ``buoyancy_volume`` collision sphere at the centre of buoyancy whose volume is
   ``B / (rho g)``, for the gz-sim Buoyancy system (world plugin, ``uniform_fluid_density``
   = rho), so that ``rho g V = B``;
-* the ``gz::sim::systems::Hydrodynamics`` plugin: added mass ``<xDotU>`` .. ``<nDotR>``
-  (SNAME sign: the negative of uvsim's positive added-mass matrix, which the plugin
-  requires since gz-sim's behaviour change), linear damping ``<xU>`` .. ``<nR>`` and
-  quadratic damping ``<xUabsU>`` .. ``<nRabsR>`` (paper sign, negative), each term of
-  the FLU matrices ``S6 A S6`` that is non-zero, diagonal always; the plugin's force is
-  ``sum_j (L_ij + Q_ij |nu_j|) nu_j + Ma nu_dot`` (Hydrodynamics.cc);
-* or, with ``added_mass="fluid"``, the added mass as SDF ``<fluid_added_mass>`` (positive,
-  FLU, 21 upper-triangle entries ``xx`` .. ``rr``) and no ``Dot`` terms in the plugin, never
-  both;
+* the ``gz::sim::systems::Hydrodynamics`` plugin: linear damping ``<xU>`` .. ``<nR>`` and
+  quadratic damping ``<xUabsU>`` .. ``<nRabsR>`` (paper sign, negative), each term of the
+  FLU matrices ``S6 A S6`` that is non-zero, diagonal always;
+* the added mass, by default (``added_mass="fluid"``) as SDF ``<fluid_added_mass>``
+  (positive, FLU, about the link origin: gz-math ``Inertial.hh:76-77``; 21 upper-triangle
+  entries ``xx`` .. ``rr``), so that the physics engine carries ``M_A`` in the link's
+  inertia and applies ``-C_A(v) v`` itself: uvsim's dynamics (:mod:`uvsim.export.plugins`);
+* or, only when asked (``added_mass="plugin"``), as the plugin's ``<xDotU>`` .. ``<nDotR>``
+  (SNAME sign, the negative of uvsim's ``M_A``), never both.  gz-sim then applies the
+  added-mass Coriolis term with the sign opposite to Fossen's (``+C_A(v) v``:
+  :data:`uvsim.export.plugins.GZ_CORIOLIS_SOURCE`), uses only the diagonal of ``M_A`` for
+  it, and integrates ``M_A v_dot`` from the previous step's finite difference, which
+  diverges when ``M_A >= M_RB`` in a DOF (gz-sim#1923); the export warns of each;
 * one thruster link + revolute joint per thruster (joint axis = thrust direction, FLU)
   and a ``gz::sim::systems::Thruster`` plugin taking thrust commands in newtons, clamped
   to the curve's range at its nominal voltage.  The PWM -> thrust map stays in uvsim
@@ -59,22 +63,36 @@ def added_mass_warnings(vehicle) -> list[str]:
     return [f"{_DOF[i]}: added mass {MA[i]:.4g} >= rigid {MRB[i]:.4g}" for i in range(6) if MA[i] >= MRB[i]]
 
 
-def gz_sdf(vehicle, *, added_mass: str = "plugin", link: str = "base_link") -> tuple[str, list[str]]:
+def gz_sdf(vehicle, *, added_mass: str = "fluid", link: str = "base_link") -> tuple[str, list[str]]:
     """SDF text of ``vehicle`` for gz-sim and the warnings to print before writing it.
 
-    ``added_mass``: "plugin" (Hydrodynamics ``xDotU``.. terms) or "fluid" (SDF
-    ``<fluid_added_mass>``, needs the DART physics engine)."""
+    ``added_mass``: "fluid" (default: SDF ``<fluid_added_mass>``, carried by the physics
+    engine, DART; reproduces uvsim's dynamics) or "plugin" (Hydrodynamics ``xDotU``..
+    terms: a warning names where gz-sim's Coriolis sign differs, module docstring)."""
+    from uvsim.export.plugins import GZ_CORIOLIS_SOURCE
+
     if added_mass not in ("plugin", "fluid"):
-        raise VehicleError(f"added_mass {added_mass!r}: expected 'plugin' or 'fluid'")
+        raise VehicleError(f"added_mass {added_mass!r}: expected 'fluid' or 'plugin'")
     warnings = []
     heavy = added_mass_warnings(vehicle)
-    if heavy and added_mass == "plugin":
+    if added_mass == "plugin":
         warnings.append(
-            "gz-sim integrates the Hydrodynamics plugin's added mass explicitly and is known to diverge when the "
-            "added mass is not below the rigid-body mass (gz-sim issue #1923): " + "; ".join(heavy)
-            + ". Export with --added-mass fluid (SDF <fluid_added_mass>, DART physics) to avoid it.")
+            "with plugin added mass gz-sim applies the added-mass Coriolis/centripetal wrench as +C_A(v)v, the "
+            "opposite of Fossen's -C_A(v)v that uvsim uses, so the Munk moment is stabilizing in Gazebo and the "
+            f"vehicle turns differently: {GZ_CORIOLIS_SOURCE}. Use the default --added-mass fluid, or patch the "
+            "plugin (https://github.com/gazebosim/gz-sim/issues).")
+        MA = vehicle.added_mass_matrix
+        if np.any(MA - np.diag(np.diag(MA))):
+            warnings.append("the plugin's Coriolis term uses only the diagonal of the added mass "
+                            "(HydrodynamicsUtils.hh:38): the off-diagonal added mass acts in M_A v_dot only")
+        if heavy:
+            warnings.append(
+                "gz-sim integrates the Hydrodynamics plugin's added mass from the previous step's finite-difference "
+                "acceleration, which diverges at any physics step when the added mass is not below the rigid-body "
+                "mass (gz-sim issue #1923): " + "; ".join(heavy) + ".")
     if vehicle.effects:
-        warnings.append(f"effects {[e.kind for e in vehicle.effects]} have no gz-sim counterpart and are not exported")
+        warnings.append(f"effects {[e.kind for e in vehicle.effects]} have no gz-sim counterpart and are not exported: "
+                        "the Gazebo model lacks them")
     DL, DQ = damping_matrices(vehicle)
     MA_f, DL_f, DQ_f = (frd_to_flu_matrix(A) for A in (vehicle.added_mass_matrix, DL, DQ))
     rho, g = vehicle.rho, vehicle.g
