@@ -150,9 +150,12 @@ def test_free_families_fix_and_explicit_bounds(mixed):
 def test_joint_stage_checkpoint_kill_and_resume(mixed, tmp_path):
     """SIGKILL during the joint stage, resume: finished iterations are not redone and the
     result equals an uninterrupted fit."""
-    base = ["calibrate", "--data", str(mixed), "--free", "z_b", "--max-iter", "12"]
+    # --keep-worse: this fit validates worse than its start in depth and p (issue 21; the result check
+    # refuses it, exit 2), which is not what this test is about: resuming must give the same result
+    base = ["calibrate", "--data", str(mixed), "--free", "z_b", "--max-iter", "12", "--keep-worse"]
     ref = tmp_path / "ref.json"
-    assert main(base + ["--out", str(tmp_path / "ref.yaml"), "--json", str(ref)]) == 0
+    code = main(base + ["--out", str(tmp_path / "ref.yaml"), "--json", str(ref)])
+    assert code == 2 and json.loads(ref.read_text())["status"]["kept"]
     ck = tmp_path / "fit.ckpt"
     out = tmp_path / "fitted.yaml"
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(os.path.dirname(uvsim.__path__[0]))]
@@ -178,7 +181,7 @@ def test_joint_stage_checkpoint_kill_and_resume(mixed, tmp_path):
     assert killed_at is not None, "the fit ended before it could be interrupted"
     res = subprocess.run(cmd + ["--resume", str(ck), "--json", str(tmp_path / "resumed.json")], env=env,
                          capture_output=True, text=True)
-    assert res.returncode == 0, res.stderr
+    assert res.returncode == code, res.stderr
     assert re.search(rf"resuming from {re.escape(str(joint))}: the joint stage, stage 1 of 1 \(2 s windows\), "
                      r"iteration \d+", res.stderr), res.stderr
     a, b = json.loads(ref.read_text()), json.loads((tmp_path / "resumed.json").read_text())
@@ -194,10 +197,12 @@ def test_no_refine_runs_the_ga_only(tmp_path):
     generate_dataset("bluerov2_heavy", d, dofs=["heave"], runs_per_dof=2, validation_per_dof=1, duration=6.0,
                      rate=20.0, seed=2)
     out = tmp_path / "f.yaml"
+    # a 6 x 2 GA may validate worse than its start (x, y +2-3 %): kept for this test (issue 21's check)
     assert main(["calibrate", "--data", str(d), "--vehicle", "bluerov2_heavy_initial", "--no-refine",
                  "--population", "6", "--generations", "2", "--out", str(out), "--json",
-                 str(tmp_path / "r.json")]) == 0
+                 str(tmp_path / "r.json"), "--keep-worse"]) in (0, 2)
     rep = json.loads((tmp_path / "r.json").read_text())
+    assert rep["status"]["ok"] or rep["status"]["kept"]
     assert rep["free_parameters"] == [] and rep["parameters"] == rep["ga_parameters"]
     assert all(v is None for v in rep["uncertainty"].values())
     uvsim.load_vehicle(out)
@@ -238,3 +243,25 @@ def test_ga_on_real_sensor_channels(tmp_path):
     # closer to the truth than the start, in the heave effective mass
     assert abs(ga["Z_wdot"] - 20.0) < abs(init["Z_wdot"] - 20.0)
     assert cal.report_["validation_rmse"]["depth_m"] < cal.report_["initial_validation_rmse"]["depth_m"]
+
+
+def test_a_fit_worse_than_its_start_is_refused_and_nothing_written(mixed, tmp_path, capsys):
+    """Issue 21: on these IMU + depth + PWM runs, freeing z_b with the default coefficients makes
+    the open-loop depth and roll rate worse than the starting model on the validation runs: the
+    result check refuses it (exit 2, channels and numbers in the message, no vehicle written);
+    --keep-worse writes it with status.ok false."""
+    out, rep = tmp_path / "f.yaml", tmp_path / "r.json"
+    argv = ["calibrate", "--data", str(mixed), "--free", "z_b", "--max-iter", "12", "--out", str(out), "--json",
+            str(rep)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "validates worse than the starting model" in err and "per channel, open loop" in err
+    assert not out.exists()
+    r = json.loads(rep.read_text())
+    nw = r["never_worse"]
+    assert not r["status"]["ok"] and not nw["ok"] and "depth" in nw["worse"]
+    for c in nw["worse"]:  # each refused channel is worse beyond the guard's tolerance
+        d = nw["channels"][c]
+        assert d["after"] > d["before"] and d["relative"] > 0.02
+    assert main(argv + ["--keep-worse"]) == 2
+    assert out.exists() and json.loads(rep.read_text())["status"]["kept"]

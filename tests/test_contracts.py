@@ -27,7 +27,9 @@ import uvsim
 from contract_data import SHIPPED_DATASET, shipped_run, shipped_vehicle_text, write_tiny_dataset
 from uvsim.cli import main
 
-CAL = ["--vehicle", "bluerov2_heavy_initial", "--population", "4", "--generations", "1", "--no-refine"]
+#: --keep-worse: a 4 x 1 GA is no fit worth keeping and the result check may refuse it (it validates worse
+#: than its start, issue 21); these cases are about the inputs, so the result is written anyway.
+CAL = ["--vehicle", "bluerov2_heavy_initial", "--population", "4", "--generations", "1", "--no-refine", "--keep-worse"]
 DIAG = ["--only", "current", "--max-iter", "3", "--max-effects", "1", "--quiet"]
 
 
@@ -399,7 +401,7 @@ def _no_work(t: Path) -> None:
 def _fitted_loadable(t: Path) -> None:
     veh = uvsim.load_vehicle(t / "out" / "fit.yaml")
     rep = json.loads((t / "out" / "r.json").read_text())
-    assert rep["status"]["ok"] and not rep["settings"]["refine"]
+    assert (rep["status"]["ok"] or rep["status"]["kept"]) and not rep["settings"]["refine"]
     assert veh.parameters()["X_u"] == pytest.approx(rep["parameters"]["X_u"])
     assert "(GA value, not refined)" in (t / "out" / "fit.yaml").read_text()
 
@@ -419,7 +421,8 @@ def test_cli_contract(case, tmp_path, capsys, monkeypatch):
         for frag in case.frags:
             assert frag in last, f"{frag!r} not in {last!r}"
     else:
-        assert rc == 0, err
+        # accepted inputs; a calibration whose result check refused the fit (kept by --keep-worse) still counts
+        assert rc == 0 or (argv[0] == "calibrate" and rc == 2 and "Kept anyway (--keep-worse)" in err), err
         for frag in case.frags:
             assert frag in err, f"{frag!r} not in stderr {err!r}"
     if case.check is not None:

@@ -9,7 +9,7 @@ import pytest
 from uvsim.diagnosis import diagnose
 from uvsim.diagnosis.candidates import catalogue, observability, search_bound_hits
 from uvsim.diagnosis.decision import judge
-from uvsim.diagnosis.guard import MAX_WORSE, TOLERANCE, guard
+from uvsim.fitting.guard import MAX_WORSE, TOLERANCE, guard
 from uvsim.diagnosis.residual import UNEXPLAINED, verdict
 from uvsim.scenarios import generate, load_truth, sample_scenario
 

@@ -84,7 +84,7 @@ def run_scenario(seed: int, n_effects: int, *, workers: int = 1, retune=BASE_RET
 
 def worst_group_change(rep: dict) -> float | None:
     """Largest relative change of a logged group's open-loop validation error caused by a
-    chosen candidate (the guard's numbers, uvsim.diagnosis.guard; > 0: worse); None when
+    chosen candidate (the guard's numbers, uvsim.fitting.guard; > 0: worse); None when
     nothing was chosen."""
     worst = None
     for st in rep["steps"]:

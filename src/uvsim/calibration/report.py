@@ -76,6 +76,28 @@ def run_entry(run, fitted: dict, initial: dict) -> dict:
     }
 
 
+def never_worse(runs, fitted: dict, initial: dict, meas: dict) -> dict | None:
+    """The fitted model against the model the user started from, on the validation runs'
+    open-loop simulations, per logged channel the fit used (:func:`uvsim.fitting.guard.guard`:
+    a channel is worse when its error grows beyond the block bootstrap's noise, or by more
+    than 10 %).  None without validation runs.  ``ok`` False means the calibration is not a
+    success (issue 21: a fit that trades unexcited coefficients for residual can validate
+    worse than its start, and the report must say so)."""
+    from uvsim.fitting.guard import block_costs, guard
+
+    val = [r for r in runs if r.split == "validation"]
+    if not val:
+        return None
+    ms = [meas[r.name] for r in val]
+    before = block_costs(ms, [initial[r.name] for r in val], by="channel")
+    after = block_costs(ms, [fitted[r.name] for r in val], by="channel")
+    g = guard(before, after)
+    why = g["why"].replace("makes the open-loop validation worse", "the fitted model validates worse than the "
+                                                                     "starting model")
+    return {"ok": g["ok"], "worse": g["worse"], "channels": g["groups"], "why": why,
+            "method": "open-loop validation runs, per channel, block bootstrap over 3 s blocks (uvsim.fitting.guard)"}
+
+
 def pooled(evals: dict, runs, split: str) -> tuple[dict, dict]:
     """(group RMSEs, channel Fit %) pooled over the runs of ``split``."""
     ms = [evals[r.name]["metrics"] for r in runs if r.split == split]
@@ -159,6 +181,7 @@ def build_report(cal, ds, runs, problems, ga, bounds_of, t0, t_ga, t_ref) -> dic
         "initial_validation_rmse": val0, "initial_validation_fit_percent": val0_fit,
         "initial_training_rmse": tr0,
         "per_run": per_run,
+        "never_worse": never_worse(ds.runs, fitted, initial, cal.evaluation_["meas"]),
         "identifiability": cal.identifiability_,
         "refinement": {} if res is None else {"stages": res.stages, "cost": res.cost,
                                               "n_residuals": res.n_residuals},

@@ -45,7 +45,9 @@ def register(sub) -> None:
                    help="1-sigma noise level by group or channel (default: estimated from each run)")
     p.add_argument("--horizons", default=None, metavar="H1,H2,...",
                    help="window lengths (s) of the joint fit's continuation, 'whole' for whole runs (default 2)")
-    p.add_argument("--max-iter", type=int, default=20, help="Levenberg-Marquardt iterations per horizon")
+    p.add_argument("--max-iter", type=int, default=40,
+                   help="Levenberg-Marquardt iterations per horizon; a last stage that stops there is reported as "
+                        "unfinished (exit 2) unless --keep-worse")
     p.add_argument("--no-gyro-bias", action="store_true", help="do not fit a gyro bias per run")
     p.add_argument("--attitude-lag", default="auto", metavar="auto|SECONDS",
                    help="time constant of the attitude filter's lag on logged Euler angles: 'auto' (default, "
@@ -70,6 +72,10 @@ def register(sub) -> None:
                    help="extra GA run weight (amplitude/median)^-E favouring slow runs (default 0: manifest weights)")
     p.add_argument("--out", required=True, help="fitted vehicle YAML (complete, loadable by every command)")
     p.add_argument("--json", default=None, help="report JSON")
+    p.add_argument("--keep-worse", action="store_true",
+                   help="write the fitted vehicle and report even when the result check refuses it (a fit that "
+                        "validates worse than the starting model in some channel, or one stopped at the iteration "
+                        "limit); the exit status stays 2 and report.json says status.ok: false")
     p.add_argument("--plots", default=None, help="directory for plots (measured vs simulated, error boxplots, "
                                                  "GA convergence)")
     add_allow_argument(p)
@@ -306,6 +312,15 @@ def _run(args) -> int:
     rep = cal.report_
     rep["input_notes"] = notes
     problems = calibration_problems(rep, ds)
+    if problems and getattr(args, "keep_worse", False):
+        rep["status"] = {"ok": False, "problems": problems, "kept": True}
+        out.parent.mkdir(parents=True, exist_ok=True)
+        save_fitted_vehicle(cal, out)
+        if args.json:
+            Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+            Path(args.json).write_text(json.dumps(jsonable(rep), indent=2))
+        print_summary(cal)
+        fail_if(problems, "calibrate", f"Kept anyway (--keep-worse): {out}" + (f", {args.json}" if args.json else ""))
     if problems:
         if args.json:
             rep["status"] = {"ok": False, "problems": problems}

@@ -124,6 +124,14 @@ def calibration_problems(rep: Mapping, ds) -> list[str]:
     probs = rmse_problems(rep["training_rmse"], [r for r in ds.runs if r.split == "train"], "training RMSE")
     probs += rmse_problems(rep["validation_rmse"], [r for r in ds.runs if r.split == "validation"],
                            "validation RMSE")
+    nw = rep.get("never_worse")
+    if nw is not None and not nw["ok"]:
+        probs.append(nw["why"] + " (per channel, open loop, on the validation runs); keep it anyway with --keep-worse")
+    stages = (rep.get("refinement") or {}).get("stages") or []
+    if stages and str(stages[-1].get("message", "")).startswith("maximum number of iterations"):
+        probs.append(f"unfinished: the joint fit's last stage stopped at the iteration limit "
+                     f"({stages[-1].get('iterations')} iterations) before converging; raise --max-iter, or keep the "
+                     "result anyway with --keep-worse")
     hits = bound_hits(rep)
     for d in rep["dofs"]:
         names = [k for k in DOF_PARAMETERS.get(d, ()) if k in rep["parameters"]]

@@ -17,7 +17,7 @@ import numpy as np
 from uvsim.checkpoint import fingerprint
 from uvsim.diagnosis.candidates import Candidate, catalogue, coupled_candidate, coupling_terms, observability
 from uvsim.diagnosis.decision import LEVEL, judge, wald
-from uvsim.diagnosis.guard import block_costs, guard
+from uvsim.fitting.guard import block_costs, guard
 from uvsim.errors import CalibrationError, UvsimError, VehicleError
 from uvsim.fitting import fit
 from uvsim.fitting.compare import bootstrap_improvement
@@ -122,7 +122,7 @@ class Selector:
     def open_loop_blocks(self, vehicle, values: Mapping) -> dict:
         """Free simulations of the validation runs from their logged starts
         (:func:`uvsim.fitting.evaluate.open_loop`, the report's before/after RMSE), as
-        noise-normalized errors per signal group and block (:func:`uvsim.diagnosis.guard.block_costs`);
+        noise-normalized errors per signal group and block (:func:`uvsim.fitting.guard.block_costs`);
         ``total`` is inf when a simulation diverges."""
         known = vehicle.parameters()
         ol = open_loop(vehicle, self.val, overrides={k: v for k, v in values.items() if k in known},
@@ -386,7 +386,7 @@ class Selector:
         vc = self.val_cost(veh, vals)
         cmp = bootstrap_improvement(val_cur["windows"], vc["windows"], level=LEVEL)
         cmp["wald"] = wald(best, c)
-        # the open-loop guard (uvsim.diagnosis.guard): no logged group may get worse
+        # the open-loop guard (uvsim.fitting.guard): no logged group may get worse
         vc["open_loop"] = self.open_loop_blocks(veh, vals)
         if "open_loop" in val_cur:
             cmp["guard"] = guard(val_cur["open_loop"], vc["open_loop"])

@@ -1,4 +1,8 @@
-"""The open-loop guard: a change to the model must not make any logged group worse.
+"""The open-loop guard: a change to the model must not make any logged group (or channel) worse.
+
+Shared by diagnosis (an effect is accepted only when it passes, :mod:`uvsim.diagnosis`) and
+calibration (a fitted model worse than the model the user started from is not a success,
+:mod:`uvsim.calibration.report`).
 
 The windowed prediction error that the fits minimize restarts every window from
 estimated node states, so it rewards a change that explains the next few seconds even
@@ -44,8 +48,8 @@ WORSE_LEVEL = 0.9
 MAX_WORSE = 0.10
 
 
-def block_costs(meas: Sequence, results: Sequence[dict], block_s: float = BLOCK_S) -> dict:
-    """Open-loop errors by group and block.
+def block_costs(meas: Sequence, results: Sequence[dict], block_s: float = BLOCK_S, *, by: str = "group") -> dict:
+    """Open-loop errors by group (``by="group"``) or channel (``by="channel"``) and block.
 
     Parameters
     ----------
@@ -54,9 +58,9 @@ def block_costs(meas: Sequence, results: Sequence[dict], block_s: float = BLOCK_
 
     Returns
     -------
-    dict with ``groups``: group -> (B,) noise-normalized sums of squares per block (blocks
-    of every run, in run order), ``runs``: run name -> group -> sum, ``total`` (inf when a
-    simulation diverged) and ``rmse``: group -> pooled RMSE in the group's unit.
+    dict with ``groups``: group (or channel) -> (B,) noise-normalized sums of squares per
+    block (blocks of every run, in run order), ``runs``: run name -> key -> sum, ``total``
+    (inf when a simulation diverged) and ``rmse``: key -> pooled RMSE in its unit.
     """
     groups: dict[str, list] = {}
     runs: dict[str, dict] = {}
@@ -79,13 +83,19 @@ def block_costs(meas: Sequence, results: Sequence[dict], block_s: float = BLOCK_
             if bad.any():
                 total = float("inf")
                 z = np.where(bad, 1e6, z)  # a diverged simulation: a huge but finite error
-            per_row = (z ** 2).sum(axis=1)
-            per_blk = np.bincount(blk, weights=per_row, minlength=n_blk)
-            groups.setdefault(g, []).append(per_blk)
-            runs[m.name][g] = float(per_row.sum())
-            sq.setdefault(g, []).append((float(np.nansum(np.where(used, e, 0.0) ** 2)), int(used.sum())))
-            if np.isfinite(total):
-                total += float(per_row.sum())
+            if by == "channel":  # one key per logged channel of the group
+                keys = [(c, [j]) for j, c in enumerate(grp.channels) if used[:, j].any()]
+            else:
+                keys = [(g, list(range(len(grp.channels))))]
+            for key, cols in keys:
+                per_row = (z[:, cols] ** 2).sum(axis=1)
+                per_blk = np.bincount(blk, weights=per_row, minlength=n_blk)
+                groups.setdefault(key, []).append(per_blk)
+                runs[m.name][key] = float(per_row.sum())
+                ee = np.where(used[:, cols], e[:, cols], 0.0)
+                sq.setdefault(key, []).append((float(np.nansum(ee ** 2)), int(used[:, cols].sum())))
+                if np.isfinite(total):
+                    total += float(per_row.sum())
     rmse = {g: float(np.sqrt(sum(s for s, _ in v) / max(sum(n for _, n in v), 1))) for g, v in sq.items()}
     return {"groups": {g: np.concatenate(v) for g, v in groups.items()}, "runs": runs, "total": total,
             "rmse": rmse}

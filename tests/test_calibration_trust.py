@@ -1,0 +1,34 @@
+"""Issue 21 (part): a calibration is not a success when the joint fit stopped at its
+iteration limit (the never-worse check is pinned in test_calibration_mixed.py, on the
+real-sensor-like dataset where a fit made depth worse than its start)."""
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from uvsim.cli import main
+from uvsim.synthetic import generate_dataset
+
+SMALL = dict(runs_per_dof=2, validation_per_dof=1, duration=6.0, rate=20.0)
+
+
+@pytest.fixture(scope="module")
+def heave(tmp_path_factory):
+    d = tmp_path_factory.mktemp("heave") / "d"
+    generate_dataset("bluerov2_heavy", d, dofs=["heave"], seed=2, **SMALL)
+    return d
+
+
+def test_the_iteration_limit_is_not_reported_as_success(heave, tmp_path, capsys):
+    """The joint fit converges in about 20 iterations here; with --max-iter 3 it stops at the
+    limit, which is 'unfinished' (exit 2), never a silent success."""
+    argv = ["calibrate", "--data", str(heave), "--vehicle", "bluerov2_heavy", "--population", "6",
+            "--generations", "2", "--seed", "3", "--max-iter", "3", "--out", str(tmp_path / "f.yaml"),
+            "--json", str(tmp_path / "r.json")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "unfinished: the joint fit's last stage stopped at the iteration limit (3 iterations)" in err
+    rep = json.loads((tmp_path / "r.json").read_text())
+    assert rep["refinement"]["stages"][-1]["message"].startswith("maximum number of iterations")
+    assert not rep["status"]["ok"]
