@@ -121,10 +121,9 @@ def test_vehicles_a_target_cannot_represent_are_refused_or_warned():
 
 def _maneuver(duration):
     """Surge, a turn, sway, heave, a reverse turn, a mixed leg: 10 s each (generalized forces, FRD)."""
-    t = np.arange(0, duration + 1e-9, 0.02)
-    phases = [[10, 0, 0, 0, 0, 0], [10, 0, 0, 0, 0, 1.0], [0, 8, 0, 0, 0, 0], [0, 0, -5, 0, 0, 0],
-              [-8, 0, 0, 0, 0, -1.0], [10, 5, 0, 0, 0, 0.5]]
-    return t, np.array([phases[min(int(x // 10), 5)] for x in t], float)
+    from uvsim.export.replay import standard_maneuver
+
+    return standard_maneuver(duration)
 
 
 def test_default_gz_replay_follows_uvsim_and_plugin_mode_does_not():
@@ -148,11 +147,41 @@ def test_default_gz_replay_follows_uvsim_and_plugin_mode_does_not():
     assert ok.attitude_rad < 0.002 and bad.attitude_rad > 100 * ok.attitude_rad, (ok.summary(), bad.summary())
 
 
+def test_uuv_replay_follows_uvsim():
+    """UUV Simulator's HMFossen with its filtered acceleration: 15 s of the maneuver within 1 cm
+    and 1 mrad of uvsim at 0.5 ms; without the filter (alpha = 1) closer still."""
+    veh = load_vehicle("bluerov2_heavy")
+    t, U = _maneuver(15.0)
+    r = replay_check(veh, t, U, input_kind="force", target="uuv-simulator", physics_step=0.0005)
+    assert not r.diverged and r.position_m < 0.01 and r.attitude_rad < 0.001, r.summary()
+
+
+def test_uuv_export_is_refused_when_its_replay_diverges(monkeypatch):
+    """The export to UUV Simulator replays the standard maneuver first; a model whose replay
+    diverges is refused with the reason unless forced (here the replay is made to diverge)."""
+    import uvsim.export.replay as replay
+    from uvsim.export.replay import ReplayResult
+
+    veh = load_vehicle("bluerov2_heavy")
+    export_vehicle(veh, "uuv-simulator", "x.xacro")  # the real replay: no divergence, written
+    t = np.array([0.0, 1.0])
+    monkeypatch.setattr(replay, "replay_check", lambda *a, **k: ReplayResult(
+        "uuv-simulator", "HMFossen", 0.001, t, np.array([0.0, np.nan]), np.array([0.0, np.nan]), True))
+    with pytest.raises(VehicleError, match="not exported to uuv-simulator.*diverges.*--force"):
+        export_vehicle(veh, "uuv-simulator", "x.xacro")
+    _, warnings, _ = export_vehicle(veh, "uuv-simulator", "x.xacro", force=True)
+    assert any("written anyway (--force)" in w for w in warnings)
+
+
 @pytest.mark.slow
-def test_default_gz_replay_60_s_within_1_cm_and_1_mrad():
+def test_default_replays_60_s_within_1_cm_and_1_mrad():
+    """The 60 s maneuver: gz-sim's default export at 0.5 ms (1.6 mm, 0.73 mrad measured) and UUV
+    Simulator at 0.25 ms (1.7 mm, 0.50 mrad; 0.99 mrad at 0.5 ms)."""
     veh = load_vehicle("bluerov2_heavy")
     t, U = _maneuver(60.0)
     r = replay_check(veh, t, U, input_kind="force", physics_step=0.0005)
+    assert r.position_m < 0.01 and r.attitude_rad < 0.001, r.summary()
+    r = replay_check(veh, t, U, input_kind="force", target="uuv-simulator", physics_step=0.00025)
     assert r.position_m < 0.01 and r.attitude_rad < 0.001, r.summary()
 
 

@@ -16,6 +16,9 @@ def register(sub) -> None:
                    help="gz-sim: added mass as SDF <fluid_added_mass> carried by the physics engine (fluid, default: "
                         "reproduces uvsim) or as Hydrodynamics xDotU.. terms (plugin: gz-sim applies +C_A(v)v there, "
                         "the opposite of Fossen's sign, and diverges when M_A >= M_RB; a warning says where)")
+    p.add_argument("--force", action="store_true",
+                   help="uuv-simulator: write the model even when uvsim's replay of UUV Simulator's equations "
+                        "diverges with it (the export refuses it otherwise, with the reason)")
     p.add_argument("--check", metavar="RUN", default=None,
                    help="replay a logged run's inputs (CSV in the log format) through the exported model under the "
                         "target plugin's own equations and report its deviation from uvsim's simulation")
@@ -32,7 +35,7 @@ def _run(args) -> int:
     veh = load_vehicle(args.vehicle)
     if args.check is None and args.physics_step is not None:
         raise VehicleError("--physics-step needs --check RUN")
-    path, warnings, text = export_vehicle(veh, args.to, args.out, added_mass=args.added_mass)
+    path, warnings, text = export_vehicle(veh, args.to, args.out, added_mass=args.added_mass, force=args.force)
     for w in warnings:
         print(f"uvsim export: warning: {w}", file=sys.stderr)
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -57,7 +57,13 @@ def vehicle_json(vehicle) -> dict:
     }
 
 
-def export_vehicle(vehicle, to: str, out, *, added_mass: str | None = None) -> tuple[Path, list[str], str]:
+#: Duration of the replay an export to UUV Simulator runs before writing (s of the standard
+#: maneuver at a 1 ms physics step; uvsim.export.replay).
+UUV_CHECK_S = 15.0
+
+
+def export_vehicle(vehicle, to: str, out, *, added_mass: str | None = None,
+                   force: bool = False) -> tuple[Path, list[str], str]:
     """Render ``vehicle`` for ``to`` (one of :data:`TARGETS`).
 
     ``added_mass``: gz-sim only, "fluid" (default) or "plugin" (:func:`uvsim.export.gz_sim.gz_sdf`).
@@ -73,6 +79,24 @@ def export_vehicle(vehicle, to: str, out, *, added_mass: str | None = None) -> t
         from uvsim.export.uuv_simulator import uuv_xacro
 
         text, warnings = uuv_xacro(vehicle)
+        warnings = [w for w in warnings if "filtered finite-difference" not in w]
+        if not vehicle.effects:
+            from uvsim.export.replay import replay_check, standard_maneuver
+
+            t, U = standard_maneuver(UUV_CHECK_S)
+            with np.errstate(all="ignore"):
+                res = replay_check(vehicle, t, U, input_kind="force", target="uuv-simulator", physics_step=0.001,
+                                   text=text)
+            if res.diverged:
+                why = (f"UUV Simulator's HMFossen applies the added mass from a low-pass filtered finite-difference "
+                       f"acceleration (uuv_gazebo_plugins HydrodynamicModel.cc:102-125, alpha 0.3 at line 400), and "
+                       f"uvsim's replay of those equations with this model diverges on the standard maneuver at a "
+                       f"1 ms physics step ({res.summary()}); UUV Simulator itself was not run "
+                       "(docs/import_export.md)")
+                if not force:
+                    raise VehicleError(f"{vehicle.source}: not exported to uuv-simulator: {why}. Write it anyway "
+                                       "with --force")
+                warnings.append(why + "; written anyway (--force)")
     elif to == "json":
         text, warnings = json.dumps(vehicle_json(vehicle), indent=2) + "\n", []
     else:

@@ -193,10 +193,10 @@ def replay_check(vehicle, t, inputs, *, input_kind: str = "force", target: str =
     """Replay ``inputs`` (n, k) at times ``t`` (n,) through the exported model inside
     ``target`` ("gz-sim" or "uuv-simulator") and compare with uvsim (module docstring).
 
+    The physics step is ``physics_step`` rounded so that it divides each sample interval.
     ``added_mass``: the gz-sim mode ("fluid" or "plugin"); ``text``: an exported file to
     check instead of exporting ``vehicle`` again; ``pos0`` (3,) NED, ``q0`` (4,) FRD->NED
     quaternion of the start (default origin, level); the vehicle starts at rest."""
-    from uvsim.export import export_vehicle
     from uvsim.simulate import simulate
     from uvsim.vehicle import load_vehicle
 
@@ -208,8 +208,14 @@ def replay_check(vehicle, t, inputs, *, input_kind: str = "force", target: str =
     if veh.effects:
         raise VehicleError(f"{veh.source}: effects {[e.kind for e in veh.effects]} have no counterpart in {target}; "
                            "the replay would compare two different models")
-    if text is None:
-        _, _, text = export_vehicle(veh, target, "replay", added_mass=added_mass if target == "gz-sim" else None)
+    if text is None and target == "gz-sim":
+        from uvsim.export.gz_sim import gz_sdf
+
+        text = gz_sdf(veh, added_mass=added_mass)[0]
+    elif text is None and target == "uuv-simulator":
+        from uvsim.export.uuv_simulator import uuv_xacro
+
+        text = uuv_xacro(veh)[0]
     if target == "gz-sim":
         from uvsim.export.gz_sim import parse_gz_sdf
 
@@ -232,14 +238,14 @@ def replay_check(vehicle, t, inputs, *, input_kind: str = "force", target: str =
     n = t.size
     pos_err, att_err = np.full(n, np.nan), np.full(n, np.nan)
     diverged = False
-    time = t[0]
     for i in range(n):
         if i:
             f_thr = tg.thrust_wrench(U[i - 1], input_kind, curves)  # held over the sample interval
-            while time < t[i] - 1e-12:
-                h = min(physics_step, t[i] - time)
+            # a fixed step that divides the sample interval (no sliver steps: the plugins divide by it)
+            n_sub = max(1, int(round((t[i] - t[i - 1]) / physics_step)))
+            h = (t[i] - t[i - 1]) / n_sub
+            for _ in range(n_sub):
                 p, q, v = tg.step(p, q, v, f_thr, h)
-                time += h
             if not (np.all(np.isfinite(v)) and np.linalg.norm(v) < 1e3):
                 diverged = True
                 break
@@ -250,6 +256,17 @@ def replay_check(vehicle, t, inputs, *, input_kind: str = "force", target: str =
         cosang = np.clip((np.trace(R_ref.T @ R_frd_ned) - 1.0) / 2.0, -1.0, 1.0)
         att_err[i] = np.arccos(cosang)
     return ReplayResult(target, mode, physics_step, t, pos_err, att_err, diverged)
+
+
+def standard_maneuver(duration: float = 60.0, rate: float = 50.0) -> tuple[np.ndarray, np.ndarray]:
+    """The replay check's maneuver: generalized forces (FRD: X, Y, Z N; K, M, N N m), 10 s each
+    of surge 10 N; surge and a 1 N m turn; sway 8 N; heave -5 N (up); -8 N with a -1 N m turn;
+    10 N, 5 N and 0.5 N m (the BlueROV2 Heavy reaches 0.53 m/s and 1.4 rad/s).  Returns
+    ``(t, inputs)``."""
+    t = np.arange(0.0, duration + 1e-9, 1.0 / rate)
+    phases = np.array([[10, 0, 0, 0, 0, 0], [10, 0, 0, 0, 0, 1.0], [0, 8, 0, 0, 0, 0], [0, 0, -5, 0, 0, 0],
+                       [-8, 0, 0, 0, 0, -1.0], [10, 5, 0, 0, 0, 0.5]], float)
+    return t, phases[np.minimum((t // 10).astype(int), 5)]
 
 
 def stable_step(vehicle, *, added_mass: str = "fluid", speed: float = 1.0, target: str = "gz-sim") -> dict:

@@ -49,9 +49,6 @@ def uuv_xacro(vehicle) -> tuple[str, list[str]]:
                            "damping; this vehicle has off-diagonal quadratic terms")
     if vehicle.effects:
         warnings.append(f"effects {[e.kind for e in vehicle.effects]} have no UUV Simulator counterpart; not exported")
-    warnings.append("UUV Simulator applies the added mass from a low-pass filtered finite-difference acceleration "
-                    "(HydrodynamicModel.cc:102-125, alpha 0.3 at line 400); uvsim's replay of those equations diverges "
-                    "for the BlueROV2 Heavy at a 1 ms step (docs/import_export.md): check this model with --check RUN.csv")
     ET.register_namespace("xacro", XACRO_NS)
     robot = ET.Element("robot")
     robot.append(ET.Comment(" exported by uvsim export: Fossen matrices in FRD (UUV Simulator flips Gazebo's FLU "
