@@ -212,3 +212,25 @@ def test_cli_check_replays_a_logged_run(tmp_path, capsys):
                  str(tmp_path / "p.sdf"), "--check", str(tmp_path / "run.csv")]) == 2
     out = capsys.readouterr().out
     assert "DIVERGED" in out and "none: unstable at every step" in out
+
+
+def test_thrusters_replay_with_pwm_through_both_targets():
+    """PWM telegraph on every thruster of the BlueROV2 Heavy for 10 s: gz-sim (thrust of uvsim's
+    T200 curve along each exported joint axis at its position) and UUV Simulator (the xacro's
+    LinearInterp PWM -> thrust table) follow uvsim within 1 cm and 1 mrad (0.5 / 0.25 ms)."""
+    veh = load_vehicle("bluerov2_heavy")
+    t = np.arange(0, 10.0 + 1e-9, 0.02)
+    rng = np.random.default_rng(5)
+    U = np.empty((t.size, veh.actuators.n_thrusters))
+    for j in range(U.shape[1]):
+        levels = rng.uniform(1400, 1600, 5)
+        U[:, j] = np.rint(levels[np.minimum((t // 2).astype(int), 4)])
+    for target, h in (("gz-sim", 0.0005), ("uuv-simulator", 0.00025)):  # UUV: 0.99 mrad at 0.5 ms
+        r = replay_check(veh, t, U, input_kind="pwm", target=target, physics_step=h)
+        assert not r.diverged and r.position_m < 0.01 and r.attitude_rad < 0.001, r.summary()
+    # a thruster written with the wrong axis would not: flip one joint axis in the file
+    text, _ = gz_sdf(veh)
+    bad = text.replace('<xyz>0.0 0.0 -1.0</xyz>', '<xyz>0.0 0.0 1.0</xyz>', 1)
+    assert bad != text
+    r = replay_check(veh, t, U, input_kind="pwm", physics_step=0.0005, text=bad)
+    assert r.position_m > 0.05

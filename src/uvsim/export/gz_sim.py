@@ -169,6 +169,10 @@ def _thrusters(model, vehicle, link, rho, warnings) -> None:
         _sub(pl, "namespace", vehicle.name)
         _sub(pl, "joint_name", f"{name}_joint")
         _sub(pl, "fluid_density", _num(rho))
+        # velocity control: the plugin commands the propeller joint's speed and applies no PID torque
+        # about the thrust axis (gz-sim Thruster.cc:725-760, commit 93bbf3ed1bd2), so the base link gets
+        # the thrust alone, as in uvsim (which models no propeller reaction torque)
+        _sub(pl, "velocity_control", "true")
         curve = act.curves[i] if act.curves else None
         if curve is not None:
             _sub(pl, "max_thrust_cmd", _num(curve.max_forward))
