@@ -483,7 +483,7 @@ def _expect_cli(m: Mutant, rc, err, file_name, cmd):
         for f in m.frags:
             assert f in last, f"{f!r} not in {last!r}"
     else:
-        assert rc == 0, err
+        assert rc == 0 or (cmd == "calibrate" and rc == 2 and "Kept anyway (--keep-worse)" in err), err
         if m.expect == "note":
             assert "note:" in err and file_name in err, err
 
@@ -557,12 +557,14 @@ def test_fuzz_vehicle_file(name, variant, baseline, tmp_path, capsys):
 def base_fit(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("basefit")
     ds = write_tiny_dataset(tmp / "ds")
-    assert main(["calibrate", "--data", str(ds), *TINY_GA, "--out", str(tmp / "fit.yaml")]) == 0
+    assert main(["calibrate", "--data", str(ds), *TINY_GA, "--out", str(tmp / "fit.yaml")]) in (0, 2)
     return (tmp / "fit.yaml").read_text().replace(str(ds), "DATASET")
 
 
+#: --keep-worse: a 4 x 1 GA may validate worse than its start and be refused by the result check
+#: (issue 21); these cases are about the inputs, so the result is written anyway (exit 2, "Kept anyway").
 TINY_GA = ["--vehicle", "bluerov2_heavy_initial", "--population", "4", "--generations", "1", "--no-refine",
-           "--no-progress"]
+           "--no-progress", "--keep-worse"]
 
 
 @pytest.mark.parametrize("name, variant", _cases(MANIFEST_OPS), ids=[f"{n}-{v}" for n, v in _cases(MANIFEST_OPS)])
