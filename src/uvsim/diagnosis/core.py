@@ -187,6 +187,13 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         table = []
         winners = [row for row in st["fitted"] if row.get("accepted")]
         best = parsimonious(winners)
+        if best is None:
+            # a candidate that passed everything but the open-loop guard: its richer variants (a
+            # ballast piece's own mass, a richer tether) get their chance, judged with the guard too
+            for row in sorted([r for r in st["fitted"] if r.get("guard_blocked")], key=lambda r: r["val"]["cost"]):
+                best = inertia_challenger(sel, row, st, val_cur) or richer_challenger(sel, row, st, val_cur)
+                if best is not None:
+                    break
         if best is not None:
             best = richer_challenger(sel, best, st, val_cur) or best
             best = simplest_sufficient(sel, best, st, val_cur) or best

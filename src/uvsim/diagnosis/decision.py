@@ -60,7 +60,9 @@ def wald(res, c) -> dict:
 
 
 def judge(row, val_cur) -> tuple[bool, str]:
-    """The acceptance rule: physical values, an in-sample robust Wald
+    """The acceptance rule (it marks ``row["bound_rejected"]`` / ``row["guard_blocked"]`` when
+    those were the reason): physical values, no parameter on the edge of its search range, an
+    in-sample robust Wald
     test of the effect being off at :data:`WALD_P`, and on the validation runs a
     reduction of the cost by at least :data:`MIN_RELATIVE` that the block bootstrap over
     windows confirms at :data:`VAL_LEVEL` (one-sided)."""
@@ -73,6 +75,7 @@ def judge(row, val_cur) -> tuple[bool, str]:
     values = row.get("values", {})
     hits = search_bound_hits(c, values, row.get("at_bounds") or [])
     if hits:
+        row["bound_rejected"] = True  # the selector fits one more candidate for it (Selector.step)
         if hits == ["thruster_lag_time_constant"] and values[hits[0]] <= c.bounds[hits[0]][0] * 1.0001:
             return False, (f"time constant on its floor {c.bounds[hits[0]][0]:.3g} s (half the log's sample "
                            "interval): indistinguishable from the timing of the logged inputs (candidates._lag)")
@@ -92,6 +95,8 @@ def judge(row, val_cur) -> tuple[bool, str]:
                        f"resamples (needs {100 * VAL_LEVEL:.0f} %)")
     g = cmp.get("guard")
     if g is not None and not g["ok"]:
+        # everything but the guard passed: a richer variant (a piece's own mass) may still pass it
+        row["guard_blocked"] = True
         return False, g["why"]
     return True, (f"significant: Wald p = {w.get('p', float('nan')):.1g} in training, validation cost "
                   f"-{100 * cmp['relative']:.1f} % (better in {100 * cmp['p_better']:.1f} % of resamples); "

@@ -340,7 +340,10 @@ class Selector:
             # the next effects by screening rank get an output-error fit too, up to `top` fits in all
             done = {id(r["candidate"]) for r in fitted}
             for c, s, red in choice:
-                if len(fitted) >= max(top, 1):
+                # a fit refused because a parameter ran to the edge of its range (the candidate absorbed
+                # something it does not describe) does not use up the budget of `top` fits
+                spent = sum(1 for r in fitted if not r.get("bound_rejected"))
+                if spent >= max(top, 1) or len(fitted) >= 2 * max(top, 1):
                     break
                 if id(c) in done:
                     continue
