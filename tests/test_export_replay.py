@@ -234,3 +234,13 @@ def test_thrusters_replay_with_pwm_through_both_targets():
     assert bad != text
     r = replay_check(veh, t, U, input_kind="pwm", physics_step=0.0005, text=bad)
     assert r.position_m > 0.05
+
+
+def test_a_cg_off_the_link_origin_is_warned_in_the_default_mode():
+    from uvsim.vehicle import vehicle_from_dict
+
+    d = load_vehicle("bluerov2_heavy").to_dict()
+    d["rigid_body"]["r_g"] = [0.0, 0.0, 0.02]
+    _, warnings = gz_sdf(vehicle_from_dict(d, source="cg-low"))
+    assert any("centre of gravity" in w and "Inertial.hh:178-198" in w for w in warnings)
+    assert not any("centre of gravity" in w for w in gz_sdf(load_vehicle("bluerov2_heavy"))[1])

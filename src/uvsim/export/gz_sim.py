@@ -93,6 +93,13 @@ def gz_sdf(vehicle, *, added_mass: str = "fluid", link: str = "base_link") -> tu
     if vehicle.effects:
         warnings.append(f"effects {[e.kind for e in vehicle.effects]} have no gz-sim counterpart and are not exported: "
                         "the Gazebo model lacks them")
+    if added_mass == "fluid" and np.any(np.asarray(vehicle.r_g, float) != 0):
+        warnings.append(
+            f"the centre of gravity {list(np.round(vehicle.r_g, 6))} m is off the link origin: gz-math's "
+            "Inertial::BodyMatrix (include/gz/math/Inertial.hh:178-198, commit 12f4a7bb1900) puts the inertia about "
+            "the centre of mass where the spatial inertia about the link origin has the parallel-axis term, and "
+            "uvsim's replay check (which uses the inertia about the origin, Fossen 2021 eq. 3.44) cannot tell "
+            "which one the physics engine uses with <fluid_added_mass>: compare a run in Gazebo with uvsim")
     DL, DQ = damping_matrices(vehicle)
     MA_f, DL_f, DQ_f = (frd_to_flu_matrix(A) for A in (vehicle.added_mass_matrix, DL, DQ))
     rho, g = vehicle.rho, vehicle.g
