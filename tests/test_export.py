@@ -41,13 +41,24 @@ def coupled():
     return vehicle_from_dict(d, source="coupled-test")
 
 
+def _composite(p):
+    """Mass, centre of mass and inertia about the origin (file frame) of all the file's links:
+    the base link and each thruster link (parallel-axis theorem, written out here)."""
+    parts = [(p["mass"], np.asarray(p["cg"]), np.asarray(p["inertia_cg"]))]
+    parts += [(th["mass"], np.asarray(th["position"]), np.asarray(th["inertia"])) for th in p["thrusters"]]
+    m = sum(mi for mi, _, _ in parts)
+    c = sum(mi * ci for mi, ci, _ in parts) / m
+    J = sum(Ji + mi * (ci @ ci * np.eye(3) - np.outer(ci, ci)) for mi, ci, Ji in parts)
+    return m, c, J
+
+
 def _back_to_frd(p, veh):
     S6 = np.diag([1.0, -1, -1, 1, -1, -1])
     S3 = S6[:3, :3]
-    r = S3 @ p["cg"]
-    J = S3 @ p["inertia_cg"] @ S3 + veh.mass * (np.dot(r, r) * np.eye(3) - np.outer(r, r))
+    m, c, J = _composite(p)
     return {"added_mass": S6 @ p["added_mass"] @ S6, "linear": S6 @ p["linear"] @ S6,
-            "quadratic": S6 @ p["quadratic"] @ S6, "r_g": r, "inertia": J, "r_b": S3 @ p["cb"]}
+            "quadratic": S6 @ p["quadratic"] @ S6, "mass": m, "r_g": S3 @ c, "inertia": S3 @ J @ S3,
+            "r_b": S3 @ p["cb"]}
 
 
 def test_gz_sdf_round_trip_every_coefficient(coupled):
@@ -62,10 +73,12 @@ def test_gz_sdf_round_trip_every_coefficient(coupled):
     np.testing.assert_array_equal(back["added_mass"], coupled.added_mass_matrix)
     np.testing.assert_array_equal(back["linear"], DL)
     np.testing.assert_array_equal(back["quadratic"], DQ)
-    np.testing.assert_allclose(back["inertia"], coupled.inertia_matrix, atol=1e-15)
-    np.testing.assert_allclose(back["r_g"], coupled.r_g, atol=0)
+    # base link + thruster links together: uvsim's inertia about the origin, CG and mass
+    np.testing.assert_allclose(back["inertia"], coupled.inertia_matrix, atol=1e-14)
+    np.testing.assert_allclose(back["r_g"], coupled.r_g, atol=1e-15)
     np.testing.assert_allclose(back["r_b"], coupled.r_b, atol=0)
-    assert p["mass"] == coupled.mass
+    assert back["mass"] == pytest.approx(coupled.mass, rel=1e-14)
+    assert len(p["thrusters"]) == 8 and p["mass"] < coupled.mass  # the thruster links' mass is taken out
     # buoyancy: rho g V of the collision sphere reproduces B
     assert p["water_density"] * coupled.g * p["buoyancy_volume"] == pytest.approx(coupled.buoyancy, rel=1e-12)
 
@@ -126,7 +139,11 @@ def test_uuv_round_trip_and_signs():
     assert np.all(np.diag(p["linear"]) < 0) and np.all(np.diag(p["quadratic"]) < 0)
     np.testing.assert_array_equal(np.diag(p["quadratic"]), [-34.972, -43.118, -70.209, -0.389, -0.427, -0.425])
     assert p["volume"] * veh.rho * veh.g == pytest.approx(veh.buoyancy, rel=1e-12)
-    np.testing.assert_array_equal(p["cb"], [0.0, 0.0, 0.024])  # CB above the CG: +z in FLU
+    # CB above the CG: +z in FLU, written from the base link's centre of mass (Gazebo classic's ODE)
+    np.testing.assert_allclose(p["cg"] + p["cb"], [0.0, 0.0, 0.024], atol=1e-15)
+    assert p["fluid_density"] == veh.rho
+    m, c, J = _composite(p)
+    assert m == pytest.approx(veh.mass, rel=1e-14) and np.allclose(c, 0.0, atol=1e-15)
     t1 = p["thrusters"][0]
     curve = veh.actuators.curves[0]
     np.testing.assert_array_equal(t1["thrust"], curve.thrust(t1["pwm"]))

@@ -236,11 +236,24 @@ def test_thrusters_replay_with_pwm_through_both_targets():
     assert r.position_m > 0.05
 
 
-def test_a_cg_off_the_link_origin_is_warned_in_the_default_mode():
+def test_a_cg_off_the_link_origin_goes_to_gz_sim_and_is_refused_by_uuv_simulator():
+    """DART adds the parallel-axis term (gz-physics AddedMassFeatures.cc, module docstring of
+    uvsim.export.gz_sim), so the default gz-sim export keeps a low CG; UUV Simulator applies its
+    hydrodynamic wrench at the centre of mass, which no coefficient undoes: refused unless forced,
+    and the replay shows why."""
+    from uvsim.export.replay import standard_maneuver
     from uvsim.vehicle import vehicle_from_dict
 
     d = load_vehicle("bluerov2_heavy").to_dict()
     d["rigid_body"]["r_g"] = [0.0, 0.0, 0.02]
-    _, warnings = gz_sdf(vehicle_from_dict(d, source="cg-low"))
-    assert any("centre of gravity" in w and "Inertial.hh:178-198" in w for w in warnings)
-    assert not any("centre of gravity" in w for w in gz_sdf(load_vehicle("bluerov2_heavy"))[1])
+    veh = vehicle_from_dict(d, source="cg-low")
+    assert not any("centre of gravity" in w for w in gz_sdf(veh)[1])
+    t, U = standard_maneuver(15.0)
+    r = replay_check(veh, t, U, input_kind="force", target="gz-sim", physics_step=0.0005)
+    assert not r.diverged and r.position_m < 0.01 and r.attitude_rad < 0.001, r.summary()
+    with pytest.raises(VehicleError, match="centre of gravity.*--force"):
+        uuv_xacro(veh)
+    text, warnings = uuv_xacro(veh, force=True)
+    assert any("written anyway" in w for w in warnings)
+    r = replay_check(veh, t, U, input_kind="force", target="uuv-simulator", physics_step=0.0005, text=text)
+    assert r.position_m > 0.05  # the lever arm of the wrench at the CG (217 mm over 15 s when written)

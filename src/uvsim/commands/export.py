@@ -1,5 +1,5 @@
 """``uvsim export VEHICLE --to gz-sim|uuv-simulator|json --out FILE [--added-mass fluid|plugin]
-[--check RUN.csv [--physics-step S]]`` (docs/import_export.md)."""
+[--check RUN.csv|standard [--physics-step S]] [--force]`` (docs/import_export.md)."""
 from __future__ import annotations
 
 import sys
@@ -18,10 +18,12 @@ def register(sub) -> None:
                         "the opposite of Fossen's sign, and diverges when M_A >= M_RB; a warning says where)")
     p.add_argument("--force", action="store_true",
                    help="uuv-simulator: write the model even when uvsim's replay of UUV Simulator's equations "
-                        "diverges with it (the export refuses it otherwise, with the reason)")
+                        "diverges with it, or its centre of gravity is off the body origin (refused otherwise, with "
+                        "the reason)")
     p.add_argument("--check", metavar="RUN", default=None,
-                   help="replay a logged run's inputs (CSV in the log format) through the exported model under the "
-                        "target plugin's own equations and report its deviation from uvsim's simulation")
+                   help="replay a logged run's inputs (CSV in the log format), or 'standard' for the built-in 60 s "
+                        "maneuver, through the exported model under the target plugin's own equations and report "
+                        "its deviation from uvsim's simulation, the stable physics step and the thrust tables")
     p.add_argument("--physics-step", type=float, default=None,
                    help="physics step of the replay, s (default 0.001, Gazebo's default max_step_size)")
     p.set_defaults(func=_run)
@@ -48,16 +50,18 @@ def _run(args) -> int:
 
 def _check(veh, args, text) -> int:
     from uvsim.errors import VehicleError
-    from uvsim.export.replay import DEFAULT_STEP, replay_check, stable_step
-    from uvsim.logs import read_run
+    from uvsim.export.replay import DEFAULT_STEP, replay_check, stable_step, standard_maneuver
+    from uvsim.export.thrust_tables import describe_thrust_check, file_thrust_check
 
     if args.to not in ("gz-sim", "uuv-simulator"):
         raise VehicleError(f"--check replays a Gazebo target (gz-sim, uuv-simulator), not {args.to}")
-    run = read_run(args.check)
     h = DEFAULT_STEP if args.physics_step is None else args.physics_step
-    pos0 = run.position[0] if run.has_position and all(abs(x) < 1e9 for x in run.position[0]) else None
-    res = replay_check(veh, run.t, run.inputs, input_kind=run.input_kind, target=args.to, physics_step=h,
-                       pos0=pos0, text=text)
+    if args.check == "standard":
+        t, U = standard_maneuver(60.0)
+        print("replaying the standard 60 s maneuver (uvsim.export.replay.standard_maneuver, generalized forces)")
+        res = replay_check(veh, t, U, input_kind="force", target=args.to, physics_step=h, text=text)
+    else:
+        res = replay_check(veh, args.check, target=args.to, physics_step=h, text=text)
     print(res.summary())
     mode = "fluid" if args.to == "gz-sim" and (args.added_mass or "fluid") == "fluid" else "plugin"
     st = stable_step(veh, added_mass=mode, target=args.to)
@@ -66,4 +70,10 @@ def _check(veh, args, text) -> int:
     print("largest stable physics step for the added-mass and damping terms (linearized at 1 m/s, 1 rad/s): "
           + ("none: unstable at every step" if h_max == 0.0 else ("any" if h_max == float("inf") else f"{h_max:.4g} s"))
           + f" (limited by {worst}, added/rigid mass {st[worst]['ratio']:.3g})")
+    if veh.actuators.curves:
+        if args.to == "gz-sim":
+            from uvsim.export.gz_sim import parse_gz_sdf as parse
+        else:
+            from uvsim.export.uuv_simulator import parse_uuv_xacro as parse
+        print(describe_thrust_check(file_thrust_check(veh, parse(text), args.to), veh.actuators.curves))
     return 0 if not res.diverged else 2

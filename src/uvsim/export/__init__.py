@@ -78,8 +78,7 @@ def export_vehicle(vehicle, to: str, out, *, added_mass: str | None = None,
     elif to == "uuv-simulator":
         from uvsim.export.uuv_simulator import uuv_xacro
 
-        text, warnings = uuv_xacro(vehicle)
-        warnings = [w for w in warnings if "filtered finite-difference" not in w]
+        text, warnings = uuv_xacro(vehicle, force=force)
         if not vehicle.effects:
             from uvsim.export.replay import replay_check, standard_maneuver
 

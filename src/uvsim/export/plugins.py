@@ -119,17 +119,19 @@ class GzHydrodynamics:
     linear: np.ndarray
     quad_abs: np.ndarray
     fluid_added_mass: np.ndarray | None = None
+    #: +1: the plugin as written (``kCmatVec = -Cmat * state``, line 578); -1: that sign patched
+    coriolis_sign: float = 1.0
     prev: np.ndarray | None = field(default=None, repr=False)
 
     @classmethod
-    def from_sdf(cls, parsed: dict) -> "GzHydrodynamics":
+    def from_sdf(cls, parsed: dict, coriolis_sign: float = 1.0) -> "GzHydrodynamics":
         q = np.zeros((6, 6, 6))
         for i in range(6):
             for j in range(6):
                 q[i, j, j] = parsed["quadratic"][i, j]
         if parsed["fluid_added_mass"]:
-            return cls(np.zeros((6, 6)), parsed["linear"], q, parsed["added_mass"])
-        return cls(-parsed["added_mass"], parsed["linear"], q, None)
+            return cls(np.zeros((6, 6)), parsed["linear"], q, parsed["added_mass"], coriolis_sign)
+        return cls(-parsed["added_mass"], parsed["linear"], q, None, coriolis_sign)
 
     def wrench(self, state: np.ndarray, dt: float, abs_state: np.ndarray | None = None) -> dict:
         s = np.asarray(state, float)
@@ -138,7 +140,7 @@ class GzHydrodynamics:
         s_dot = (s - self.prev) / dt          # Hydrodynamics.cc:552-553
         self.prev = s.copy()
         out = {"added_mass": self.Ma @ s_dot,                       # -(-Ma s_dot)
-               "coriolis": gz_coriolis_matrix(self.Ma, s) @ s,      # -(-Cmat s)
+               "coriolis": self.coriolis_sign * gz_coriolis_matrix(self.Ma, s) @ s,  # -(-Cmat s)
                "damping": gz_damping_wrench(self.linear, self.quad_abs, s)}
         corr = np.zeros(6)
         if self.fluid_added_mass is not None:  # Hydrodynamics.cc:600-621 (zero without a current)

@@ -4,38 +4,48 @@
 or :func:`uvsim.export.uuv_simulator.parse_uuv_xacro`, so the numbers are the file's, in
 its FLU link frame and ENU world), and steps it the way Gazebo does:
 
-* a rigid body about the link origin: ``M v_dot + C(v) v = f`` with ``M`` from the
-  file's ``<inertial>`` (mass, centre of mass, inertia about it; Fossen 2021 eq. 3.44) and
+* one rigid body about the base link's origin: ``M v_dot + C(v) v = f`` with ``M`` the
+  spatial inertia of the file's links (base link and thruster links: mass, centre of mass,
+  inertia about it; Fossen 2021 eq. 3.44; the propellers' spin is not modelled) and
   ``C(v) v`` its parameterization-independent Coriolis term (eq. 3.46).  With
-  ``<fluid_added_mass>`` the engine's ``M`` includes ``M_A`` and its Coriolis term
-  ``C_A(v) v`` (gz-math ``Inertial::SpatialMatrix``; the plugin's comment,
-  :mod:`uvsim.export.plugins`);
+  ``<fluid_added_mass>`` the engine's ``M`` includes ``M_A`` and so its Coriolis term
+  ``C_A(v) v`` (gz-physics ``dartsim/src/AddedMassFeatures.cc:45-71``: DART's spatial
+  inertia plus the added mass; :mod:`uvsim.export.gz_sim`);
 * semi-implicit Euler at the physics step ``h`` (velocities first, then the pose with
-  the new velocities), as DART, ODE and Bullet step rigid bodies;
+  the new velocities: ``p += h R v``, ``R <- R exp(h w)``), as DART and ODE step a free
+  body (their exact position updates were not re-read here and may differ at O(h^2));
 * the plugin's wrench (:class:`uvsim.export.plugins.GzHydrodynamics` or
-  :class:`~uvsim.export.plugins.UuvFossen`) from the velocity at the start of the
-  step, including its finite-difference (gz-sim) or filtered (UUV Simulator)
-  acceleration;
-* gravity at the centre of mass and buoyancy ``rho g V`` at the buoyancy volume's
-  centre (gz-sim Buoyancy system, uniform density; UUV Simulator ``BuoyantObject``);
-* thrust along each thruster joint's axis at the joint: commands in newtons from uvsim's
-  curve at the logged PWM (gz-sim Thruster system in force mode, clamped to
-  ``min/max_thrust_cmd``) or the xacro's ``LinearInterp`` PWM -> thrust table (UUV
-  Simulator), generalized forces applied as a body wrench.
+  :class:`~uvsim.export.plugins.UuvFossen`) from the velocity at the start of the step
+  (gz-sim: ``PreUpdate`` before the physics ``Update``; UUV Simulator: ``WorldUpdateBegin``),
+  including its finite-difference (gz-sim) or filtered (UUV Simulator) acceleration;
+  gz-sim applies it at the link origin (``Link::AddWorldWrench``), UUV Simulator at the
+  base link's centre of mass (Gazebo classic ``ODELink::AddRelativeForce``);
+* gravity ``m g`` at each link's centre of mass and buoyancy ``rho g V`` at the centre of
+  buoyancy: gz-sim's Buoyancy system with a uniform density (everywhere, no surface:
+  ``Buoyancy.cc:587-613``); UUV Simulator's ``BuoyantObject`` (``BuoyantObject.cc:82-119``:
+  the whole volume below the surface z = 0, none above it for the bounding-box height 0 of a
+  link without collisions; the position read from the centre of mass, ``uuv_simulator``
+  module docstring);
+* thrust along each thruster joint's axis at its link: commands in newtons (gz-sim Thruster
+  system, clamped to ``min/max_thrust_cmd``: ``Thruster.cc:517-526``) from the PWM table the
+  SDF carries for its bridge (at the run's battery voltage when the table has voltage
+  sheets), or UUV Simulator's ``LinearInterp`` PWM -> thrust table with its clamps
+  (``ThrusterPlugin.cc:203-241``); generalized-force inputs are applied as a body wrench.
 
 The result is compared with uvsim's own simulation of the same inputs from the same
-initial state: the largest position (m) and attitude (rad) deviation over the run.
+initial state (at rest): the largest position (m) and attitude (rad) deviation over the run.
 :func:`stable_step` gives the largest physics step for which the added-mass term of a
 mode is stable (gz-sim#1923).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from uvsim.errors import VehicleError
-from uvsim.export.frames import S3, S6, frd_to_flu_matrix
+from uvsim.export.frames import S3, S6
 from uvsim.export.plugins import GzHydrodynamics, UuvFossen
 from uvsim.kinematics import quat_to_rotation
 from uvsim.rigid_body import skew
@@ -44,6 +54,10 @@ from uvsim.rigid_body import skew
 T_NED_ENU = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
 #: Default physics step, s (gz-sim's and Gazebo classic's default max_step_size).
 DEFAULT_STEP = 0.001
+#: Start depth (m, NED) of a replay without a logged position: deep enough that the standard
+#: maneuver's 13.6 m rise of the positively buoyant BlueROV2 Heavy stays below UUV
+#: Simulator's surface at z = 0 (uvsim's model has no surface; gz-sim's uniform Buoyancy neither).
+DEFAULT_START_DEPTH = 20.0
 
 
 @dataclass
@@ -85,19 +99,21 @@ class ReplayResult:
                              "attitude_error_rad": self.attitude_error})
 
 
-def _rigid_mass(parsed: dict) -> np.ndarray:
-    """6x6 rigid-body mass matrix about the link origin from the file's inertial block (FLU)."""
-    m, c, J = parsed["mass"], np.asarray(parsed["cg"], float), np.asarray(parsed["inertia_cg"], float)
+def _spatial_inertia(m: float, c, J) -> np.ndarray:
+    """6x6 rigid-body mass matrix about a link origin of mass ``m`` with centre of mass ``c``
+    (3,) and inertia ``J`` (3x3) about it (Fossen 2021 eq. 3.44)."""
+    c = np.asarray(c, float)
     M = np.zeros((6, 6))
     M[:3, :3] = m * np.eye(3)
     M[:3, 3:] = -m * skew(c)
     M[3:, :3] = m * skew(c)
-    M[3:, 3:] = J + m * (np.dot(c, c) * np.eye(3) - np.outer(c, c))
+    M[3:, 3:] = np.asarray(J, float) + m * (np.dot(c, c) * np.eye(3) - np.outer(c, c))
     return M
 
 
 def _rot(q):
-    """Rotation matrix of a unit quaternion ``[w, x, y, z]`` (body -> world)."""
+    """Rotation matrix of a unit quaternion ``[w, x, y, z]`` (body -> world), unbatched
+    (the replay's inner loop; :func:`uvsim.kinematics.quat_to_rotation` for arrays)."""
     w, x, y, z = q
     return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
                      [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
@@ -121,9 +137,9 @@ def _exp_quat(w, h):
 
 def _frd_ned_to_flu_enu(q_frd_ned: np.ndarray) -> np.ndarray:
     """Rotation FLU -> ENU of a body whose FRD -> NED attitude is ``q``: ``T R S``."""
-    R = T_NED_ENU @ quat_to_rotation(np.asarray(q_frd_ned, float)[None])[0] @ S3
     from scipy.spatial.transform import Rotation
 
+    R = T_NED_ENU @ quat_to_rotation(np.asarray(q_frd_ned, float)[None])[0] @ S3
     x, y, z, w = Rotation.from_matrix(R).as_quat()
     return np.array([w, x, y, z])
 
@@ -131,53 +147,84 @@ def _frd_ned_to_flu_enu(q_frd_ned: np.ndarray) -> np.ndarray:
 class _Target:
     """The exported model inside its simulator (module docstring)."""
 
-    def __init__(self, target: str, parsed: dict, vehicle, mode: str, g: float):
-        self.target, self.mode, self.g = target, mode, g
-        self.parsed = parsed
-        self.M = _rigid_mass(parsed)
-        self.rho = parsed.get("water_density", vehicle.rho)
-        self.V = parsed["buoyancy_volume"] if target == "gz-sim" else parsed["volume"]
-        self.cb = np.asarray(parsed["cb"], float)
+    def __init__(self, target: str, parsed: dict, g: float, current_enu, patch_coriolis: bool = False):
+        self.target, self.g, self.parsed = target, g, parsed
+        self.thr = parsed.get("thrusters", [])
         self.cg = np.asarray(parsed["cg"], float)
+        M = _spatial_inertia(parsed["mass"], self.cg, parsed["inertia_cg"])
+        mc = parsed["mass"] * self.cg
+        for th in self.thr:  # the thruster links, rigidly attached (their spin is not modelled)
+            M = M + _spatial_inertia(th.get("mass", 0.0), th["position"], th.get("inertia", np.zeros((3, 3))))
+            mc = mc + th.get("mass", 0.0) * np.asarray(th["position"], float)
+        self.mass = float(M[0, 0])
+        self.mass_moment = mc  # sum of m_i c_i: gravity acts at mc / mass
         if target == "gz-sim":
-            self.plugin = GzHydrodynamics.from_sdf(parsed)
+            self.plugin = GzHydrodynamics.from_sdf(parsed, coriolis_sign=-1.0 if patch_coriolis else 1.0)
             if parsed["fluid_added_mass"]:
-                self.M = self.M + parsed["added_mass"]  # the engine carries M_A (SpatialMatrix)
+                M = M + parsed["added_mass"]  # the engine carries M_A (AddedMassFeatures.cc:67-69)
+            self.rho, self.V = parsed["water_density"], parsed["buoyancy_volume"]
+            self.cb = np.asarray(parsed["cb"], float)
+            self.hydro_at = np.zeros(3)      # Link::AddWorldWrench at the link origin
         else:
             self.plugin = UuvFossen(parsed["added_mass"], parsed["linear"], np.diag(parsed["quadratic"]))
-        self.Minv = np.linalg.inv(self.M)
-        self.thr = parsed.get("thrusters", [])
-        self.current_enu = np.zeros(3)
+            self.rho, self.V = parsed["fluid_density"], parsed["volume"]
+            self.cb = self.cg + np.asarray(parsed["cb"], float)  # read from the centre of mass (ODE)
+            self.hydro_at = self.cg          # AddRelativeForce: at the centre of mass (ODE)
+        self.M = M
+        self.Minv = np.linalg.inv(M)
+        self.current_enu = np.asarray(current_enu, float)
 
-    def thrust_wrench(self, u: np.ndarray, kind: str, curves) -> np.ndarray:
+    def thrust_wrench(self, u: np.ndarray, kind: str, voltage: float | None) -> np.ndarray:
+        """Body wrench (FLU, about the link origin) of one input row."""
         if kind == "force":
             return S6 @ np.asarray(u, float)  # FRD generalized force -> FLU
         f = np.zeros(6)
         for i, th in enumerate(self.thr):
-            if kind == "thrust":
-                T = float(u[i])
-            elif self.target == "gz-sim":  # a bridge sends uvsim's curve's thrust; the plugin clamps it
-                T = float(curves[i].thrust(np.array([u[i]]))[0])
-            else:                          # UUV Simulator: the xacro's LinearInterp table
-                T = float(np.interp(u[i], th["pwm"], th["thrust"]))
+            T = float(u[i]) if kind == "thrust" else self._pwm_thrust(th, float(u[i]), voltage)
+            if self.target == "gz-sim" and "max" in th:
+                T = min(max(T, th["min"]), th["max"])              # Thruster.cc:520-521
+            elif self.target != "gz-sim":
+                T = min(max(T, th["limits"][0]), th["limits"][1])  # ThrusterPlugin.cc:235-236
             a = np.asarray(th["axis"], float)
             F = T * a / np.linalg.norm(a)
             f[:3] += F
             f[3:] += np.cross(th["position"], F)
         return f
 
+    def _pwm_thrust(self, th: dict, pwm: float, voltage: float | None) -> float:
+        if "pwm" not in th or "thrust" not in th:
+            raise VehicleError(f"{self.target}: the exported file has no PWM -> thrust table for its thrusters")
+        if self.target != "gz-sim":  # UUV Simulator: clamp the input, LinearInterp (ThrusterPlugin.cc:213-231)
+            return float(np.interp(min(max(pwm, th["clamp"][0]), th["clamp"][1]), th["pwm"], th["thrust"]))
+        sheets = th.get("sheets") or {}
+        if voltage is None or not np.isfinite(voltage) or not sheets:
+            return float(np.interp(pwm, th["pwm"], th["thrust"]))
+        vs = np.array(sorted(sheets))  # the bridge applies the battery voltage, linearly between sheets
+        if not vs[0] <= voltage <= vs[-1]:
+            raise VehicleError(f"voltage {voltage:g} V outside the SDF table's {vs[0]:g}..{vs[-1]:g} V")
+        j = int(np.clip(np.searchsorted(vs, voltage, side="right") - 1, 0, vs.size - 2))
+        w = (voltage - vs[j]) / (vs[j + 1] - vs[j])
+        T0, T1 = (float(np.interp(pwm, th["pwm"], sheets[v])) for v in vs[j:j + 2])
+        return (1.0 - w) * T0 + w * T1
+
+    def _volume(self, z: float) -> float:
+        if self.target == "gz-sim":
+            return self.V
+        return self.V if z < 0.0 else 0.0   # BuoyantObject.cc:100-111 with bounding-box height 0
+
     def step(self, p, q, v, f_thr, h):
         R = _rot(q)                                      # FLU -> ENU
-        vc_b = R.T @ self.current_enu
         s = v.copy()
-        s[:3] -= vc_b
+        s[:3] -= R.T @ self.current_enu
         if self.target == "gz-sim":
             w_h = self.plugin.wrench(s, h, abs_state=v)["total"]
         else:  # UUV Simulator works in FRD: flip, apply, flip back (HydrodynamicModel.cc:128-140)
             w_h = S6 @ self.plugin.wrench(S6 @ s, h)["total"]
-        fg = R.T @ np.array([0.0, 0.0, -self.parsed["mass"] * self.g])
-        fb = R.T @ np.array([0.0, 0.0, self.rho * self.g * self.V])
-        restoring = np.concatenate([fg + fb, np.cross(self.cg, fg) + np.cross(self.cb, fb)])
+            w_h[3:] += np.cross(self.hydro_at, w_h[:3])
+        e3 = R.T[:, 2]                                   # world up in the body frame
+        fb = self.rho * self.g * self._volume(p[2]) * e3
+        restoring = np.concatenate([-self.mass * self.g * e3 + fb,
+                                    np.cross(self.mass_moment, -self.g * e3) + np.cross(self.cb, fb)])
         ab = self.M @ v  # C(v) v = [w x a; v x a + w x b] (Fossen 2021 eq. 3.46)
         cor = np.concatenate([np.cross(v[3:], ab[:3]), np.cross(v[:3], ab[:3]) + np.cross(v[3:], ab[3:])])
         tau = w_h + restoring + f_thr - cor
@@ -187,60 +234,110 @@ class _Target:
         return p_new, q_new / np.linalg.norm(q_new), v_new
 
 
-def replay_check(vehicle, t, inputs, *, input_kind: str = "force", target: str = "gz-sim",
-                 added_mass: str = "fluid", physics_step: float = DEFAULT_STEP, pos0=None, q0=None,
-                 text: str | None = None) -> ReplayResult:
-    """Replay ``inputs`` (n, k) at times ``t`` (n,) through the exported model inside
-    ``target`` ("gz-sim" or "uuv-simulator") and compare with uvsim (module docstring).
+def _run_arrays(run, inputs, input_kind, pos0, voltage):
+    """``(t, U, kind, pos0, voltage)`` from a :class:`uvsim.logs.Run`, a run CSV path, or
+    times ``run`` (n,) with ``inputs`` (n, k)."""
+    from uvsim.logs import read_run
 
-    The physics step is ``physics_step`` rounded so that it divides each sample interval.
-    ``added_mass``: the gz-sim mode ("fluid" or "plugin"); ``text``: an exported file to
-    check instead of exporting ``vehicle`` again; ``pos0`` (3,) NED, ``q0`` (4,) FRD->NED
-    quaternion of the start (default origin, level); the vehicle starts at rest."""
+    if isinstance(run, (str, Path)):
+        run = read_run(run)
+    if hasattr(run, "inputs") and hasattr(run, "input_kind"):
+        if inputs is not None:
+            raise VehicleError("replay_check: give a run, or times and inputs, not both")
+        if pos0 is None and run.has_position and np.all(np.isfinite(run.position[0])):
+            pos0 = run.position[0]
+        if voltage is None and getattr(run, "has_voltage", False):
+            voltage = run.voltage
+        return np.asarray(run.t, float), np.asarray(run.inputs, float), run.input_kind, pos0, voltage
+    if inputs is None:
+        raise VehicleError("replay_check: inputs are needed with an array of times")
+    t = np.asarray(run, float)
+    return t, np.asarray(inputs, float).reshape(t.size, -1), input_kind or "force", pos0, voltage
+
+
+def replay_check(vehicle, run, inputs=None, *, input_kind: str | None = None, target: str = "gz-sim",
+                 added_mass: str = "fluid", physics_step: float = DEFAULT_STEP, pos0=None, q0=None, voltage=None,
+                 text: str | None = None, patch_coriolis: bool = False) -> ReplayResult:
+    """Replay a run's inputs through the exported model inside ``target`` ("gz-sim" or
+    "uuv-simulator") and compare with uvsim's simulation of the same inputs (module docstring).
+
+    Parameters
+    ----------
+    vehicle : Vehicle, built-in name or vehicle file
+    run : uvsim.logs.Run, path of a run CSV, or array (n,)
+        The run (its inputs, input kind, battery voltage and first logged position are used),
+        or the sample times ``t`` (s) with ``inputs``.
+    inputs : array (n, k), optional
+        Inputs held over each sample interval (with times as ``run``): generalized forces
+        FRD (k = 6), per-thruster thrust (N) or PWM (us), as ``input_kind`` says (default "force").
+    target : {"gz-sim", "uuv-simulator"}
+    added_mass : {"fluid", "plugin"}
+        The gz-sim mode (:func:`uvsim.export.gz_sim.gz_sdf`).
+    physics_step : float
+        Physics step, s, rounded so that it divides each sample interval.
+    pos0 : (3,) NED start, default the run's first logged position, else
+        (0, 0, :data:`DEFAULT_START_DEPTH`) (below UUV Simulator's surface); ``q0`` (4,) FRD->NED
+        quaternion, default level.  The vehicle starts at rest.
+    voltage : array (n,), optional
+        Battery voltage per sample (a run's own by default): uvsim's curves and the gz-sim
+        bridge use it, UUV Simulator's table cannot.
+    text : str, optional
+        An exported file to check instead of exporting ``vehicle`` again.
+    patch_coriolis : bool
+        gz-sim only: flip the sign of the plugin's Coriolis term (``Hydrodynamics.cc:578``), what
+        an upstream fix would give.
+
+    Returns
+    -------
+    ReplayResult
+    """
     from uvsim.simulate import simulate
     from uvsim.vehicle import load_vehicle
 
     veh = load_vehicle(vehicle)
-    t = np.asarray(t, float)
-    U = np.asarray(inputs, float).reshape(t.size, -1)
+    t, U, kind, pos0, voltage = _run_arrays(run, inputs, input_kind, pos0, voltage)
     if not (np.isfinite(physics_step) and 0 < physics_step <= 0.1):
         raise VehicleError(f"physics_step {physics_step!r}: expected seconds in (0, 0.1]")
     if veh.effects:
         raise VehicleError(f"{veh.source}: effects {[e.kind for e in veh.effects]} have no counterpart in {target}; "
                            "the replay would compare two different models")
+    if target not in ("gz-sim", "uuv-simulator"):
+        raise VehicleError(f"target {target!r}: the replay check knows gz-sim and uuv-simulator")
     if text is None and target == "gz-sim":
         from uvsim.export.gz_sim import gz_sdf
 
         text = gz_sdf(veh, added_mass=added_mass)[0]
-    elif text is None and target == "uuv-simulator":
+    elif text is None:
         from uvsim.export.uuv_simulator import uuv_xacro
 
-        text = uuv_xacro(veh)[0]
+        text = uuv_xacro(veh, force=True)[0]  # measure what the export refuses without --force
     if target == "gz-sim":
         from uvsim.export.gz_sim import parse_gz_sdf
 
         parsed = parse_gz_sdf(text)
-        mode = "fluid added mass" if parsed["fluid_added_mass"] else "plugin added mass"
-    elif target == "uuv-simulator":
+        mode = ("fluid added mass" if parsed["fluid_added_mass"] else "plugin added mass"
+                + (", Coriolis sign patched" if patch_coriolis else ""))
+        current_enu = parsed["current_enu"]
+    else:
         from uvsim.export.uuv_simulator import parse_uuv_xacro
 
         parsed, mode = parse_uuv_xacro(text), "HMFossen"
-    else:
-        raise VehicleError(f"target {target!r}: the replay check knows gz-sim and uuv-simulator")
-    pos0 = np.zeros(3) if pos0 is None else np.asarray(pos0, float)
+        current_enu = T_NED_ENU @ np.asarray(veh.current_ned, float)  # the world's, set as the export warns
+    pos0 = np.array([0.0, 0.0, DEFAULT_START_DEPTH]) if pos0 is None else np.asarray(pos0, float)
     q0 = np.array([1.0, 0.0, 0.0, 0.0]) if q0 is None else np.asarray(q0, float)
-    ref = simulate(veh, t, U, input_kind=input_kind, pos0=pos0, q0=q0, nu0=np.zeros(6))
+    V = None if voltage is None else np.asarray(voltage, float).reshape(t.size)
+    if V is not None and np.all(np.isnan(V)):  # NaN: the curves' nominal voltage (uvsim.simulate)
+        V = None
+    ref = simulate(veh, t, U, input_kind=kind, pos0=pos0, q0=q0, nu0=np.zeros(6), voltage=V)
     Yr = ref.y
-    tg = _Target(target, parsed, veh, mode, veh.g)
-    tg.current_enu = T_NED_ENU @ np.asarray(veh.current_ned, float)
-    curves = veh.actuators.curves
+    tg = _Target(target, parsed, veh.g, current_enu, patch_coriolis=patch_coriolis)
     p, q, v = T_NED_ENU @ pos0, _frd_ned_to_flu_enu(q0), np.zeros(6)
     n = t.size
     pos_err, att_err = np.full(n, np.nan), np.full(n, np.nan)
     diverged = False
     for i in range(n):
         if i:
-            f_thr = tg.thrust_wrench(U[i - 1], input_kind, curves)  # held over the sample interval
+            f_thr = tg.thrust_wrench(U[i - 1], kind, None if V is None else V[i - 1])  # held over the interval
             # a fixed step that divides the sample interval (no sliver steps: the plugins divide by it)
             n_sub = max(1, int(round((t[i] - t[i - 1]) / physics_step)))
             h = (t[i] - t[i - 1]) / n_sub
@@ -249,12 +346,10 @@ def replay_check(vehicle, t, inputs, *, input_kind: str = "force", target: str =
             if not (np.all(np.isfinite(v)) and np.linalg.norm(v) < 1e3):
                 diverged = True
                 break
-        R_flu_enu = quat_to_rotation(q[None])[0]
-        R_frd_ned = T_NED_ENU @ R_flu_enu @ S3
+        R_frd_ned = T_NED_ENU @ _rot(q) @ S3
         R_ref = quat_to_rotation(Yr[i, 3:7][None])[0]
         pos_err[i] = np.linalg.norm(T_NED_ENU @ p - Yr[i, :3])
-        cosang = np.clip((np.trace(R_ref.T @ R_frd_ned) - 1.0) / 2.0, -1.0, 1.0)
-        att_err[i] = np.arccos(cosang)
+        att_err[i] = np.arccos(np.clip((np.trace(R_ref.T @ R_frd_ned) - 1.0) / 2.0, -1.0, 1.0))
     return ReplayResult(target, mode, physics_step, t, pos_err, att_err, diverged)
 
 
@@ -272,27 +367,34 @@ def standard_maneuver(duration: float = 60.0, rate: float = 50.0) -> tuple[np.nd
 def stable_step(vehicle, *, added_mass: str = "fluid", speed: float = 1.0, target: str = "gz-sim") -> dict:
     """Largest physics step (s) at which each DOF's added-mass and damping terms are stable
     under the target's stepping, from the per-DOF linearization at ``speed`` (m/s or rad/s)
-    of the recurrences of :func:`replay_check`:
+    of the recurrences of :func:`replay_check` (rigid mass ``m``, added mass ``a``, damping
+    slope ``d = L + 2 Q |speed|`` <= 0):
 
     * engine-carried added mass (gz-sim ``fluid``): ``(m + a) v' = (m + a + h d) v``,
       stable for ``h < 2 (m + a) / |d|``;
-    * plugin added mass from the previous step's finite difference (gz-sim ``plugin``):
-      ``m v_{k+1} = (m - a + h d) v_k + a v_{k-1}``, whose roots leave the unit circle for
-      ``a >= m`` at any step (gz-sim#1923) and otherwise for h above a bound found by
-      bisection;
-    * UUV Simulator's filtered acceleration: the same with the filter's state (bisection).
+    * plugin added mass from the previous step's finite difference (gz-sim ``plugin``,
+      ``Hydrodynamics.cc:552-566``): ``m v_{k+1} = (m - a + h d) v_k + a v_{k-1}``.  By the
+      Jury test its roots stay inside the unit circle iff ``a < m`` and
+      ``h < 2 (m - a) / |d|``: unstable at every step once ``a >= m`` (gz-sim#1923), and the
+      bound shrinks with ``1 - a/m``;
+    * UUV Simulator's filtered acceleration (``alpha = 0.3``): the same with the filter's
+      state, bound found by bisection on the spectral radius.
 
-    ``d = L + 2 Q |speed|`` the damping slope.  Returns per DOF ``{"h_max", "ratio" a/m}``
-    (``h_max`` 0.0 when unstable at every step, inf when stable at every step) and
-    ``overall`` (the smallest)."""
+    An undamped DOF (``d = 0``) keeps its physical root at 1 (constant velocity): counted as
+    stable.  Returns per DOF ``{"h_max", "ratio" a/m}`` (``h_max`` 0.0 when unstable at every
+    step, inf when stable at every step) and ``overall`` (the smallest).  Necessary, not
+    sufficient: the coupling between DOFs is ignored (the replay is the check)."""
     from uvsim.export.frames import damping_matrices
     from uvsim.vehicle import load_vehicle
 
+    if target not in ("gz-sim", "uuv-simulator") or added_mass not in ("fluid", "plugin"):
+        raise VehicleError(f"stable_step: target {target!r}, added_mass {added_mass!r}: expected gz-sim or "
+                           "uuv-simulator and fluid or plugin")
     veh = load_vehicle(vehicle)
     DL, DQ = damping_matrices(veh)
     m = np.diag(veh.M_RB)
     a = np.diag(veh.added_mass_matrix)
-    d = np.diag(DL) + 2.0 * np.diag(DQ) * abs(speed)
+    d = np.minimum(np.diag(DL) + 2.0 * np.diag(DQ) * abs(speed), 0.0)
     names = ("surge", "sway", "heave", "roll", "pitch", "yaw")
     out = {}
     for i in range(6):
@@ -301,32 +403,36 @@ def stable_step(vehicle, *, added_mass: str = "fluid", speed: float = 1.0, targe
     return out
 
 
-def _spectral_radius(m, a, d, h, target, mode) -> float:
-    if target == "gz-sim" and mode == "fluid":
-        return abs(1.0 + h * d / (m + a))
-    if target == "gz-sim":   # state (v_k, v_{k-1})
-        A = np.array([[(m - a + h * d) / m, a / m], [1.0, 0.0]])
-    else:                    # state (v_k, v_{k-1}, af_{k-1}); af_k = 0.7 af_{k-1} + 0.3 (v_k - v_{k-1}) / h
-        al = 0.3
-        # m v_{k+1} = m v_k + h (d v_k - a af_k)
-        A = np.array([[1.0 + h * d / m - h * a / m * al / h, h * a / m * al / h, -h * a / m * (1 - al)],
-                      [1.0, 0.0, 0.0],
-                      [al / h, -al / h, 1 - al]])
-    return float(max(abs(np.linalg.eigvals(A))))
+def _uuv_radius(m, a, d, h) -> float:
+    """Largest root of UUV Simulator's recurrence other than an undamped DOF's root at 1; state
+    ``(v_k, v_{k-1}, af_{k-1})``, ``af_k = 0.7 af_{k-1} + 0.3 (v_k - v_{k-1}) / h``,
+    ``m v_{k+1} = m v_k + h (d v_k - a af_k)``."""
+    al = 0.3
+    A = np.array([[1.0 + h * d / m - a / m * al, a / m * al, -h * a / m * (1 - al)],
+                  [1.0, 0.0, 0.0],
+                  [al / h, -al / h, 1 - al]])
+    z = np.linalg.eigvals(A)
+    if d == 0.0:
+        z = np.delete(z, np.argmin(np.abs(z - 1.0)))
+    return float(max(abs(z)))
 
 
 def _h_max(m, a, d, target, mode) -> float:
     if target == "gz-sim" and mode == "fluid":
-        return float("inf") if d >= 0 else float(2.0 * (m + a) / abs(d))
+        return float("inf") if d == 0 else float(2.0 * (m + a) / abs(d))
+    if target == "gz-sim":  # Jury: p(z) = m z^2 - (m - a + h d) z - a
+        if a >= m:
+            return 0.0
+        return float("inf") if d == 0 else float(2.0 * (m - a) / abs(d))
     tiny = 1e-6
-    if _spectral_radius(m, a, d, tiny, target, mode) >= 1.0:
+    if _uuv_radius(m, a, d, tiny) >= 1.0:
         return 0.0
     lo, hi = tiny, 10.0
-    if _spectral_radius(m, a, d, hi, target, mode) < 1.0:
+    if _uuv_radius(m, a, d, hi) < 1.0:
         return float("inf")
     for _ in range(60):
         mid = np.sqrt(lo * hi)
-        if _spectral_radius(m, a, d, mid, target, mode) < 1.0:
+        if _uuv_radius(m, a, d, mid) < 1.0:
             lo = mid
         else:
             hi = mid
