@@ -54,7 +54,7 @@ DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw")
 #: (docs/contracts.md).  The plug-in sections (``damping``, ``thrusters`` with a ``type``,
 #: each ``effects`` entry) are checked by their plug-in classes.
 VEHICLE_KEYS = ("name", "description", "sources", "meta", "environment", "rigid_body", "added_mass",
-                "damping", "thrusters", "effects", "sensors")
+                "damping", "thrusters", "effects", "sensors", "uncertainty")
 ENVIRONMENT_KEYS = ("g", "rho", "current_ned")
 RIGID_BODY_KEYS = ("mass", "buoyancy", "r_g", "r_b", "inertia")
 SENSOR_KEYS = ("position", "source")
@@ -91,6 +91,9 @@ class Vehicle:
     current_ned: np.ndarray = field(default_factory=lambda: np.zeros(3))
     #: sensor name -> position (3,) on the body, m (``sensors:`` section, :data:`SENSOR_NAMES`)
     sensors: dict = field(default_factory=dict)
+    #: parameter name -> 1-sigma uncertainty of the file's value, in the parameter's units
+    #: (``uncertainty:`` section): the prior width of a calibration (:mod:`uvsim.fitting.priors`)
+    uncertainty: dict = field(default_factory=dict)
     description: str = ""
     source: str = "<memory>"
     raw: dict = field(default_factory=dict, repr=False)
@@ -211,6 +214,8 @@ class Vehicle:
         }
         if self.sensors:
             d["sensors"] = {k: {"position": [float(x) for x in p]} for k, p in self.sensors.items()}
+        if self.uncertainty:
+            d["uncertainty"] = {k: float(x) for k, x in self.uncertainty.items()}
         if self.raw.get("thrusters") is not None:
             d["thrusters"] = copy.deepcopy(self.raw["thrusters"])
         if self.raw.get("sources"):
@@ -472,11 +477,25 @@ def vehicle_from_dict(d: dict, *, source: str = "<dict>", actuators: Actuators |
         source=source,
         raw=d,
     )
+    v.uncertainty = _uncertainty(d.get("uncertainty"), f, v.parameters())
     M = v.M
     ev = np.linalg.eigvalsh(0.5 * (M + M.T))
     if ev.min() <= 0:
         raise VehicleError(f"{f}: M = M_RB + M_A is not positive definite (eigenvalues {np.round(ev, 6)})")
     return v
+
+
+def _uncertainty(spec, f: str, params: Mapping[str, float]) -> dict:
+    """The ``uncertainty:`` section: {parameter name: positive 1-sigma in its units}."""
+    if spec is None:
+        return {}
+    require_mapping(spec, f"{f}: uncertainty", error=VehicleError, example="uncertainty: {X_u: 2.0, N_rdot: 0.05}")
+    check_keys(spec, list(params), f"{f}: uncertainty", error=VehicleError,
+               hint=" (a parameter name of this vehicle: uvsim.load_vehicle(...).parameters())")
+    out = {}
+    for k, x in spec.items():
+        out[k] = _num(spec, k, f"{f}: uncertainty", positive=True)
+    return out
 
 
 class _VehicleDumper(yaml.SafeDumper):

@@ -136,6 +136,11 @@ class Calibrator:
         longer than 1.5 sample intervals; 0: none.
     initial_velocity : "zero" | "differentiate" for the GA's and the open-loop
         evaluation's unknown initial velocities (the joint stage estimates them).
+    prior : the joint stage fits maximum a posteriori with the starting vehicle as the prior
+        (default True): each free parameter's prior mean is the vehicle file's value, its
+        width the file's ``uncertainty:`` entry or :func:`uvsim.fitting.priors.default_prior_sd`
+        (50 %), and the data count with their effective information
+        (:mod:`uvsim.fitting.priors`); False: least squares within the bounds only.
     workers : local processes (GA evaluations and joint stage; results do not depend on it).
     dask : dask.distributed scheduler address or "local" for the GA evaluations.
     batch_rows : largest number of trajectories per batched GA simulation.
@@ -166,7 +171,7 @@ class Calibrator:
                  signal_weights: Mapping | None = None, noise: Mapping | None = None, ga_channels: str = "own",
                  low_speed_exponent: float = 0.0, refine: bool = True, horizons=DEFAULT_HORIZONS,
                  max_iter: int = 40, gyro_bias: bool = True, screen: bool = True, attitude_lag="auto",
-                 initial_velocity: str = "zero",
+                 initial_velocity: str = "zero", prior: bool = True,
                  workers: int = 1, dask: str | None = None, batch_rows: int = DEFAULT_BATCH_ROWS, checkpoint=None,
                  resume=None, progress: bool = False, effects=None, allow=()):
         self.dofs = dofs
@@ -180,6 +185,7 @@ class Calibrator:
         self.horizons, self.max_iter, self.gyro_bias, self.screen = horizons, max_iter, gyro_bias, screen
         self.attitude_lag = attitude_lag
         self.initial_velocity = initial_velocity
+        self.prior = prior
         self.workers, self.dask, self.batch_rows = workers, dask, batch_rows
         self.checkpoint, self.resume, self.progress = checkpoint, resume, progress
         self.effects = effects
@@ -398,7 +404,8 @@ class Calibrator:
             "vehicle": start_veh.to_dict(), "runs": [(r.name, float(np.nansum(r.data.to_numpy()))) for r in runs],
             "keep": keep, "screen": screen, "bounds": {k: list(bounds_of(k)) for k in names},
             "horizons": horizons, "max_iter": self.max_iter, "gyro_bias": self.gyro_bias, "lag": self.lag_["tau"],
-            "weights": self.signal_weights, "noise": self.noise, "initial_velocity": self.initial_velocity})
+            "weights": self.signal_weights, "noise": self.noise, "initial_velocity": self.initial_velocity,
+            "prior": bool(self.prior), "uncertainty": self.initial_vehicle_.uncertainty})
         ck_path = self.checkpoint if self.checkpoint is not None else self.resume
         ck = None
         if ck_path is not None or self.resume is not None:
@@ -407,7 +414,9 @@ class Calibrator:
         return run_joint(start_veh, runs, meas, params, keep=keep, screen=screen,
                          bounds={k: bounds_of(k) for k in names}, horizons=horizons, max_iter=int(self.max_iter),
                          gyro_bias=bool(self.gyro_bias), initial_velocity=self.initial_velocity,
-                         workers=self._workers(), checkpoint=ck, progress=self.progress)
+                         workers=self._workers(), checkpoint=ck, progress=self.progress,
+                         prior_mean=self.initial_vehicle_.parameters() if self.prior else None,
+                         prior_sd=self.initial_vehicle_.uncertainty)
 
     # ------------------------------------------------------------------ results
     def predict(self, runs) -> dict:

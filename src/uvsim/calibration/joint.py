@@ -86,7 +86,7 @@ def _bar(progress: bool, total: int):
 
 def run_joint(vehicle, runs, meas, params, *, keep, screen, bounds, horizons, max_iter: int, gyro_bias: bool,
               initial_velocity: str = "zero", workers: int = 1, checkpoint: JointCheckpoint | None = None,
-              progress: bool = False):
+              progress: bool = False, prior_mean=None, prior_sd=None):
     """Screen and fit (module docstring).
 
     Parameters
@@ -97,6 +97,8 @@ def run_joint(vehicle, runs, meas, params, *, keep, screen, bounds, horizons, ma
     keep : names freed whatever the screen says; screen : candidates freed if excited.
     bounds : {name: (low, high)} for every name of ``keep`` and ``screen``.
     horizons, max_iter, gyro_bias, initial_velocity, workers : see :func:`uvsim.fitting.fit`.
+    prior_mean, prior_sd : {name: value} (every parameter) and {name: sd} (some): the prior
+        of :func:`uvsim.fitting.fit` (None: no prior).
 
     Returns
     -------
@@ -132,7 +134,7 @@ def run_joint(vehicle, runs, meas, params, *, keep, screen, bounds, horizons, ma
     try:
         res = fit(vehicle, runs, space, meas=meas, horizons=horizons, max_iter=max_iter, gyro_bias=gyro_bias,
                   initial_velocity=initial_velocity, workers=workers, checkpoint=checkpoint, on_iteration=on_it,
-                  progress=lambda msg: log.debug(msg))
+                  progress=lambda msg: log.debug(msg), prior_mean=prior_mean, prior_sd=prior_sd)
     finally:
         if bar is not None:
             bar.n = bar.total

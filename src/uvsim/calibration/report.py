@@ -142,6 +142,21 @@ def effective_inertia_sigma(cal) -> dict:
     return out
 
 
+def prior_report(res) -> dict:
+    """The report's ``prior``: the data weight and, per freed parameter, the prior mean and
+    sd, the posterior sd, how far the data moved it (in prior sds) and how much they
+    determined it (``1 - posterior sd / prior sd``: 0 = the prior alone, 1 = the data alone)."""
+    if res is None or not res.prior_sd:
+        return {"used": False}
+    par = {}
+    for k in res.names:
+        s0, s1 = res.prior_sd[k], res.std.get(k)
+        par[k] = {"mean": res.prior_mean[k], "prior_sd": s0, "posterior_sd": s1,
+                  "moved_prior_sd": (res.values[k] - res.prior_mean[k]) / s0,
+                  "determined": None if s1 is None else max(0.0, 1.0 - s1 / s0)}
+    return {"used": True, "data_weight": res.data_weight, "parameters": par}
+
+
 def build_report(cal, ds, runs, problems, ga, bounds_of, t0, t_ga, t_ref) -> dict:
     """The JSON-ready report of a fitted Calibrator (docs/calibration.md, report.json)."""
     meas = cal._meas(ds.runs, cal.signal_weights)
@@ -176,6 +191,7 @@ def build_report(cal, ds, runs, problems, ga, bounds_of, t0, t_ga, t_ref) -> dic
         "linear_damping": {d: p[k] for d, k in LINEAR_DAMPING.items()},
         "quadratic_damping": {d: p[k] for d, k in QUADRATIC_DAMPING.items()},
         "gyro_bias": {} if res is None else dict(res.gyro_bias),
+        "prior": prior_report(res),
         "validation_rmse": val, "validation_fit_percent": val_fit,
         "training_rmse": tr, "training_fit_percent": tr_fit,
         "initial_validation_rmse": val0, "initial_validation_fit_percent": val0_fit,
@@ -203,6 +219,6 @@ def build_report(cal, ds, runs, problems, ga, bounds_of, t0, t_ga, t_ref) -> dic
                      "bounds": {k: list(v) for k, v in (cal.bounds or {}).items()},
                      "refine": cal.refine, "horizons": cal._horizons(), "max_iter": cal.max_iter,
                      "gyro_bias": cal.gyro_bias, "screen": cal.screen, "attitude_lag": cal.attitude_lag,
-                     "initial_velocity": cal.initial_velocity},
+                     "initial_velocity": cal.initial_velocity, "prior": cal.prior},
         "logbook": {d: [dict(rec) for rec in lb] for d, lb in ga["logbooks"].items()},
     }

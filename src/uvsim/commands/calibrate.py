@@ -2,7 +2,7 @@
 
     uvsim calibrate --data DIR [--vehicle NAME|FILE] [--dof surge,...] [--free z_b,thruster_gain_*]
                     [--fix NAME,...] [--bounds NAME=LO:HI,...] [--weights NAME=W,...] [--noise NAME=SIGMA,...]
-                    [--horizons 2,6] [--no-gyro-bias] [--seed S] [--population P --generations G]
+                    [--horizons 2,6] [--no-gyro-bias] [--no-prior] [--seed S] [--population P --generations G]
                     [--workers N] [--dask ADDR|local] [--checkpoint CKPT] [--resume CKPT] [--no-refine]
                     --out fitted.yaml [--json report.json] [--plots DIR] [--progress]
 
@@ -49,6 +49,9 @@ def register(sub) -> None:
                    help="Levenberg-Marquardt iterations per horizon; a last stage that stops there is reported as "
                         "unfinished (exit 2) unless --keep-worse")
     p.add_argument("--no-gyro-bias", action="store_true", help="do not fit a gyro bias per run")
+    p.add_argument("--no-prior", action="store_true",
+                   help="joint fit by least squares within the bounds only, without the starting vehicle as a prior "
+                        "(default: maximum a posteriori, docs/calibration.md 'Priors')")
     p.add_argument("--attitude-lag", default="auto", metavar="auto|SECONDS",
                    help="time constant of the attitude filter's lag on logged Euler angles: 'auto' (default, "
                         "estimated from the gyro), a number, or 0 for none")
@@ -228,7 +231,9 @@ def print_summary(cal, out=None) -> None:
     def say(s=""):
         print(s, file=out)
 
-    say(f"{'parameter':18s} {'initial':>11s} {'fitted':>11s} {'1-sigma':>10s}  flags")
+    prior = rep.get("prior", {}).get("parameters", {})
+    say(f"{'parameter':18s} {'initial':>11s} {'fitted':>11s} {'1-sigma':>10s}"
+        + (f" {'prior sd':>10s} {'moved':>7s} {'data':>5s}" if prior else "") + "  flags")
     for k, v in rep["parameters"].items():
         flags = []
         if k in rep["at_bounds"]:
@@ -241,8 +246,18 @@ def print_summary(cal, out=None) -> None:
             flags.append("held at the vehicle's value (its sum with the added inertia is fitted)")
         elif k not in free:
             flags.append("GA only")
-        say(f"{k:18s} {rep['initial_parameters'][k]:11.5g} {v:11.5g} {_fmt(rep['uncertainty'][k]):>10s}  "
+        pr = prior.get(k)
+        cols = ""
+        if prior:
+            cols = (f" {_fmt(pr['prior_sd']):>10s} {pr['moved_prior_sd']:+7.2f} "
+                    f"{'' if pr['determined'] is None else format(pr['determined'], '5.0%'):>5s}" if pr else
+                    f" {'':10s} {'':7s} {'':5s}")
+        say(f"{k:18s} {rep['initial_parameters'][k]:11.5g} {v:11.5g} {_fmt(rep['uncertainty'][k]):>10s}{cols}  "
             f"{', '.join(flags)}")
+    if prior:
+        say(f"prior: the starting vehicle's values; 'moved' = (fitted - prior mean) / prior sd, 'data' = 1 - "
+            f"posterior sd / prior sd (0 %: the prior alone); data weight {rep['prior']['data_weight']:.3g} "
+            "(docs/calibration.md, 'Priors')")
     if ident.get("not_excited"):
         say(f"not excited by the data (left at their values): {', '.join(ident['not_excited'])}")
     for c in ident.get("effective_inertia", []):
@@ -291,7 +306,8 @@ def _run(args) -> int:
                      margin=args.margin, workers=args.workers, dask=args.dask, checkpoint=ckpt, resume=args.resume,
                      refine=not args.no_refine, free=args.free, fix=args.fix, bounds=bounds,
                      signal_weights=weights, noise=noise, horizons=horizons, max_iter=args.max_iter,
-                     gyro_bias=not args.no_gyro_bias, screen=not args.no_screen, ga_channels=args.ga_channels,
+                     gyro_bias=not args.no_gyro_bias, prior=not args.no_prior, screen=not args.no_screen,
+                     ga_channels=args.ga_channels,
                      attitude_lag=lag, low_speed_exponent=args.low_speed_exponent, progress=want_progress(args),
                      allow=parse_allow(args.allow))
     logger = logging.getLogger("uvsim")

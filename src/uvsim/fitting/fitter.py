@@ -26,6 +26,7 @@ import numpy as np
 from uvsim.errors import CalibrationError
 from uvsim.fitting.objective import WindowedProblem, whole_runs
 from uvsim.fitting.parameters import ParameterSpace
+from uvsim.fitting.priors import make_prior
 from uvsim.fitting.solver import covariance, solve
 from uvsim.measurements import measurements_for
 
@@ -58,6 +59,11 @@ class FitResult:
     window_costs: list = field(repr=False, default_factory=list)
     #: index into the fitted runs of each entry of ``nus`` / ``window_costs``
     order: list = field(repr=False, default_factory=list)
+    #: the prior (maximum a posteriori fit, :mod:`uvsim.fitting.priors`): {name: mean},
+    #: {name: standard deviation}, and the data weight at the solution; empty / None without
+    prior_mean: dict = field(default_factory=dict)
+    prior_sd: dict = field(default_factory=dict)
+    data_weight: float | None = None
 
     def summary(self) -> dict:
         return {"values": self.values, "std": self.std, "cost": self.cost, "n_residuals": self.n_residuals,
@@ -101,7 +107,7 @@ def build_problems(vehicle, runs, meas, space: ParameterSpace, horizon, z_ref, *
 def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence = DEFAULT_HORIZONS,
         max_iter: int = 20, gyro_bias: bool = True, noise=None, weights=None, initial_velocity: str = "zero",
         z0=None, progress=None, workers: int = 1, ftol: float = 1e-6, checkpoint=None,
-        on_iteration=None) -> FitResult:
+        on_iteration=None, prior_mean=None, prior_sd=None) -> FitResult:
     """Fit ``space``'s free parameters of ``vehicle`` to ``runs`` (module docstring).
 
     Parameters
@@ -125,6 +131,11 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
         the state belongs to the same problem (e.g. by a fingerprint).
     on_iteration : callable(stage index, iteration, cost) after every accepted step
         (e.g. a progress bar).
+    prior_mean : {name: value} of every free parameter: fit maximum a posteriori with a
+        Gaussian prior there (:mod:`uvsim.fitting.priors`; the data weighted by their
+        effective information); ``prior_sd`` {name: standard deviation} overrides
+        :func:`uvsim.fitting.priors.default_prior_sd`. The reported ``std`` is then the
+        posterior's.
     """
     runs = list(runs)
     if not runs:
@@ -134,6 +145,7 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
     say = progress or (lambda msg: None)
     z = space.z0 if z0 is None else np.asarray(z0, float)
     horizons = list(horizons)
+    prior = None if prior_mean is None else make_prior(space, prior_mean, prior_sd)
     saved = checkpoint.load() if checkpoint is not None else None
     stages = [] if saved is None else list(saved["stages"])
     first = 0 if saved is None else int(saved["stage"])
@@ -144,7 +156,7 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
     if saved is not None and first == len(horizons):  # every stage finished: the final linearization only
         problems, order = build_problems(vehicle, runs, meas, space, horizons[-1], np.array(saved["z_start"]),
                                          gyro_bias=gyro_bias, initial_velocity=initial_velocity)
-        res = solve(problems, z, saved["nus"], max_iter=0, workers=workers)
+        res = solve(problems, z, saved["nus"], max_iter=0, workers=workers, prior=prior)
         # the finished fit's own cost (re-evaluated here in a batch of another size, the sum may
         # differ in its last bit with the BLAS kernels of some machines)
         res["cost"] = stages[-1]["cost"]
@@ -170,24 +182,28 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
 
         st0 = saved["solver"] if saved is not None and si == first else None
         res = solve(problems, z, max_iter=max_iter, workers=workers, ftol=ftol, progress=on_it, state=st0,
-                    on_step=on_step)
+                    on_step=on_step, prior=prior)
         z = res["z"]
         stages.append({"horizon_s": H, "iterations": res["iterations"], "cost": float(res["cost"]),
                        "message": res["message"], "windows": int(sum(p.lay.W for p in problems)),
                        "simulated_parameter_sets": int(res["evaluations"]),
-                       "seconds": float(time.perf_counter() - t0)})
+                       "seconds": float(time.perf_counter() - t0),
+                       **({"data_weight": float(res["data_weight"])} if prior is not None else {})})
         if checkpoint is not None:
             checkpoint.save({"stage": si + 1, "z": z, "z_start": z_start, "nus": res["nus"], "stages": stages,
                              "solver": None},
                             progress=f"stage {si + 1} of {len(horizons)} ({label}) finished")
     blocks = res["blocks"]
-    cov = covariance(blocks) if space.p else None
+    cov = covariance(res.get("posterior_blocks", blocks)) if space.p else None
     sc = space.scale
     values = space.as_dict(z)
     if cov is not None:
-        C = cov["robust"] * np.outer(sc, sc)
+        # without a prior the cluster-robust sandwich; with one the posterior (w S + P)^-1, which is
+        # the prior's covariance along what the data do not see (the sandwich would be 0 there)
+        C = (cov["robust"] if prior is None else np.linalg.pinv(cov["information"])) * np.outer(sc, sc)
         std = {k: float(np.sqrt(max(C[i, i], 0.0))) for i, k in enumerate(space.names)}
-        ident = identifiability(cov["information"] / np.outer(sc, sc), space.names, C)
+        info = cov["information"] if prior is None else covariance(blocks)["information"]  # the data's own
+        ident = identifiability(info / np.outer(sc, sc), space.names, C)
     else:
         C, std, ident = np.zeros((0, 0)), {}, {}
     # per-run nuisance: gyro biases (in the problems' run order)
@@ -200,9 +216,15 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
                 gb[run.name] = [float(x) for x in b]
             k += 1
     n_res = int(sum(b.n for b in blocks))
-    return FitResult(space.names, values, std, C, float(res["cost"]), n_res, stages, gb, space.at_bounds(z),
-                     space.physical_limit(z), ident, z, res["nus"], problems, [b.window_sse for b in blocks],
-                     order)
+    out = FitResult(space.names, values, std, C, float(res["cost"]), n_res, stages, gb, space.at_bounds(z),
+                    space.physical_limit(z), ident, z, res["nus"], problems, [b.window_sse for b in blocks],
+                    order)
+    if prior is not None:
+        sc = space.scale
+        out.prior_mean = {k: float(prior.mean_z[i] * sc[i]) for i, k in enumerate(space.names)}
+        out.prior_sd = {k: float(prior.sd_z[i] * sc[i]) for i, k in enumerate(space.names)}
+        out.data_weight = float(res["data_weight"])
+    return out
 
 
 def identifiability(info: np.ndarray, names: Sequence[str], cov: np.ndarray | None = None) -> dict:

@@ -44,6 +44,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from uvsim.fitting.priors import data_weight
 from uvsim.fitting.objective import DEFECT_SIGMA, GYRO_BIAS_SIGMA, WindowedProblem, apply_tangent, tangent_difference
 
 #: Forward-difference steps: scaled parameters (relative) and node components (m, rad, m/s, rad/s).
@@ -324,9 +325,43 @@ class PoolEvaluator(SerialEvaluator):
         self._pool.shutdown(wait=True, cancel_futures=True)
 
 
+class PriorEvaluator:
+    """An evaluator whose blocks are the data's, weighted by the data weight ``w``
+    (:func:`uvsim.fitting.priors.data_weight`, re-estimated at every linearization with
+    window scores), plus one block for the prior's residuals (no nuisance, no windows).
+    ``raw`` keeps the data's own blocks of the last such linearization."""
+
+    reweighs = True
+
+    def __init__(self, ev, prior):
+        self.ev, self.prior, self.w, self.raw = ev, prior, 1.0, None
+
+    def linearize(self, z, nus, *, jacobian=True, scores=False) -> list:
+        raw = self.ev.linearize(z, nus, jacobian=jacobian, scores=scores)
+        if scores:
+            self.raw = raw
+            if self.prior.temper:
+                S, _, _ = _normal(raw, 0.0)
+                self.w = data_weight(S, sum(b.scores.T @ b.scores for b in raw))
+        w = self.w
+        out = [RunNormal(w * b.rss, b.n) if b.A is None else
+               RunNormal(w * b.rss, b.n, w * b.A, w * b.gz, w * b.D, w * b.B, w * b.gn, w * b.window_sse,
+                         None if b.scores is None else w * b.scores) for b in raw]
+        r = self.prior.residual(z)
+        p = r.size
+        if not jacobian:
+            return out + [RunNormal(float(r @ r), 0)]
+        inv = 1.0 / self.prior.sd_z
+        return out + [RunNormal(float(r @ r), 0, np.diag(inv * inv), inv * r, np.zeros((0, 0)), np.zeros((0, p)),
+                                np.zeros(0), np.zeros(0), np.zeros((0, p)) if scores else None)]
+
+    def close(self):
+        self.ev.close()
+
+
 def solve(prob, z0: np.ndarray, nus0: list | None = None, *, max_iter: int = 20,
           ftol: float = 1e-6, xtol: float = 1e-7, progress=None, workers: int = 1, state: dict | None = None,
-          on_step=None) -> dict:
+          on_step=None, prior=None) -> dict:
     """Levenberg-Marquardt from (z0, nus0) (module docstring).
 
     ``prob`` is a :class:`WindowedProblem` or a list of them sharing one parameter space
@@ -342,16 +377,28 @@ def solve(prob, z0: np.ndarray, nus0: list | None = None, *, max_iter: int = 20,
     the iterations, with a dict of everything the iteration depends on (``z``, ``nus``,
     the damping, counters); ``solve(..., state=that)`` continues from it and gives the
     result an uninterrupted call would have given (the linearization at a point is
-    deterministic; rejected steps after the saved one are repeated identically)."""
+    deterministic; rejected steps after the saved one are repeated identically).
+
+    ``prior``: a :class:`uvsim.fitting.priors.Prior` on ``z`` (maximum a posteriori, the
+    data weighted as that module says).  Then ``blocks`` are the data's own blocks at the
+    solution, ``posterior_blocks`` the weighted data's and the prior's (for
+    :func:`covariance`: the posterior), and ``data_weight`` the final weight."""
     probs = _problems(prob)
     ev = PoolEvaluator(probs, int(workers)) if workers and int(workers) > 1 and len(probs) > 1 \
         else SerialEvaluator(probs)
+    if prior is not None:
+        ev = PriorEvaluator(ev, prior)
     try:
         with threadpool_limits(1, "blas"):
-            return _solve(probs, ev, z0, nus0, max_iter=max_iter, ftol=ftol, xtol=xtol, progress=progress,
-                          state=state, on_step=on_step)
+            res = _solve(probs, ev, z0, nus0, max_iter=max_iter, ftol=ftol, xtol=xtol, progress=progress,
+                         state=state, on_step=on_step)
     finally:
         ev.close()
+    if prior is not None:
+        res["posterior_blocks"], res["blocks"] = res["blocks"], ev.raw
+        res["data_weight"] = ev.w
+        res["nus"] = res["nus"][:len(ev.raw)]
+    return res
 
 
 def _solve(probs, ev, z0, nus0, *, max_iter, ftol, xtol, progress, state=None, on_step=None):
@@ -375,6 +422,8 @@ def _solve(probs, ev, z0, nus0, *, max_iter, ftol, xtol, progress, state=None, o
         cost, history, lam, nu_f = state["cost"], list(state["history"]), state["lam"], state["nu_f"]
         evals, it0 = state["evaluations"], state["iteration"]
         blocks = ev.linearize(z, nus, scores=True)
+        if getattr(ev, "reweighs", False):
+            cost = _cost(blocks)
     message = "maximum number of iterations reached"
     it = it0
     at_z = True  # ``blocks`` is the linearization (with window scores) at ``z``
@@ -406,6 +455,9 @@ def _solve(probs, ev, z0, nus0, *, max_iter, ftol, xtol, progress, state=None, o
                 break
             blocks = ev.linearize(z, nus, scores=True)
             evals += n_sets
+            if getattr(ev, "reweighs", False):  # the data weight was re-estimated: the cost at it
+                cost = _cost(blocks)
+                history[-1] = cost
             if on_step is not None:
                 on_step({"z": z.copy(), "nus": [n.copy() for n in nus], "cost": cost, "history": list(history),
                          "lam": lam, "nu_f": nu_f, "evaluations": evals, "iteration": it})

@@ -1,0 +1,106 @@
+"""The model a user starts from as a prior on the fitted parameters (maximum a posteriori).
+
+A free parameter ``theta_j`` with prior mean ``mu_j`` (the vehicle file's value) and prior
+standard deviation ``sigma_j`` adds the residual ``(theta_j - mu_j) / sigma_j`` to the
+fit (a Gaussian prior as a least-squares residual: Tarantola 2005, *Inverse Problem
+Theory*, sec. 3.2, eq. 3.46; the MAP estimate of a linearized problem). A coefficient the
+data do not excite then stays near the start instead of running to a search bound, and a
+coefficient they do determine moves as far as they say. Bounds are physical limits only.
+
+**How much the data count.** The fit's residuals are normalized by the sensors' noise, as
+if every sample were independent. Trajectory residuals are not (100 Hz samples of one
+slow motion, and a model that differs from the vehicle in structure leaves a correlated
+misfit), so ``J^T J`` overstates what the data know by a factor ``k`` and a prior of
+any sensible width would be swamped. The data's residuals are therefore weighted by
+``w = min(1, 1 / k)`` with ``k = tr(S^-1 M) / p``: ``S`` the data's information on the
+parameters (nuisance profiled out) and ``M`` the sum of the windows' score outer
+products (the cluster-robust "meat" of :func:`uvsim.fitting.solver.covariance`), so that
+``w S`` matches the information the windows' scatter supports (``k = 1`` for white,
+correctly scaled residuals). Raising the likelihood to a power below one for a
+misspecified model is the "coarsened" / power posterior of Miller & Dunson 2019
+("Robust Bayesian inference via coarsening", JASA 114(527), 1113-1125); the power is
+re-estimated at every fresh linearization, like the weights of iteratively reweighted
+least squares.
+
+Default prior width (:func:`default_prior_sd`): :data:`DEFAULT_RELATIVE_SD` of the value
+(a start model 20-40 % off lies within one sigma), or for parameters whose natural range
+is not relative (positions, gains, current) the half-width of their default search range
+(:func:`uvsim.fitting.parameters.default_bounds` at margin :data:`DEFAULT_RELATIVE_SD`).
+A parameter that is 0 in the file gets a quarter of its search range. A vehicle file may
+state its own per-coefficient uncertainty (``uncertainty:`` section, docs/calibration.md),
+which takes precedence.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Mapping
+
+import numpy as np
+
+from uvsim.errors import CalibrationError
+from uvsim.fitting.parameters import ParameterSpace, default_bounds
+
+#: Relative prior standard deviation of a coefficient whose uncertainty the vehicle file
+#: does not state (start models in practice are 20-40 % off: issue 21).
+DEFAULT_RELATIVE_SD = 0.5
+
+
+def default_prior_sd(name: str, value: float) -> float:
+    """Prior standard deviation of parameter ``name`` at ``value`` (module docstring)."""
+    try:
+        lo, hi = default_bounds(name, float(value), DEFAULT_RELATIVE_SD)
+    except CalibrationError:  # a coefficient that is 0 in the file has no relative width
+        raise CalibrationError(f"parameter {name} is 0 in the vehicle, so it has no default prior width; state "
+                               f"its uncertainty in the vehicle file (uncertainty: {{{name}: SD}}) or fit "
+                               "without priors (--no-prior)") from None
+    if name.startswith(("thruster_", "force_")) or name.startswith(("x_", "y_", "z_")) or name.startswith("current_"):
+        return 0.5 * (hi - lo)
+    return DEFAULT_RELATIVE_SD * abs(float(value))
+
+
+@dataclass
+class Prior:
+    """Gaussian prior on a space's free parameters, in its scaled variables ``z``:
+    ``mean_z`` (p,), ``sd_z`` (p,) > 0; ``temper``: weight the data by
+    :func:`data_weight` (module docstring)."""
+
+    mean_z: np.ndarray
+    sd_z: np.ndarray
+    temper: bool = True
+
+    def residual(self, z: np.ndarray) -> np.ndarray:
+        return (np.asarray(z, float) - self.mean_z) / self.sd_z
+
+
+def make_prior(space: ParameterSpace, means: Mapping[str, float], sds: Mapping[str, float] | None = None, *,
+               temper: bool = True) -> Prior:
+    """The prior of ``space``'s free parameters: mean ``means[name]`` (the vehicle file's
+    value), standard deviation ``sds[name]`` or :func:`default_prior_sd` (physical units;
+    for a mean of 0, which has no relative width, a quarter of the parameter's search range)."""
+    sds = dict(sds or {})
+    mu, sd = [], []
+    for fp in space.free:
+        if fp.name not in means:
+            raise CalibrationError(f"no prior mean for parameter {fp.name}")
+        m = float(means[fp.name])
+        if fp.name in sds:
+            s = float(sds[fp.name])
+        elif m == 0.0:  # no relative width: a quarter of the search range the caller gave
+            s = 0.25 * (fp.upper - fp.lower)
+        else:
+            s = default_prior_sd(fp.name, m)
+        if not (np.isfinite(s) and s > 0):
+            raise CalibrationError(f"prior standard deviation of {fp.name}: {s!r}; expected a positive number")
+        mu.append(m / fp.scale)
+        sd.append(s / fp.scale)
+    return Prior(np.array(mu, float), np.array(sd, float), temper)
+
+
+def data_weight(S: np.ndarray, meat: np.ndarray) -> float:
+    """``min(1, p / tr(S^-1 M))`` (module docstring): ``S`` the data's reduced information
+    (p, p), ``meat`` the sum of window score outer products (p, p)."""
+    p = S.shape[0]
+    if p == 0:
+        return 1.0
+    k = float(np.trace(np.linalg.pinv(S) @ meat)) / p
+    return 1.0 if not np.isfinite(k) or k <= 1.0 else 1.0 / k

@@ -1,0 +1,90 @@
+"""The starting model as a prior (uvsim.fitting.priors): an unexcited coefficient stays at its
+prior with the prior's width, an excited one moves as far as the data say, the data weight
+falls under structural mismatch, and the vehicle file's uncertainty sets the width."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import uvsim
+from uvsim.errors import CalibrationError
+from uvsim.fitting import fit, make_space
+from uvsim.fitting.priors import data_weight, default_prior_sd, make_prior
+from uvsim.synthetic import generate_runs
+
+NAMES = ["X_uu", "X_u", "N_rr", "K_pp"]
+
+
+@pytest.fixture(scope="module")
+def surge_only():
+    """Surge runs only: N_rr and K_pp are not excited; truth X_uu, X_u 30 % off the file."""
+    v = uvsim.load_vehicle("bluerov2_heavy")
+    P = v.parameters()
+    truth = {"X_uu": P["X_uu"] * 1.3, "X_u": P["X_u"] * 0.7}
+    runs, _ = generate_runs("bluerov2_heavy", dofs=("surge",), runs_per_dof=3, validation_per_dof=0, seed=2,
+                            overrides=truth)
+    return v, P, truth, runs
+
+
+def test_an_unexcited_coefficient_stays_at_its_prior_and_an_excited_one_follows_the_data(surge_only):
+    v, P, truth, runs = surge_only
+    space = make_space(P, NAMES)
+    plain = fit(v, runs, space)
+    # without the prior the unexcited coefficients run to a search bound (what issue 21 reports)
+    assert {"N_rr", "K_pp"} & set(plain.at_bounds)
+    res = fit(v, runs, space, prior_mean={k: P[k] for k in NAMES})
+    assert res.at_bounds == []
+    for k in ("N_rr", "K_pp"):
+        assert abs(res.values[k] - P[k]) < 0.02 * res.prior_sd[k], k
+        assert res.std[k] == pytest.approx(res.prior_sd[k], rel=0.05), k   # the prior alone
+    # X_uu: determined by the data (posterior sd far below the prior's) and recovered
+    assert res.std["X_uu"] < 0.05 * res.prior_sd["X_uu"]
+    assert res.values["X_uu"] == pytest.approx(truth["X_uu"], rel=0.01)
+    assert res.prior_sd["X_uu"] == pytest.approx(0.5 * abs(P["X_uu"]))
+    assert 0.0 < res.data_weight <= 1.0
+
+
+def test_the_vehicle_files_uncertainty_sets_the_prior_width(surge_only):
+    v, P, _, runs = surge_only
+    space = make_space(P, NAMES)
+    res = fit(v, runs, space, prior_mean={k: P[k] for k in NAMES}, prior_sd={"N_rr": 0.01})
+    assert res.prior_sd["N_rr"] == pytest.approx(0.01)
+    assert res.std["N_rr"] == pytest.approx(0.01, rel=0.05)
+    d = v.to_dict()
+    d["uncertainty"] = {"N_rr": 0.01}
+    assert uvsim.vehicle.vehicle_from_dict(d).uncertainty == {"N_rr": 0.01}
+
+
+def test_prior_widths_and_their_errors():
+    assert default_prior_sd("X_uu", -35.0) == pytest.approx(17.5)
+    assert default_prior_sd("z_b", -0.024) == pytest.approx(0.05)       # positions: not relative
+    assert default_prior_sd("thruster_gain_1", 1.0) == pytest.approx(0.725)
+    with pytest.raises(CalibrationError, match="X_u is 0"):
+        default_prior_sd("X_u", 0.0)
+    P = uvsim.load_vehicle("bluerov2_heavy").parameters()
+    space = make_space(P, ["X_uu"])
+    with pytest.raises(CalibrationError, match="prior standard deviation of X_uu"):
+        make_prior(space, P, {"X_uu": -1.0})
+    with pytest.raises(CalibrationError, match="no prior mean"):
+        make_prior(space, {})
+
+
+def test_data_weight_is_one_for_white_residuals_and_small_for_correlated_ones():
+    rng = np.random.default_rng(0)
+    W, n, p = 400, 50, 3
+    # smooth sensitivities within a window (a slow motion sampled fast), as trajectories have
+    J = rng.normal(size=(W, 1, p)) + 0.1 * rng.normal(size=(W, n, p))
+    S = sum(j.T @ j for j in J)
+    white = [j.T @ rng.normal(size=n) for j in J]                  # independent unit residuals
+    assert data_weight(S, sum(np.outer(s, s) for s in white)) == pytest.approx(1.0, abs=0.15)
+    corr = [j.T @ np.full(n, rng.normal()) for j in J]             # one shared error per window
+    assert data_weight(S, sum(np.outer(s, s) for s in corr)) < 0.05  # ~1/n: n samples, one error
+
+
+def test_a_structural_mismatch_lowers_the_data_weight(surge_only):
+    """Truth with a 8 cm/s current the fitted model lacks: the data count for much less."""
+    v, P, truth, _ = surge_only
+    runs, _ = generate_runs("bluerov2_heavy", dofs=("surge",), runs_per_dof=3, validation_per_dof=0, seed=2,
+                            overrides=truth, effects=[{"type": "current", "n": 0.08, "e": 0.03}])
+    res = fit(v, runs, make_space(P, NAMES), prior_mean={k: P[k] for k in NAMES})
+    assert res.data_weight < 0.1
