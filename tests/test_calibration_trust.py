@@ -32,3 +32,17 @@ def test_the_iteration_limit_is_not_reported_as_success(heave, tmp_path, capsys)
     rep = json.loads((tmp_path / "r.json").read_text())
     assert rep["refinement"]["stages"][-1]["message"].startswith("maximum number of iterations")
     assert not rep["status"]["ok"]
+
+
+def test_without_validation_runs_the_check_compares_on_the_training_runs(tmp_path, capsys):
+    """No validation run: the fitted model is still compared with its start, on the training
+    runs (report never_worse.split 'train'), never skipped."""
+    d = tmp_path / "d"
+    generate_dataset("bluerov2_heavy", d, dofs=["heave"], seed=2, **{**SMALL, "validation_per_dof": 0})
+    argv = ["calibrate", "--data", str(d), "--vehicle", "bluerov2_heavy_initial", "--population", "6",
+            "--generations", "2", "--seed", "3", "--out", str(tmp_path / "f.yaml"), "--json", str(tmp_path / "r.json"),
+            "--keep-worse"]
+    assert main(argv) in (0, 2)
+    nw = json.loads((tmp_path / "r.json").read_text())["never_worse"]
+    assert nw is not None and nw["split"] == "train" and nw["channels"]
+    assert "training runs" in nw["method"] or nw["method"].startswith("open-loop train")

@@ -88,3 +88,40 @@ def test_a_structural_mismatch_lowers_the_data_weight(surge_only):
                             overrides=truth, effects=[{"type": "current", "n": 0.08, "e": 0.03}])
     res = fit(v, runs, make_space(P, NAMES), prior_mean={k: P[k] for k in NAMES})
     assert res.data_weight < 0.1
+
+
+def test_the_imu_spec_sets_the_gyro_bias_prior_and_a_large_bias_is_flagged():
+    from types import SimpleNamespace
+
+    from uvsim.calibration.report import gyro_bias_flags
+    from uvsim.errors import VehicleError
+    from uvsim.fitting.objective import GYRO_BIAS_SIGMA
+    from uvsim.vehicle import vehicle_from_dict
+
+    d = uvsim.load_vehicle("bluerov2_heavy").to_dict()
+    d["sensors"] = {"imu": {"gyro_bias_sd": 0.005}}
+    v = vehicle_from_dict(d)
+    assert v.gyro_bias_sd == 0.005 and vehicle_from_dict(v.to_dict()).gyro_bias_sd == 0.005
+    for bad, msg in (({"imu": {"gyro_bias_sd": 2.0}}, "expected rad/s"),
+                     ({"pressure": {"position": [0, 0, 0], "gyro_bias_sd": 0.01}}, "only the imu"),
+                     ({"imu": {"gyro_bias_sd": -0.01}}, "positive")):
+        d["sensors"] = bad
+        with pytest.raises(VehicleError, match=msg):
+            vehicle_from_dict(d, source="f.yaml")
+    res = SimpleNamespace(gyro_bias={"run_1": [0.001, -0.004, 0.081]})
+    flags = gyro_bias_flags(res, GYRO_BIAS_SIGMA)
+    assert len(flags) == 1 and "run run_1: gyro bias in r +0.0810" in flags[0]
+    assert gyro_bias_flags(res, 0.05) == []
+
+
+def test_the_gyro_bias_prior_reaches_the_fit(surge_only):
+    """The vehicle's IMU spec is the windowed problem's gyro-bias prior (default 0.02 rad/s)."""
+    from uvsim.fitting.objective import WindowedProblem
+
+    v, P, _, runs = surge_only
+    space = make_space(P, ["X_uu"])
+    meas = [uvsim.measurements.measurements_for(r, v) for r in runs]
+    tight = v.with_parameters({})
+    tight.gyro_bias_sd = 1e-4
+    assert WindowedProblem(tight, runs, meas, space, 2.0).gyro_bias_sd == 1e-4
+    assert WindowedProblem(v, runs, meas, space, 2.0).gyro_bias_sd == 0.02

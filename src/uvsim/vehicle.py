@@ -57,7 +57,7 @@ VEHICLE_KEYS = ("name", "description", "sources", "meta", "environment", "rigid_
                 "damping", "thrusters", "effects", "sensors", "uncertainty")
 ENVIRONMENT_KEYS = ("g", "rho", "current_ned")
 RIGID_BODY_KEYS = ("mass", "buoyancy", "r_g", "r_b", "inertia")
-SENSOR_KEYS = ("position", "source")
+SENSOR_KEYS = ("position", "source", "gyro_bias_sd")
 
 
 def inertia_tensor(Ixx, Iyy, Izz, Ixy=0.0, Ixz=0.0, Iyz=0.0) -> np.ndarray:
@@ -94,6 +94,9 @@ class Vehicle:
     #: parameter name -> 1-sigma uncertainty of the file's value, in the parameter's units
     #: (``uncertainty:`` section): the prior width of a calibration (:mod:`uvsim.fitting.priors`)
     uncertainty: dict = field(default_factory=dict)
+    #: the IMU gyro's in-run bias, 1-sigma per axis, rad/s (``sensors.imu.gyro_bias_sd``): the prior
+    #: of the gyro bias a fit estimates per run; None: :data:`uvsim.fitting.objective.GYRO_BIAS_SIGMA`
+    gyro_bias_sd: float | None = None
     description: str = ""
     source: str = "<memory>"
     raw: dict = field(default_factory=dict, repr=False)
@@ -214,6 +217,8 @@ class Vehicle:
         }
         if self.sensors:
             d["sensors"] = {k: {"position": [float(x) for x in p]} for k, p in self.sensors.items()}
+        if self.gyro_bias_sd is not None:
+            d.setdefault("sensors", {}).setdefault("imu", {})["gyro_bias_sd"] = float(self.gyro_bias_sd)
         if self.uncertainty:
             d["uncertainty"] = {k: float(x) for k, x in self.uncertainty.items()}
         if self.raw.get("thrusters") is not None:
@@ -376,6 +381,10 @@ def _sensors(spec, f: str) -> dict:
             raise VehicleError(f"{f}: sensors.{name}: expected a mapping {{position: [x, y, z]}} "
                                "(m, body frame; optional source)")
         check_keys(val, SENSOR_KEYS, f"{f}: sensors.{name}", error=VehicleError)
+        if "gyro_bias_sd" in val and name != "imu":
+            raise VehicleError(f"{f}: sensors.{name}.gyro_bias_sd: only the imu has a gyro")
+        if name == "imu" and "position" not in val and "gyro_bias_sd" in val:
+            continue  # the gyro's bias spec alone (the accelerometer's position not given)
         if "position" not in val:
             raise VehicleError(f"{f}: sensors.{name}.position: missing (expected [x, y, z], m, body frame)")
         pos = _vec3(val, "position", f"{f}: sensors.{name}")
@@ -478,10 +487,23 @@ def vehicle_from_dict(d: dict, *, source: str = "<dict>", actuators: Actuators |
         raw=d,
     )
     v.uncertainty = _uncertainty(d.get("uncertainty"), f, v.parameters())
+    v.gyro_bias_sd = _gyro_bias_sd(d.get("sensors"), f)
     M = v.M
     ev = np.linalg.eigvalsh(0.5 * (M + M.T))
     if ev.min() <= 0:
         raise VehicleError(f"{f}: M = M_RB + M_A is not positive definite (eigenvalues {np.round(ev, 6)})")
+    return v
+
+
+def _gyro_bias_sd(spec, f: str) -> float | None:
+    """``sensors.imu.gyro_bias_sd`` (rad/s, > 0 and below 1 rad/s) or None."""
+    imu = (spec or {}).get("imu") if isinstance(spec, dict) else None
+    if not isinstance(imu, dict) or imu.get("gyro_bias_sd") is None:
+        return None
+    v = _num(imu, "gyro_bias_sd", f"{f}: sensors.imu", positive=True)
+    if v >= 1.0:
+        raise VehicleError(f"{f}: sensors.imu.gyro_bias_sd = {v:g}: expected rad/s, a MEMS gyro's in-run bias "
+                           "(0.001-0.05 rad/s)")
     return v
 
 

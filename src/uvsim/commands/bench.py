@@ -1,5 +1,8 @@
 """``uvsim bench [--json] [--quick] [--only AREA,...]``: speed figures (docs/performance.md).
 
+``uvsim bench calibrate-structural --scenarios N [--compare-no-prior]``: calibration on data that
+differ from the model in structure (:mod:`uvsim.benchmarks.calibration_structural`, docs/calibration.md).
+
 ``uvsim bench diagnose --scenarios N --seed S [--two-effects M] [--results FILE]``: the
 diagnosis on randomized scenarios from the independent truth model
 (:mod:`uvsim.benchmarks.scenarios`, docs/diagnose.md)."""
@@ -12,9 +15,13 @@ import platform
 
 def register(sub) -> None:
     p = sub.add_parser("bench", help="measure simulator / calibration speed; 'bench diagnose': scenario benchmark")
-    p.add_argument("suite", nargs="?", choices=["diagnose", "diagnose-structural"], default=None,
+    p.add_argument("suite", nargs="?", choices=["diagnose", "diagnose-structural", "calibrate-structural"],
+                   default=None,
                    help="'diagnose': diagnose randomized scenarios; 'diagnose-structural': scenarios whose data "
-                        "differ from the model in structure, N per class (default: the speed figures)")
+                        "differ from the model in structure, N per class; 'calibrate-structural': calibrate N such "
+                        "datasets and compare with the start model (default: the speed figures)")
+    p.add_argument("--compare-no-prior", action="store_true",
+                   help="(calibrate-structural) calibrate each dataset also without the priors (--no-prior)")
     p.add_argument("--scenarios", type=int, default=20, help="(diagnose) single-effect or clean scenarios")
     p.add_argument("--two-effects", type=int, default=0, help="(diagnose) two-effect scenarios")
     p.add_argument("--seed", type=int, default=0, help="(diagnose) first scenario seed")
@@ -36,6 +43,8 @@ def _run(args) -> int:
         return _diagnose(args)
     if args.suite == "diagnose-structural":
         return _structural(args)
+    if args.suite == "calibrate-structural":
+        return _calibrate_structural(args)
     mods = available()
     if args.only:
         want = [a.strip() for a in args.only.split(",") if a.strip()]
@@ -120,4 +129,26 @@ def _structural(args) -> int:
     print(f"largest open-loop worsening of a logged group by an accepted candidate: "
           + ("none accepted" if w is None else f"{100 * w:+.1f} %")
           + f"; accepted candidates worsening a group by > 10 %: {s['accepted_candidates_worsening_a_group_over_10pct']}")
+    return 0
+
+
+def _calibrate_structural(args) -> int:
+    from uvsim.benchmarks.calibration_structural import WORSE_POINTS, run_benchmark
+    from uvsim.commands.checks import check_outputs
+
+    check_outputs({"--results": args.results})
+    out = run_benchmark(args.scenarios, args.seed, compare_no_prior=args.compare_no_prior, workers=args.workers,
+                        results=args.results, progress=None if args.json else (lambda m: print(m, flush=True)))
+    if args.json:
+        print(json.dumps(out, indent=2, default=float))
+        return 0
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}")
+    for mode, d in out["summary"].items():
+        print(f"{mode}: {d['n']} fits ({d['errors']} refused before a result); no worse than the start in every "
+              f"channel (> {WORSE_POINTS:g} Fit % points) {d['no_worse']}/{d['n']} ({100 * d['no_worse_rate']:.0f} %); "
+              f"worse {d['worse']}, of which reported not ok {d['worse_reported_not_ok']}; reported ok "
+              f"{d['ok_reported']}; fits with a parameter on a bound {d['fits_with_a_bound_hit']}; seconds median "
+              f"{d['seconds_median']:.1f}, max {d['seconds_max']:.1f}")
+        print("  median validation Fit % gain per channel (points): "
+              + ", ".join(f"{c} {g:+.1f}" for c, g in d["median_gain_points"].items()))
     return 0

@@ -270,6 +270,8 @@ def print_summary(cal, out=None) -> None:
         say("gyro bias per run (rad/s, p q r):")
         for name, b in rep["gyro_bias"].items():
             say(f"  {name:28s} " + " ".join(f"{x:+.5f}" for x in b))
+        for flag in rep.get("gyro_bias_flags", []):
+            say(f"  FLAG {flag}")
     lag = rep["attitude_lag"]
     if lag["tau"]:
         say(f"attitude filter lag {lag['tau']:.3f} s ({lag['source']})")

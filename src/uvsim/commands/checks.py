@@ -126,7 +126,8 @@ def calibration_problems(rep: Mapping, ds) -> list[str]:
                            "validation RMSE")
     nw = rep.get("never_worse")
     if nw is not None and not nw["ok"]:
-        probs.append(nw["why"] + " (per channel, open loop, on the validation runs); keep it anyway with --keep-worse")
+        probs.append(nw["why"] + f" (per channel, open loop, on the {nw.get('split', 'validation')} runs); keep it "
+                     "anyway with --keep-worse")
     stages = (rep.get("refinement") or {}).get("stages") or []
     if stages and str(stages[-1].get("message", "")).startswith("maximum number of iterations"):
         probs.append(f"unfinished: the joint fit's last stage stopped at the iteration limit "

@@ -45,8 +45,10 @@ from uvsim.simulate import INITIAL_WINDOW_S, _rk4_loop, initial_state_from_run
 #: between a window's end state and the next node, of the order of the state error a
 #: window accumulates from noise in its node; small against the motion.
 DEFECT_SIGMA = np.array([0.005, 0.005, 0.005, 0.005, 0.005, 0.005, 0.005, 0.005, 0.005, 0.01, 0.01, 0.01])
-#: Prior standard deviation of a run's gyro bias, rad/s (MEMS gyros: a few 0.01 rad/s).
-GYRO_BIAS_SIGMA = 0.05
+#: Prior standard deviation of a run's gyro bias, rad/s, when the vehicle file states none
+#: (``sensors.imu.gyro_bias_sd``): the in-run bias left after the autopilot's gyro calibration at
+#: boot; the ArduSub EKF of a real BlueROV2 estimated 0.001-0.017 rad/s (issue 21's logs).
+GYRO_BIAS_SIGMA = 0.02
 #: Residual given to a diverged simulation (in noise sigmas).
 FILL = 30.0
 #: Largest number of simulated rows per batched call (memory; throughput is flat above ~500).
@@ -216,6 +218,8 @@ class WindowedProblem:
         self.nodes = [NodeModel(r, m) for r, m in zip(self.runs, self.meas)]
         self.free = np.array([nm.free for nm in self.nodes])             # (R, 12)
         self.bias_runs = np.array([gyro_bias and m.has_gyro for m in self.meas])
+        #: prior sd of a run's gyro bias, rad/s (the vehicle's IMU spec, else GYRO_BIAS_SIGMA)
+        self.gyro_bias_sd = float(getattr(vehicle, "gyro_bias_sd", None) or GYRO_BIAS_SIGMA)
         self.accel = any(m.needs_acceleration for m in self.meas)
         self.initial_velocity = initial_velocity
         z_ref = space.z0 if z_ref is None else np.asarray(z_ref, float)
@@ -389,7 +393,7 @@ class WindowedProblem:
         c = self.free[r]
         pr = (D[:, w0:w0 + nw] / self.prior_sigma[w0:w0 + nw][None])[..., c].reshape(D.shape[0], -1)
         if self.bias_runs[r]:
-            pr = np.concatenate([pr, np.atleast_2d(bias) / GYRO_BIAS_SIGMA], 1)
+            pr = np.concatenate([pr, np.atleast_2d(bias) / self.gyro_bias_sd], 1)
         return pr
 
     def assemble(self, nus: list, P: int = 1):

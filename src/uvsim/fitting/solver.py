@@ -45,7 +45,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from uvsim.fitting.priors import data_weight
-from uvsim.fitting.objective import DEFECT_SIGMA, GYRO_BIAS_SIGMA, WindowedProblem, apply_tangent, tangent_difference
+from uvsim.fitting.objective import DEFECT_SIGMA, WindowedProblem, apply_tangent, tangent_difference
 
 #: Forward-difference steps: scaled parameters (relative) and node components (m, rad, m/s, rad/s).
 FD_STEP_Z = 1e-5
@@ -162,7 +162,7 @@ def linearize(prob: WindowedProblem, z: np.ndarray, nus: list, *, jacobian: bool
                 with np.errstate(all="ignore"):
                     m1 = prob.meas[r].normalized(pred, fill=30.0)[0]
                 Jn[:m_meas, nw * k + j] = (m1 - meas[0]) / FD_STEP_BIAS
-                Jn[base + nw * k + j, nw * k + j] = 1.0 / GYRO_BIAS_SIGMA
+                Jn[base + nw * k + j, nw * k + j] = 1.0 / prob.gyro_bias_sd
         cluster = np.concatenate([w_local, np.repeat(np.arange(1, nw), k), np.repeat(np.arange(nw), k),
                                   np.zeros(3 if prob.bias_runs[r] else 0, int)])
         blocks.append(_normal_pieces(res0, Jz, Jn, cluster, nw, scores))
