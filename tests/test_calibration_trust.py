@@ -46,3 +46,27 @@ def test_without_validation_runs_the_check_compares_on_the_training_runs(tmp_pat
     nw = json.loads((tmp_path / "r.json").read_text())["never_worse"]
     assert nw is not None and nw["split"] == "train" and nw["channels"]
     assert "training runs" in nw["method"] or nw["method"].startswith("open-loop train")
+
+
+def test_start_alignment_removes_a_start_offset_and_keeps_a_drift():
+    """The never-worse comparison shifts predicted depth by its mean residual over the first
+    3 s (the shared, noisy start), never by anything later: a constant offset disappears, a
+    drift that starts after the window stays."""
+    import numpy as np
+
+    from uvsim.fitting.guard import start_aligned
+    from uvsim.logs import Run
+    from uvsim.measurements import measurements_for
+    import pandas as pd
+
+    t = np.arange(0.0, 20.0, 0.1)
+    depth = 1.0 + 0.1 * np.sin(t)
+    run = Run("r", None, pd.DataFrame({"t": t, "X": 0.0, "Y": 0.0, "Z": 0.0, "K": 0.0, "M": 0.0, "N": 0.0,
+                                       "depth": depth}))
+    m = measurements_for(run, None, noise={"depth": 0.01})
+    offset = {"pred": {"depth": (depth + 0.03)[:, None]}}
+    a = start_aligned(m, offset)["pred"]["depth"][:, 0]
+    np.testing.assert_allclose(a, depth, atol=1e-12)
+    drift = {"pred": {"depth": (depth + 0.02 * np.clip(t - 5.0, 0.0, None))[:, None]}}
+    b = start_aligned(m, drift)["pred"]["depth"][:, 0]
+    assert np.max(np.abs(b - depth)) == pytest.approx(0.02 * (t[-1] - 5.0), rel=1e-9)

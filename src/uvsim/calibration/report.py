@@ -81,25 +81,27 @@ def never_worse(runs, fitted: dict, initial: dict, meas: dict) -> dict | None:
     """The fitted model against the model the user started from, on the validation runs'
     open-loop simulations, per logged channel the fit used (:func:`uvsim.fitting.guard.guard`:
     a channel is worse when its error grows beyond the block bootstrap's noise, or by more
-    than 10 %).  Without validation runs the training runs are compared instead (a weaker
+    than 10 %), position and depth aligned at the start (:func:`start_aligned`).  Without
+    validation runs the training runs are compared instead (a weaker
     check: the fit has seen them; ``split`` says which).  None without runs.  ``ok`` False
     means the calibration is not a success (issue 21: a fit that trades unexcited
     coefficients for residual can validate worse than its start, and the report must say so)."""
-    from uvsim.fitting.guard import block_costs, guard
+    from uvsim.fitting.guard import ALIGN_WINDOW_S, block_costs, guard, start_aligned
 
     split = "validation" if any(r.split == "validation" for r in runs) else "train"
     val = [r for r in runs if r.split == split]
     if not val:
         return None
     ms = [meas[r.name] for r in val]
-    before = block_costs(ms, [initial[r.name] for r in val], by="channel")
-    after = block_costs(ms, [fitted[r.name] for r in val], by="channel")
+    before = block_costs(ms, [start_aligned(m, initial[r.name]) for m, r in zip(ms, val)], by="channel")
+    after = block_costs(ms, [start_aligned(m, fitted[r.name]) for m, r in zip(ms, val)], by="channel")
     g = guard(before, after)
     what = "validates" if split == "validation" else "simulates its own training runs (no validation runs)"
     why = g["why"].replace("makes the open-loop validation worse", f"the fitted model {what} worse than the "
                                                                      "starting model")
     return {"ok": g["ok"], "worse": g["worse"], "channels": g["groups"], "why": why, "split": split,
-            "method": f"open-loop {split} runs, per channel, block bootstrap over 3 s blocks (uvsim.fitting.guard)"}
+            "method": f"open-loop {split} runs, per channel, position and depth aligned over the first "
+                      f"{ALIGN_WINDOW_S:g} s, block bootstrap over 3 s blocks (uvsim.fitting.guard)"}
 
 
 def pooled(evals: dict, runs, split: str) -> tuple[dict, dict]:

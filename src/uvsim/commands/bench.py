@@ -149,6 +149,10 @@ def _calibrate_structural(args) -> int:
               f"worse {d['worse']}, of which reported not ok {d['worse_reported_not_ok']}; reported ok "
               f"{d['ok_reported']}; fits with a parameter on a bound {d['fits_with_a_bound_hit']}; seconds median "
               f"{d['seconds_median']:.1f}, max {d['seconds_max']:.1f}")
+        print(f"  against the generator's noise-free truth: closer or as close in every state channel "
+              f"{d['closer_to_truth_everywhere']}/{d['n']}; farther in some channel {d['farther_from_truth']}, of which "
+              f"reported not ok {d['farther_reported_not_ok']}; refused though closer everywhere "
+              f"{d['refused_though_closer_to_truth']}")
         print("  median validation Fit % gain per channel (points): "
               + ", ".join(f"{c} {g:+.1f}" for c, g in d["median_gain_points"].items()))
     return 0
