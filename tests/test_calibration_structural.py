@@ -67,3 +67,20 @@ def test_one_seed_end_to_end():
     assert rec["error"] is None and rec["gain"] and rec["curve"] == "t200_14v_measured"
     # whatever the fit did, a fit worse than its start is not reported ok
     assert not rec["worse"] or not rec["check_ok"]
+
+
+def test_benchmark_records_resume_and_bad_lines_are_named(tmp_path):
+    from uvsim.benchmarks.records import append_record, load_records
+    from uvsim.errors import UvsimError
+
+    p = tmp_path / "r.jsonl"
+    assert load_records(p, lambda r: r["seed"]) == {}
+    append_record(p, {"seed": 1, "x": 2.0})
+    append_record(p, {"seed": 2, "x": 3.0})
+    said = []
+    assert load_records(p, lambda r: r["seed"], said.append) == {1: {"seed": 1, "x": 2.0}, 2: {"seed": 2, "x": 3.0}}
+    assert said == [f"resuming from {p}: 2 case(s) already done"]
+    with p.open("a") as fh:
+        fh.write("{not json\n")
+    with pytest.raises(UvsimError, match=r"r.jsonl, line 3: not a benchmark record"):
+        load_records(p, lambda r: r["seed"])

@@ -44,13 +44,13 @@ interrupted run resumes.
 """
 from __future__ import annotations
 
-import json
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
+from uvsim.benchmarks.records import append_record, load_records
 from uvsim.errors import UvsimError
 
 #: A channel whose validation Fit % drops by more than this many points: the fit is worse.
@@ -188,17 +188,7 @@ def run_benchmark(n: int, seed: int, *, compare_no_prior: bool = False, workers:
         raise UvsimError(f"--scenarios {n}: need at least one scenario")
     say = progress or (lambda m: None)
     path = Path(results) if results else None
-    done: dict = {}
-    if path is not None and path.exists():
-        for line_no, line in enumerate(path.read_text().splitlines(), 1):
-            if line.strip():
-                try:
-                    rec = json.loads(line)
-                    done[(rec["seed"], rec["prior"])] = rec
-                except (json.JSONDecodeError, KeyError) as exc:
-                    raise UvsimError(f"{path}, line {line_no}: not a benchmark record ({exc}); delete the line or "
-                                     "the file to start again") from None
-        say(f"resuming from {path}: {len(done)} calibration(s) already done")
+    done = load_records(path, lambda rec: (rec["seed"], rec["prior"]), say, "calibration")
     todo = [(s, p) for s in range(seed, seed + n) for p in ((True, False) if compare_no_prior else (True,))]
     records = []
     for i, (s, p) in enumerate(todo, 1):
@@ -207,9 +197,7 @@ def run_benchmark(n: int, seed: int, *, compare_no_prior: bool = False, workers:
             continue
         rec = run_one(s, prior=p, workers=workers)
         records.append(rec)
-        if path is not None:
-            with path.open("a") as fh:
-                fh.write(json.dumps(rec) + "\n")
+        append_record(path, rec)
         say(f"[{i}/{len(todo)}] seed {s} {'prior' if p else 'no prior'}: effects {rec['effects'] or 'none'}, "
             f"curve {rec['curve'] or '16 V'}, off {rec['perturbation']:.0%}: "
             + (f"ERROR {rec['error']}" if rec["error"] else

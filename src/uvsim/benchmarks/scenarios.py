@@ -18,7 +18,6 @@ validation RMSE at least halved, and seconds per dataset.
 """
 from __future__ import annotations
 
-import json
 import tempfile
 import time
 from collections import Counter
@@ -26,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from uvsim.benchmarks.records import append_record, load_records
 from uvsim.errors import UvsimError
 
 #: The base coefficients the benchmark re-tunes in every model (added mass and damping of
@@ -157,20 +157,8 @@ def run_benchmark(n: int, seed: int, *, two_effects: int = 0, workers: int = 1, 
     if n < 0 or two_effects < 0 or (n + two_effects) == 0:
         raise UvsimError(f"--scenarios {n} / --two-effects {two_effects}: need at least one scenario")
     say = progress or (lambda m: None)
-    done: dict = {}
     path = Path(results) if results else None
-    if path is not None and path.exists():
-        for line_no, line in enumerate(path.read_text().splitlines(), 1):
-            if not line.strip():
-                continue
-            try:
-                rec = json.loads(line)
-                done[(rec["seed"], rec["n_effects"])] = rec
-            except (json.JSONDecodeError, KeyError) as exc:
-                raise UvsimError(f"{path}, line {line_no}: not a benchmark record ({exc}); delete the line or the "
-                                 "file to start again") from None
-        if done:
-            say(f"resuming from {path}: {len(done)} scenario(s) already done")
+    done = load_records(path, lambda rec: (rec["seed"], rec["n_effects"]), say, "scenario")
     records = []
     todo = plan(n, seed, two_effects)
     for i, (s, k) in enumerate(todo, 1):
@@ -179,9 +167,7 @@ def run_benchmark(n: int, seed: int, *, two_effects: int = 0, workers: int = 1, 
             continue
         rec = run_scenario(s, k, workers=workers)
         records.append(rec)
-        if path is not None:
-            with path.open("a") as fh:
-                fh.write(json.dumps(rec) + "\n")
+        append_record(path, rec)
         say(f"[{i}/{len(todo)}] seed {s}: true {_label(rec['true'])}, named {_label(rec['named'])} "
             f"({'ok' if rec['correct'] else 'WRONG'}), {rec['seconds']:.1f} s")
     return {"summary": summarize(records), "records": records}

@@ -24,7 +24,6 @@ Records go to a JSON-lines file as they finish, so an interrupted run resumes.
 """
 from __future__ import annotations
 
-import json
 import tempfile
 import time
 from pathlib import Path
@@ -32,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from uvsim.benchmarks.scenarios import BASE_RETUNE, TRUTH_TO_CATALOGUE, worst_group_change
+from uvsim.benchmarks.records import append_record, load_records
 from uvsim.errors import UvsimError
 
 CLASSES = ("base_error", "curve_mismatch", "out_of_catalogue", "imu_depth")
@@ -123,17 +123,7 @@ def run_benchmark(n: int, seed: int, *, classes=CLASSES, workers: int = 1, resul
         raise UvsimError(f"--only {bad}: unknown class(es); expected {list(CLASSES)}")
     say = progress or (lambda m: None)
     path = Path(results) if results else None
-    done: dict = {}
-    if path is not None and path.exists():
-        for line_no, line in enumerate(path.read_text().splitlines(), 1):
-            if line.strip():
-                try:
-                    rec = json.loads(line)
-                    done[(rec["class"], rec["seed"])] = rec
-                except (json.JSONDecodeError, KeyError) as exc:
-                    raise UvsimError(f"{path}, line {line_no}: not a benchmark record ({exc}); delete the line or "
-                                     "the file to start again") from None
-        say(f"resuming from {path}: {len(done)} scenario(s) already done")
+    done = load_records(path, lambda rec: (rec["class"], rec["seed"]), say, "scenario")
     todo = [(c, seed + OFFSET[c] + i) for c in classes for i in range(n)]
     records = []
     for i, (c, s) in enumerate(todo, 1):
@@ -142,9 +132,7 @@ def run_benchmark(n: int, seed: int, *, classes=CLASSES, workers: int = 1, resul
             continue
         rec = run_one(c, s, workers=workers)
         records.append(rec)
-        if path is not None:
-            with path.open("a") as fh:
-                fh.write(json.dumps(rec) + "\n")
+        append_record(path, rec)
         say(f"[{i}/{len(todo)}] {c} seed {s}: truth {rec['truth'] or 'none'}, named {rec['named'] or 'none'}, "
             f"verdict {rec['verdict']} ({'ok' if rec['correct'] else 'WRONG'}), {rec['seconds']:.1f} s")
     return {"summary": summarize(records), "records": records}
