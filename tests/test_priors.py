@@ -125,3 +125,22 @@ def test_the_gyro_bias_prior_reaches_the_fit(surge_only):
     tight.gyro_bias_sd = 1e-4
     assert WindowedProblem(tight, runs, meas, space, 2.0).gyro_bias_sd == 1e-4
     assert WindowedProblem(v, runs, meas, space, 2.0).gyro_bias_sd == 0.02
+
+
+def test_a_fit_with_priors_resumed_from_any_step_gives_the_same_result(surge_only):
+    """The data weight is part of the saved state: resuming after an accepted step of a MAP fit
+    ends where the uninterrupted fit ends."""
+    from uvsim.fitting.objective import WindowedProblem
+    from uvsim.fitting.solver import solve
+
+    v, P, _, runs = surge_only
+    space = make_space(P, NAMES)
+    meas = [uvsim.measurements.measurements_for(r, v) for r in runs]
+    prob = WindowedProblem(v, runs, meas, space, 2.0)
+    prior = make_prior(space, P)
+    states = []
+    full = solve(prob, space.z0, max_iter=30, prior=prior, on_step=states.append)
+    assert len(states) >= 2 and all("data_weight" in s for s in states)
+    again = solve(prob, space.z0, max_iter=30, prior=prior, state=states[1])
+    np.testing.assert_array_equal(again["z"], full["z"])
+    assert again["data_weight"] == full["data_weight"]

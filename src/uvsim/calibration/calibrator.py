@@ -125,7 +125,7 @@ class Calibrator:
         amplitude) ** -low_speed_exponent; 0 (default): the manifest weights.
     refine : run the joint stage (default True).
     horizons : window lengths of the joint stage's continuation, s (None: whole runs).
-    max_iter : Levenberg-Marquardt iterations per continuation stage (40). A last stage that
+    max_iter : Levenberg-Marquardt iterations per continuation stage (80). A last stage that
         stops there is not converged: the result check reports it as unfinished.
     gyro_bias : fit a constant gyro bias per run (joint stage; the GA removes each run's
         median rate residual).
@@ -170,7 +170,7 @@ class Calibrator:
                  margin: float = 0.5, bounds: Mapping | None = None, free=None, fix=None,
                  signal_weights: Mapping | None = None, noise: Mapping | None = None, ga_channels: str = "own",
                  low_speed_exponent: float = 0.0, refine: bool = True, horizons=DEFAULT_HORIZONS,
-                 max_iter: int = 40, gyro_bias: bool = True, screen: bool = True, attitude_lag="auto",
+                 max_iter: int = 80, gyro_bias: bool = True, screen: bool = True, attitude_lag="auto",
                  initial_velocity: str = "zero", prior: bool = True,
                  workers: int = 1, dask: str | None = None, batch_rows: int = DEFAULT_BATCH_ROWS, checkpoint=None,
                  resume=None, progress: bool = False, effects=None, allow=()):

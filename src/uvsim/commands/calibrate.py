@@ -45,7 +45,7 @@ def register(sub) -> None:
                    help="1-sigma noise level by group or channel (default: estimated from each run)")
     p.add_argument("--horizons", default=None, metavar="H1,H2,...",
                    help="window lengths (s) of the joint fit's continuation, 'whole' for whole runs (default 2)")
-    p.add_argument("--max-iter", type=int, default=40,
+    p.add_argument("--max-iter", type=int, default=80,
                    help="Levenberg-Marquardt iterations per horizon; a last stage that stops there is reported as "
                         "unfinished (exit 2) unless --keep-worse")
     p.add_argument("--no-gyro-bias", action="store_true", help="do not fit a gyro bias per run")

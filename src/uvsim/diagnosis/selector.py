@@ -17,7 +17,7 @@ import numpy as np
 from uvsim.checkpoint import fingerprint
 from uvsim.diagnosis.candidates import Candidate, catalogue, coupled_candidate, coupling_terms, observability
 from uvsim.diagnosis.decision import LEVEL, judge, wald
-from uvsim.fitting.guard import block_costs, guard
+from uvsim.fitting.guard import block_costs, guard, start_aligned
 from uvsim.errors import CalibrationError, UvsimError, VehicleError
 from uvsim.fitting import fit
 from uvsim.fitting.compare import bootstrap_improvement
@@ -121,13 +121,16 @@ class Selector:
 
     def open_loop_blocks(self, vehicle, values: Mapping) -> dict:
         """Free simulations of the validation runs from their logged starts
-        (:func:`uvsim.fitting.evaluate.open_loop`, the report's before/after RMSE), as
+        (:func:`uvsim.fitting.evaluate.open_loop`, the report's before/after RMSE), position
+        and depth aligned over the start (:func:`uvsim.fitting.guard.start_aligned`), as
         noise-normalized errors per signal group and block (:func:`uvsim.fitting.guard.block_costs`);
         ``total`` is inf when a simulation diverges."""
         known = vehicle.parameters()
         ol = open_loop(vehicle, self.val, overrides={k: v for k, v in values.items() if k in known},
                        meas=self.meas_va)
-        return block_costs(self.meas_va, ol)
+        # position and depth aligned over each run's start: the noisy first samples offset every
+        # model's simulation alike and could favour one by luck (uvsim.fitting.guard.start_aligned)
+        return block_costs(self.meas_va, [start_aligned(m, o) for m, o in zip(self.meas_va, ol)])
 
     def open_loop_cost(self, vehicle, values: Mapping) -> float:
         """Noise-normalized sum of squares of the free simulations of the validation runs

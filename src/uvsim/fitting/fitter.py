@@ -79,15 +79,33 @@ def group_by_input(runs: Sequence) -> list[list[int]]:
     return list(groups.values())
 
 
-#: Runs per windowed problem.  The problems are the units of work of the solver's
-#: workers; a fixed size (not the number of workers) keeps results independent of it.
+#: Runs per windowed problem, and samples: a problem takes runs until it would exceed either.
+#: The problems are the units of work of the solver's workers; a size fixed by the data (not
+#: by the number of workers) keeps results independent of it.  The sample cap lets two long
+#: runs (2 x 35 s at 100 Hz) go to two workers.
 RUNS_PER_PROBLEM = 8
+SAMPLES_PER_PROBLEM = 3000
+
+
+def _chunks(idx: list, sizes: list) -> list[list]:
+    """``idx`` cut, in order, into chunks of at most RUNS_PER_PROBLEM runs and (unless a run
+    alone is longer) SAMPLES_PER_PROBLEM samples."""
+    out, cur, n = [], [], 0
+    for i, m in zip(idx, sizes):
+        if cur and (len(cur) == RUNS_PER_PROBLEM or n + m > SAMPLES_PER_PROBLEM):
+            out.append(cur)
+            cur, n = [], 0
+        cur.append(i)
+        n += m
+    if cur:
+        out.append(cur)
+    return out
 
 
 def build_problems(vehicle, runs, meas, space: ParameterSpace, horizon, z_ref, *, gyro_bias=True,
                    initial_velocity="zero") -> tuple[list, list]:
-    """:class:`WindowedProblem` s of at most :data:`RUNS_PER_PROBLEM` runs of one input
-    kind each; returns (problems, run order)."""
+    """:class:`WindowedProblem` s of at most :data:`RUNS_PER_PROBLEM` runs and
+    :data:`SAMPLES_PER_PROBLEM` samples of one input kind each; returns (problems, run order)."""
     probs, order = [], []
     for idx in group_by_input(runs):
         # the reference trajectories of the whole group in one batch (few large numpy calls
@@ -95,12 +113,13 @@ def build_problems(vehicle, runs, meas, space: ParameterSpace, horizon, z_ref, *
         z = space.z0 if z_ref is None else np.asarray(z_ref, float)
         yref, _, _ = whole_runs(vehicle, [runs[i] for i in idx], [meas[i].sensors for i in idx], space, z,
                                 initial_velocity=initial_velocity)
-        for a in range(0, len(idx), RUNS_PER_PROBLEM):
-            sub = idx[a:a + RUNS_PER_PROBLEM]
+        a = 0
+        for sub in _chunks(idx, [runs[i].t.size for i in idx]):
             probs.append(WindowedProblem(vehicle, [runs[i] for i in sub], [meas[i] for i in sub], space, horizon,
                                          z_ref=z_ref, gyro_bias=gyro_bias, initial_velocity=initial_velocity,
-                                         yref=yref[a:a + RUNS_PER_PROBLEM]))
+                                         yref=yref[a:a + len(sub)]))
             order += sub
+            a += len(sub)
     return probs, order
 
 
