@@ -331,10 +331,10 @@ class PriorEvaluator:
     window scores), plus one block for the prior's residuals (no nuisance, no windows).
     ``raw`` keeps the data's own blocks of the last such linearization."""
 
-    #: fresh linearizations at which the data weight is re-estimated; after them it is held, so
-    #: that the last iterations minimize one fixed objective and converge (a weight re-estimated
-    #: at every step kept three of 50 benchmark fits from converging in 40 iterations)
-    REWEIGH = 10
+    #: fresh linearizations at which the data weight is re-estimated (None: every one).  Holding
+    #: it after the first 10 left 9 of the structural benchmark's 50 fits unfinished at 80
+    #: iterations, re-estimating it at every one 3 at 40 (docs/calibration.md)
+    REWEIGH = None
 
     def __init__(self, ev, prior):
         self.ev, self.prior, self.w, self.raw, self.n_weighed = ev, prior, 1.0, None, 0
@@ -342,14 +342,14 @@ class PriorEvaluator:
     @property
     def reweighs(self) -> bool:
         """Whether the next fresh linearization may change the data weight."""
-        return self.prior.temper and self.n_weighed <= self.REWEIGH
+        return self.prior.temper and (self.REWEIGH is None or self.n_weighed <= self.REWEIGH)
 
     def linearize(self, z, nus, *, jacobian=True, scores=False) -> list:
         raw = self.ev.linearize(z, nus, jacobian=jacobian, scores=scores)
         if scores:
             self.raw = raw
             self.n_weighed += 1
-            if self.prior.temper and self.n_weighed <= self.REWEIGH:
+            if self.reweighs:
                 S, _, _ = _normal(raw, 0.0)
                 self.w = data_weight(S, sum(b.scores.T @ b.scores for b in raw))
         w = self.w
