@@ -331,9 +331,9 @@ class PriorEvaluator:
     window scores), plus one block for the prior's residuals (no nuisance, no windows).
     ``raw`` keeps the data's own blocks of the last such linearization."""
 
-    #: fresh linearizations at which the data weight is re-estimated (None: every one).  Holding
-    #: it after the first 10 left 9 of the structural benchmark's 50 fits unfinished at 80
-    #: iterations, re-estimating it at every one 3 at 40 (docs/calibration.md)
+    #: fresh linearizations at which the data weight is re-estimated (None: every one).  On the
+    #: structural benchmark's 50 fits at 80 iterations, holding it after the first 10 left 9
+    #: unfinished, re-estimating it at every one 7 (docs/calibration.md)
     REWEIGH = None
 
     def __init__(self, ev, prior):
