@@ -71,18 +71,28 @@ def _run(args) -> int:
     return 0
 
 
-def _diagnose(args) -> int:
-    from uvsim.benchmarks.scenarios import run_benchmark
+def _suite(args, run) -> dict | None:
+    """Run a scenario benchmark (``run(progress)``) with ``--results`` checked; print its JSON
+    and return None with ``--json``, else print the machine line and return its output."""
     from uvsim.commands.checks import check_outputs
 
     check_outputs({"--results": args.results})
-    out = run_benchmark(args.scenarios, args.seed, two_effects=args.two_effects, workers=args.workers,
-                        results=args.results, progress=None if args.json else (lambda m: print(m, flush=True)))
-    s = out["summary"]
+    out = run(None if args.json else (lambda m: print(m, flush=True)))
     if args.json:
         print(json.dumps(out, indent=2, default=float))
-        return 0
+        return None
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}")
+    return out
+
+
+def _diagnose(args) -> int:
+    from uvsim.benchmarks.scenarios import run_benchmark
+
+    out = _suite(args, lambda say: run_benchmark(args.scenarios, args.seed, two_effects=args.two_effects,
+                                                 workers=args.workers, results=args.results, progress=say))
+    if out is None:
+        return 0
+    s = out["summary"]
     print(f"scenarios: {s['scenarios']} (seed {args.seed}); single-effect or clean: "
           f"{s['single_or_clean']['correct']}/{s['single_or_clean']['n']} named correctly"
           + (f" ({100 * s['single_or_clean']['correct_rate']:.0f} %)" if s['single_or_clean']['n'] else ""))
@@ -110,17 +120,13 @@ def _diagnose(args) -> int:
 
 def _structural(args) -> int:
     from uvsim.benchmarks.structural import CLASSES, run_benchmark
-    from uvsim.commands.checks import check_outputs
 
-    check_outputs({"--results": args.results})
     classes = [c.strip() for c in args.only.split(",") if c.strip()] if args.only else list(CLASSES)
-    out = run_benchmark(args.scenarios, args.seed, classes=classes, workers=args.workers, results=args.results,
-                        progress=None if args.json else (lambda m: print(m, flush=True)))
-    s = out["summary"]
-    if args.json:
-        print(json.dumps(out, indent=2, default=float))
+    out = _suite(args, lambda say: run_benchmark(args.scenarios, args.seed, classes=classes, workers=args.workers,
+                                                 results=args.results, progress=say))
+    if out is None:
         return 0
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}")
+    s = out["summary"]
     for cls, d in s["classes"].items():
         print(f"{cls:18s} right {d['correct']}/{d['n']} ({100 * d['rate']:.0f} %); clean {d['clean']}, false positives "
               f"{d['false_positives_clean']}; named anything {d['named_anything']}; base model off "
@@ -134,15 +140,11 @@ def _structural(args) -> int:
 
 def _calibrate_structural(args) -> int:
     from uvsim.benchmarks.calibration_structural import WORSE_POINTS, run_benchmark
-    from uvsim.commands.checks import check_outputs
 
-    check_outputs({"--results": args.results})
-    out = run_benchmark(args.scenarios, args.seed, compare_no_prior=args.compare_no_prior, workers=args.workers,
-                        results=args.results, progress=None if args.json else (lambda m: print(m, flush=True)))
-    if args.json:
-        print(json.dumps(out, indent=2, default=float))
+    out = _suite(args, lambda say: run_benchmark(args.scenarios, args.seed, compare_no_prior=args.compare_no_prior,
+                                                 workers=args.workers, results=args.results, progress=say))
+    if out is None:
         return 0
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}")
     for mode, d in out["summary"].items():
         print(f"{mode}: {d['n']} fits ({d['errors']} refused before a result); no worse than the start in every "
               f"channel (> {WORSE_POINTS:g} Fit % points) {d['no_worse']}/{d['n']} ({100 * d['no_worse_rate']:.0f} %); "
