@@ -44,8 +44,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from uvsim.fitting.priors import data_weight
 from uvsim.fitting.objective import DEFECT_SIGMA, WindowedProblem, apply_tangent, tangent_difference
+from uvsim.fitting.priors import data_weight
 
 #: Forward-difference steps: scaled parameters (relative) and node components (m, rad, m/s, rad/s).
 FD_STEP_Z = 1e-5
