@@ -367,13 +367,14 @@ SENSOR_NAMES = ("imu", "pressure", "dvl")
 MAX_SENSOR_OFFSET = 10.0
 
 
-def _sensors(spec, f: str) -> dict:
-    """``sensors:`` section -> {name: position (3,)}; validated."""
+def _sensors(spec, f: str) -> tuple[dict, float | None]:
+    """``sensors:`` section -> ({name: position (3,)}, the imu's ``gyro_bias_sd`` (rad/s) or
+    None); validated."""
     if spec is None:
-        return {}
+        return {}, None
     if not isinstance(spec, dict):
         raise VehicleError(f"{f}: sensors: expected a mapping such as {{pressure: {{position: [x, y, z]}}}}")
-    out = {}
+    out, bias_sd = {}, None
     for name, val in spec.items():
         if name not in SENSOR_NAMES:
             raise VehicleError(unknown_key_message(f"{f}: sensors", name, SENSOR_NAMES, noun="sensor"))
@@ -383,6 +384,11 @@ def _sensors(spec, f: str) -> dict:
         check_keys(val, SENSOR_KEYS, f"{f}: sensors.{name}", error=VehicleError)
         if "gyro_bias_sd" in val and name != "imu":
             raise VehicleError(f"{f}: sensors.{name}.gyro_bias_sd: only the imu has a gyro")
+        if val.get("gyro_bias_sd") is not None:
+            bias_sd = _num(val, "gyro_bias_sd", f"{f}: sensors.imu", positive=True)
+            if bias_sd >= 1.0:
+                raise VehicleError(f"{f}: sensors.imu.gyro_bias_sd = {bias_sd:g}: expected rad/s, a MEMS gyro's "
+                                   "in-run bias (0.001-0.05 rad/s)")
         if name == "imu" and "position" not in val and "gyro_bias_sd" in val:
             continue  # the gyro's bias spec alone (the accelerometer's position not given)
         if "position" not in val:
@@ -392,7 +398,7 @@ def _sensors(spec, f: str) -> dict:
             raise VehicleError(f"{f}: sensors.{name}.position {pos.tolist()} is more than {MAX_SENSOR_OFFSET:g} m "
                                "from the body origin (expected metres, body frame)")
         out[name] = pos
-    return out
+    return out, bias_sd
 
 
 def vehicle_from_dict(d: dict, *, source: str = "<dict>", actuators: Actuators | None = None) -> Vehicle:
@@ -458,7 +464,7 @@ def vehicle_from_dict(d: dict, *, source: str = "<dict>", actuators: Actuators |
             f"{w}: diagonal added mass must be given as positive magnitudes (M_A = -diag(X_udot, ...) in SNAME sign)"
         )
 
-    sensors = _sensors(d.get("sensors"), f)
+    sensors, bias_sd = _sensors(d.get("sensors"), f)
     damping = make_term(d["damping"], context=f"{f}: damping")
     effects_spec = d.get("effects") or []
     if not isinstance(effects_spec, list):
@@ -482,28 +488,16 @@ def vehicle_from_dict(d: dict, *, source: str = "<dict>", actuators: Actuators |
         rho=rho,
         current_ned=current,
         sensors=sensors,
+        gyro_bias_sd=bias_sd,
         description=str(d.get("description", "")),
         source=source,
         raw=d,
     )
     v.uncertainty = _uncertainty(d.get("uncertainty"), f, v.parameters())
-    v.gyro_bias_sd = _gyro_bias_sd(d.get("sensors"), f)
     M = v.M
     ev = np.linalg.eigvalsh(0.5 * (M + M.T))
     if ev.min() <= 0:
         raise VehicleError(f"{f}: M = M_RB + M_A is not positive definite (eigenvalues {np.round(ev, 6)})")
-    return v
-
-
-def _gyro_bias_sd(spec, f: str) -> float | None:
-    """``sensors.imu.gyro_bias_sd`` (rad/s, > 0 and below 1 rad/s) or None."""
-    imu = (spec or {}).get("imu") if isinstance(spec, dict) else None
-    if not isinstance(imu, dict) or imu.get("gyro_bias_sd") is None:
-        return None
-    v = _num(imu, "gyro_bias_sd", f"{f}: sensors.imu", positive=True)
-    if v >= 1.0:
-        raise VehicleError(f"{f}: sensors.imu.gyro_bias_sd = {v:g}: expected rad/s, a MEMS gyro's in-run bias "
-                           "(0.001-0.05 rad/s)")
     return v
 
 

@@ -16,7 +16,7 @@ import numpy as np
 
 from uvsim.calibration.params import EFFECTIVE_INERTIA, LINEAR_DAMPING, QUADRATIC_DAMPING
 from uvsim.fitting.evaluate import open_loop
-from uvsim.fitting.objective import GYRO_BIAS_SIGMA
+from uvsim.fitting.objective import gyro_bias_sd
 from uvsim.metrics import measurement_metrics, pooled_group_rmse
 
 #: 1-sigma above this fraction of the value: reported as "weakly_determined".
@@ -216,7 +216,7 @@ def build_report(cal, ds, runs, problems, ga, bounds_of, t0, t_ga, t_ref) -> dic
         "quadratic_damping": {d: p[k] for d, k in QUADRATIC_DAMPING.items()},
         "gyro_bias": {} if res is None else dict(res.gyro_bias),
         "prior": prior_report(res),
-        "gyro_bias_flags": gyro_bias_flags(res, cal.initial_vehicle_.gyro_bias_sd or GYRO_BIAS_SIGMA),
+        "gyro_bias_flags": gyro_bias_flags(res, gyro_bias_sd(cal.initial_vehicle_)),
         "validation_rmse": val, "validation_fit_percent": val_fit,
         "training_rmse": tr, "training_fit_percent": tr_fit,
         "initial_validation_rmse": val0, "initial_validation_fit_percent": val0_fit,

@@ -61,13 +61,6 @@ def damping_matrices(vehicle) -> tuple[np.ndarray, np.ndarray]:
     raise VehicleError(f"{vehicle.source}: damping type {d.kind!r} cannot be exported (diagonal and coupled can)")
 
 
-def inertia_about_cg(vehicle) -> np.ndarray:
-    """Inertia tensor (3x3, FRD) about the centre of gravity from uvsim's tensor about
-    the body origin (parallel-axis theorem)."""
-    r = np.asarray(vehicle.r_g, float)
-    return vehicle.inertia_matrix - vehicle.mass * (np.dot(r, r) * np.eye(3) - np.outer(r, r))
-
-
 #: Mass (kg) and principal inertia (kg m^2) of each exported thruster link: nominal, small
 #: values that both physics engines accept for a spinning child link; they are taken out of
 #: the base link (:func:`base_link_inertial`) so that the whole model keeps uvsim's mass.

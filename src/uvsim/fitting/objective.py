@@ -49,6 +49,12 @@ DEFECT_SIGMA = np.array([0.005, 0.005, 0.005, 0.005, 0.005, 0.005, 0.005, 0.005,
 #: (``sensors.imu.gyro_bias_sd``): the in-run bias left after the autopilot's gyro calibration at
 #: boot; the ArduSub EKF of a real BlueROV2 estimated 0.001-0.017 rad/s (issue 21's logs).
 GYRO_BIAS_SIGMA = 0.02
+
+
+def gyro_bias_sd(vehicle) -> float:
+    """Prior sd (rad/s) of a run's gyro bias: the vehicle's ``sensors.imu.gyro_bias_sd``, else
+    :data:`GYRO_BIAS_SIGMA`."""
+    return float(getattr(vehicle, "gyro_bias_sd", None) or GYRO_BIAS_SIGMA)
 #: Residual given to a diverged simulation (in noise sigmas).
 FILL = 30.0
 #: Largest number of simulated rows per batched call (memory; throughput is flat above ~500).
@@ -219,7 +225,7 @@ class WindowedProblem:
         self.free = np.array([nm.free for nm in self.nodes])             # (R, 12)
         self.bias_runs = np.array([gyro_bias and m.has_gyro for m in self.meas])
         #: prior sd of a run's gyro bias, rad/s (the vehicle's IMU spec, else GYRO_BIAS_SIGMA)
-        self.gyro_bias_sd = float(getattr(vehicle, "gyro_bias_sd", None) or GYRO_BIAS_SIGMA)
+        self.gyro_bias_sd = gyro_bias_sd(vehicle)
         self.accel = any(m.needs_acceleration for m in self.meas)
         self.initial_velocity = initial_velocity
         z_ref = space.z0 if z_ref is None else np.asarray(z_ref, float)

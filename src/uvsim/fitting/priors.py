@@ -53,9 +53,7 @@ def default_prior_sd(name: str, value: float) -> float:
         raise CalibrationError(f"parameter {name} is 0 in the vehicle, so it has no default prior width; state "
                                f"its uncertainty in the vehicle file (uncertainty: {{{name}: SD}}) or fit "
                                "without priors (--no-prior)") from None
-    if name.startswith(("thruster_", "force_")) or name.startswith(("x_", "y_", "z_")) or name.startswith("current_"):
-        return 0.5 * (hi - lo)
-    return DEFAULT_RELATIVE_SD * abs(float(value))
+    return 0.5 * (hi - lo)  # DEFAULT_RELATIVE_SD |value| for the relative families
 
 
 @dataclass

@@ -331,24 +331,17 @@ class PriorEvaluator:
     window scores), plus one block for the prior's residuals (no nuisance, no windows).
     ``raw`` keeps the data's own blocks of the last such linearization."""
 
-    #: fresh linearizations at which the data weight is re-estimated (None: every one).  On the
-    #: structural benchmark's 50 fits at 80 iterations, holding it after the first 10 left 9
-    #: unfinished, re-estimating it at every one 7 (docs/calibration.md)
-    REWEIGH = None
-
     def __init__(self, ev, prior):
-        self.ev, self.prior, self.w, self.raw, self.n_weighed = ev, prior, 1.0, None, 0
-
-    @property
-    def reweighs(self) -> bool:
-        """Whether the next fresh linearization may change the data weight."""
-        return self.prior.temper and (self.REWEIGH is None or self.n_weighed <= self.REWEIGH)
+        self.ev, self.prior, self.w, self.raw = ev, prior, 1.0, None
+        #: the data weight changes at every fresh linearization (the solver then re-evaluates its cost);
+        #: holding it after the first 10 was tried and left more fits unfinished (9 against 7 of the
+        #: structural benchmark's 50 at 80 iterations, docs/calibration.md)
+        self.reweighs = bool(prior.temper)
 
     def linearize(self, z, nus, *, jacobian=True, scores=False) -> list:
         raw = self.ev.linearize(z, nus, jacobian=jacobian, scores=scores)
         if scores:
             self.raw = raw
-            self.n_weighed += 1
             if self.reweighs:
                 S, _, _ = _normal(raw, 0.0)
                 self.w = data_weight(S, sum(b.scores.T @ b.scores for b in raw))
@@ -406,7 +399,6 @@ def solve(prob, z0: np.ndarray, nus0: list | None = None, *, max_iter: int = 20,
     if prior is not None:
         res["posterior_blocks"], res["blocks"] = res["blocks"], ev.raw
         res["data_weight"] = ev.w
-        res["nus"] = res["nus"][:len(ev.raw)]
     return res
 
 
@@ -430,8 +422,6 @@ def _solve(probs, ev, z0, nus0, *, max_iter, ftol, xtol, progress, state=None, o
         z, nus = np.array(state["z"], float), [np.array(n, float) for n in state["nus"]]
         cost, history, lam, nu_f = state["cost"], list(state["history"]), state["lam"], state["nu_f"]
         evals, it0 = state["evaluations"], state["iteration"]
-        if "data_weight" in state and hasattr(ev, "n_weighed"):  # the weight as it stood (PriorEvaluator)
-            ev.w, ev.n_weighed = float(state["data_weight"][0]), int(state["data_weight"][1]) - 1
         blocks = ev.linearize(z, nus, scores=True)
         if getattr(ev, "reweighs", False):
             cost = _cost(blocks)
@@ -472,8 +462,8 @@ def _solve(probs, ev, z0, nus0, *, max_iter, ftol, xtol, progress, state=None, o
             if on_step is not None:
                 st = {"z": z.copy(), "nus": [n.copy() for n in nus], "cost": cost, "history": list(history),
                       "lam": lam, "nu_f": nu_f, "evaluations": evals, "iteration": it}
-                if hasattr(ev, "n_weighed"):
-                    st["data_weight"] = [ev.w, ev.n_weighed]
+                if isinstance(ev, PriorEvaluator):  # for the record: a resumed fit re-estimates it at z
+                    st["data_weight"] = ev.w
                 on_step(st)
         else:
             lam *= nu_f
