@@ -144,3 +144,15 @@ def test_a_fit_with_priors_resumed_from_any_step_gives_the_same_result(surge_onl
     again = solve(prob, space.z0, max_iter=30, prior=prior, state=states[1])
     np.testing.assert_array_equal(again["z"], full["z"])
     assert again["data_weight"] == full["data_weight"]
+
+
+def test_a_zero_valued_coefficient_gets_its_default_width_or_a_quarter_of_its_bounds():
+    P = uvsim.load_vehicle("bluerov2_heavy").parameters()
+    assert P["y_g"] == 0.0 and P["current_n"] == 0.0 and P["X_u"] != 0.0
+    space = make_space(P, ["y_g", "current_n"])
+    pr = make_prior(space, P)
+    sd = pr.sd_z * space.scale
+    assert sd[0] == pytest.approx(default_prior_sd("y_g", 0.0)) and sd[1] == pytest.approx(1.0)
+    P0 = {**P, "X_u": 0.0}  # no default width at 0: a quarter of the explicit bounds
+    space = make_space(P0, ["X_u"], bounds={"X_u": (-2.0, 0.0)})
+    assert make_prior(space, P0).sd_z[0] * space.scale[0] == pytest.approx(0.5)

@@ -83,10 +83,11 @@ def make_prior(space: ParameterSpace, means: Mapping[str, float], sds: Mapping[s
         m = float(means[fp.name])
         if fp.name in sds:
             s = float(sds[fp.name])
-        elif m == 0.0:  # no relative width: a quarter of the search range the caller gave
-            s = 0.25 * (fp.upper - fp.lower)
         else:
-            s = default_prior_sd(fp.name, m)
+            try:
+                s = default_prior_sd(fp.name, m)
+            except CalibrationError:  # 0 with no default width: a quarter of the search range the caller gave
+                s = 0.25 * (fp.upper - fp.lower)
         if not (np.isfinite(s) and s > 0):
             raise CalibrationError(f"prior standard deviation of {fp.name}: {s!r}; expected a positive number")
         mu.append(m / fp.scale)
