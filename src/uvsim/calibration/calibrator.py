@@ -40,6 +40,7 @@ from uvsim.calibration.report import build_report, evaluate_runs, identifiabilit
 from uvsim.calibration.selection import check_bounds, effective_inertia_start, expand_names, joint_candidates
 from uvsim.errors import CalibrationError
 from uvsim.estimation.lag import estimate_attitude_lag
+from uvsim.fitting.objective import LOSSES
 from uvsim.fitting.parameters import default_bounds
 from uvsim.logs import MANIFEST, Dataset, read_dataset
 from uvsim.measurements import CHANNEL_GROUP, measurements_for
@@ -141,6 +142,9 @@ class Calibrator:
         width the file's ``uncertainty:`` entry or :func:`uvsim.fitting.priors.default_prior_sd`
         (50 %), and the data count with their effective information
         (:mod:`uvsim.fitting.priors`); False: least squares within the bounds only.
+    loss : "linear" (default) or "huber": the joint stage's measurement residuals beyond
+        3 noise sigmas cost linearly (spikes, dropouts, bursts of model error;
+        :func:`uvsim.fitting.objective.robust_residuals`).
     workers : local processes (GA evaluations and joint stage; results do not depend on it).
     dask : dask.distributed scheduler address or "local" for the GA evaluations.
     batch_rows : largest number of trajectories per batched GA simulation.
@@ -171,7 +175,7 @@ class Calibrator:
                  signal_weights: Mapping | None = None, noise: Mapping | None = None, ga_channels: str = "own",
                  low_speed_exponent: float = 0.0, refine: bool = True, horizons=DEFAULT_HORIZONS,
                  max_iter: int = 80, gyro_bias: bool = True, screen: bool = True, attitude_lag="auto",
-                 initial_velocity: str = "zero", prior: bool = True,
+                 initial_velocity: str = "zero", prior: bool = True, loss: str = "linear",
                  workers: int = 1, dask: str | None = None, batch_rows: int = DEFAULT_BATCH_ROWS, checkpoint=None,
                  resume=None, progress: bool = False, effects=None, allow=()):
         self.dofs = dofs
@@ -186,6 +190,7 @@ class Calibrator:
         self.attitude_lag = attitude_lag
         self.initial_velocity = initial_velocity
         self.prior = prior
+        self.loss = loss
         self.workers, self.dask, self.batch_rows = workers, dask, batch_rows
         self.checkpoint, self.resume, self.progress = checkpoint, resume, progress
         self.effects = effects
@@ -259,6 +264,8 @@ class Calibrator:
         if self.effects:
             veh = veh.with_effects(list(self.effects))
         self.initial_vehicle_ = veh
+        if self.loss not in LOSSES:
+            raise CalibrationError(f"loss {self.loss!r}: expected one of {', '.join(LOSSES)}")
         if not 0 < float(self.margin) < 1:
             raise CalibrationError(f"margin {self.margin!r}: expected a fraction between 0 and 1 (0.5 = +-50 %)")
         if self.ga_channels not in ("own", "all"):
@@ -405,7 +412,9 @@ class Calibrator:
             "keep": keep, "screen": screen, "bounds": {k: list(bounds_of(k)) for k in names},
             "horizons": horizons, "max_iter": self.max_iter, "gyro_bias": self.gyro_bias, "lag": self.lag_["tau"],
             "weights": self.signal_weights, "noise": self.noise, "initial_velocity": self.initial_velocity,
-            "prior": bool(self.prior), "uncertainty": self.initial_vehicle_.uncertainty})
+            "prior": bool(self.prior), "uncertainty": self.initial_vehicle_.uncertainty,
+            # (the default loss leaves the key, and so earlier checkpoints, as they were)
+            **({} if self.loss == "linear" else {"loss": self.loss})})
         ck_path = self.checkpoint if self.checkpoint is not None else self.resume
         ck = None
         if ck_path is not None or self.resume is not None:
@@ -416,7 +425,7 @@ class Calibrator:
                          gyro_bias=bool(self.gyro_bias), initial_velocity=self.initial_velocity,
                          workers=self._workers(), checkpoint=ck, progress=self.progress,
                          prior_mean=self.initial_vehicle_.parameters() if self.prior else None,
-                         prior_sd=self.initial_vehicle_.uncertainty)
+                         prior_sd=self.initial_vehicle_.uncertainty, loss=self.loss)
 
     # ------------------------------------------------------------------ results
     def predict(self, runs) -> dict:

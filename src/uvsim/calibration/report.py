@@ -77,7 +77,8 @@ def run_entry(run, fitted: dict, initial: dict) -> dict:
     }
 
 
-def never_worse(runs, fitted: dict, initial: dict, meas: dict) -> dict | None:
+def never_worse(runs, fitted: dict, initial: dict, meas: dict, vehicles: tuple | None = None, *,
+                initial_velocity: str = "zero") -> dict | None:
     """The fitted model against the model the user started from, on the validation runs'
     open-loop simulations, per logged channel the fit used (:func:`uvsim.fitting.guard.guard`:
     a channel is worse when its error grows beyond the block bootstrap's noise, or by more
@@ -85,23 +86,57 @@ def never_worse(runs, fitted: dict, initial: dict, meas: dict) -> dict | None:
     validation runs the training runs are compared instead (a weaker
     check: the fit has seen them; ``split`` says which).  None without runs.  ``ok`` False
     means the calibration is not a success (issue 21: a fit that trades unexcited
-    coefficients for residual can validate worse than its start, and the report must say so)."""
-    from uvsim.fitting.guard import ALIGN_WINDOW_S, block_costs, guard, start_aligned
+    coefficients for residual can validate worse than its start, and the report must say so).
+
+    ``vehicles`` (start, fitted): with them, a run on which either model's free simulation
+    amplifies the uncertainty of its start (:func:`uvsim.fitting.sensitivity.initial_state_growth`:
+    a directionally unstable vehicle) has its attitude, rate, velocity and acceleration
+    channels left out of the comparison for both models; ``not_compared`` names them with
+    the models' growth factors, and ``unstable_fit`` the runs where only the fitted model is
+    unstable (a caution, not a verdict: the vehicle may be).  ``fit_percent`` /
+    ``initial_fit_percent``: per channel, the pooled Fit % of the fitted / start model over
+    what was compared."""
+    from uvsim.fitting.guard import ALIGN_WINDOW_S, BLOCK_S, block_costs, compare_open_loop, start_aligned
+    from uvsim.fitting.sensitivity import initial_state_growth
 
     split = "validation" if any(r.split == "validation" for r in runs) else "train"
     val = [r for r in runs if r.split == split]
     if not val:
         return None
     ms = [meas[r.name] for r in val]
-    before = block_costs(ms, [start_aligned(m, initial[r.name]) for m, r in zip(ms, val)], by="channel")
-    after = block_costs(ms, [start_aligned(m, fitted[r.name]) for m, r in zip(ms, val)], by="channel")
-    g = guard(before, after)
+    sides = []
+    for i, ev in enumerate((initial, fitted)):
+        side = block_costs(ms, [start_aligned(m, ev[r.name]) for m, r in zip(ms, val)], by="channel")
+        growth = {} if vehicles is None else initial_state_growth(vehicles[i], val, ms, [ev[r.name] for r in val],
+                                                                  initial_velocity=initial_velocity)
+        side["unstable"] = {k: x["channels"] for k, x in growth.items() if x["unstable"]}
+        sides.append((side, growth))
+    (before, g0), (after, g1) = sides
+    g = compare_open_loop(before, after)
+    exclude = g["not_compared"]
+    not_compared = {k: {"channels": v, "growth_start": g0[k]["growth"], "growth_fitted": g1[k]["growth"]}
+                    for k, v in exclude.items()}
+    unstable_fit = [k for k in after["unstable"] if k not in before["unstable"]]
     what = "validates" if split == "validation" else "simulates its own training runs (no validation runs)"
     why = g["why"].replace("makes the open-loop validation worse", f"the fitted model {what} worse than the "
                                                                      "starting model")
+    method = (f"open-loop {split} runs, per channel, position and depth aligned over the first "
+              f"{ALIGN_WINDOW_S:g} s, block bootstrap over {BLOCK_S:g} s blocks (uvsim.fitting.guard)")
+    if exclude:
+        method += ("; attitude, rates and accelerations of runs whose free simulation amplifies the "
+                   "uncertainty of its start left out (not_compared, uvsim.fitting.sensitivity)")
+
+    def fit_pct(evs):
+        mets = []
+        for m, e in zip(ms, evs):
+            met = measurement_metrics(m, e["pred"])
+            drop = set(exclude.get(m.name, ()))
+            mets.append({**met, "channels": {c: v for c, v in met["channels"].items() if c not in drop}})
+        return pooled_fit_percent(mets)
+
     return {"ok": g["ok"], "worse": g["worse"], "channels": g["groups"], "why": why, "split": split,
-            "method": f"open-loop {split} runs, per channel, position and depth aligned over the first "
-                      f"{ALIGN_WINDOW_S:g} s, block bootstrap over 3 s blocks (uvsim.fitting.guard)"}
+            "method": method, "not_compared": not_compared, "unstable_fit": unstable_fit,
+            "fit_percent": fit_pct(after["results"]), "initial_fit_percent": fit_pct(before["results"])}
 
 
 def pooled(evals: dict, runs, split: str) -> tuple[dict, dict]:
@@ -222,7 +257,8 @@ def build_report(cal, ds, runs, problems, ga, bounds_of, t0, t_ga, t_ref) -> dic
         "initial_validation_rmse": val0, "initial_validation_fit_percent": val0_fit,
         "initial_training_rmse": tr0,
         "per_run": per_run,
-        "never_worse": never_worse(ds.runs, fitted, initial, cal.evaluation_["meas"]),
+        "never_worse": never_worse(ds.runs, fitted, initial, cal.evaluation_["meas"],
+                                   (cal.initial_vehicle_, cal.vehicle_), initial_velocity=cal.initial_velocity),
         "identifiability": cal.identifiability_,
         "refinement": {} if res is None else {"stages": res.stages, "cost": res.cost,
                                               "n_residuals": res.n_residuals},
@@ -244,6 +280,6 @@ def build_report(cal, ds, runs, problems, ga, bounds_of, t0, t_ga, t_ref) -> dic
                      "bounds": {k: list(v) for k, v in (cal.bounds or {}).items()},
                      "refine": cal.refine, "horizons": cal._horizons(), "max_iter": cal.max_iter,
                      "gyro_bias": cal.gyro_bias, "screen": cal.screen, "attitude_lag": cal.attitude_lag,
-                     "initial_velocity": cal.initial_velocity, "prior": cal.prior},
+                     "initial_velocity": cal.initial_velocity, "prior": cal.prior, "loss": cal.loss},
         "logbook": {d: [dict(rec) for rec in lb] for d, lb in ga["logbooks"].items()},
     }

@@ -20,6 +20,8 @@ def register(sub) -> None:
                    help="'diagnose': diagnose randomized scenarios; 'diagnose-structural': scenarios whose data "
                         "differ from the model in structure, N per class; 'calibrate-structural': calibrate N such "
                         "datasets and compare with the start model (default: the speed figures)")
+    p.add_argument("--loss", choices=["linear", "huber"], default="linear",
+                   help="(calibrate-structural) the calibration's --loss")
     p.add_argument("--compare-no-prior", action="store_true",
                    help="(calibrate-structural) calibrate each dataset also without the priors (--no-prior)")
     p.add_argument("--scenarios", type=int, default=20, help="(diagnose) single-effect or clean scenarios")
@@ -142,7 +144,8 @@ def _calibrate_structural(args) -> int:
     from uvsim.benchmarks.calibration_structural import WORSE_POINTS, run_benchmark
 
     out = _suite(args, lambda say: run_benchmark(args.scenarios, args.seed, compare_no_prior=args.compare_no_prior,
-                                                 workers=args.workers, results=args.results, progress=say))
+                                                 loss=args.loss, workers=args.workers, results=args.results,
+                                                 progress=say))
     if out is None:
         return 0
     for mode, d in out["summary"].items():
@@ -151,6 +154,9 @@ def _calibrate_structural(args) -> int:
               f"worse {d['worse']}, of which reported not ok {d['worse_reported_not_ok']}; reported ok "
               f"{d['ok_reported']}; fits with a parameter on a bound {d['fits_with_a_bound_hit']}; seconds median "
               f"{d['seconds_median']:.1f}, max {d['seconds_max']:.1f}")
+        print(f"  seeds with a validation run whose free simulation amplifies its start (its attitude, rates "
+              f"and accelerations not compared): {d['seeds_with_runs_not_compared']}; no worse by the earlier judge "
+              f"(mean of each run's Fit %, every channel of every run): {d['no_worse_run_mean_judge']}/{d['n']}")
         print(f"  against the generator's noise-free truth: closer or as close in every state channel "
               f"{d['closer_to_truth_everywhere']}/{d['n']}; farther in some channel {d['farther_from_truth']}, of which "
               f"reported not ok {d['farther_reported_not_ok']}; refused though closer everywhere "

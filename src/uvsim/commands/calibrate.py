@@ -2,7 +2,8 @@
 
     uvsim calibrate --data DIR [--vehicle NAME|FILE] [--dof surge,...] [--free z_b,thruster_gain_*]
                     [--fix NAME,...] [--bounds NAME=LO:HI,...] [--weights NAME=W,...] [--noise NAME=SIGMA,...]
-                    [--horizons 2,6] [--no-gyro-bias] [--no-prior] [--seed S] [--population P --generations G]
+                    [--horizons 2,6] [--no-gyro-bias] [--no-prior] [--loss huber] [--seed S]
+                    [--population P --generations G]
                     [--workers N] [--dask ADDR|local] [--checkpoint CKPT] [--resume CKPT] [--no-refine]
                     --out fitted.yaml [--json report.json] [--plots DIR] [--progress]
 
@@ -26,6 +27,8 @@ ADDED_MASS_ROWS = ("X_udot", "Y_vdot", "Z_wdot", "K_pdot", "M_qdot", "N_rdot")
 
 
 def register(sub) -> None:
+    from uvsim.fitting.objective import LOSSES
+
     p = sub.add_parser("calibrate", help="fit a vehicle model to logged runs (seed 000 GA per DOF + joint "
                                          "prediction-error fit of all runs)")
     p.add_argument("--data", required=True, help="dataset directory (manifest.yaml + runs)")
@@ -49,6 +52,9 @@ def register(sub) -> None:
                    help="Levenberg-Marquardt iterations per horizon; a last stage that stops there is reported as "
                         "unfinished (exit 2) unless --keep-worse")
     p.add_argument("--no-gyro-bias", action="store_true", help="do not fit a gyro bias per run")
+    p.add_argument("--loss", choices=LOSSES, default="linear",
+                   help="loss of the joint stage's measurement residuals: linear (least squares, default) or huber "
+                        "(beyond 3 noise sigmas a residual costs linearly: spikes, dropouts, bursts of model error)")
     p.add_argument("--no-prior", action="store_true",
                    help="joint fit by least squares within the bounds only, without the starting vehicle as a prior "
                         "(default: maximum a posteriori, docs/calibration.md 'Priors')")
@@ -282,6 +288,15 @@ def print_summary(cal, out=None) -> None:
     say(f"validation RMSE {jsonable(rep['validation_rmse'])} (initial {jsonable(rep['initial_validation_rmse'])})")
     if rep["validation_fit_percent"]:
         say("validation Fit %: " + ", ".join(f"{c} {v:.1f}" for c, v in rep["validation_fit_percent"].items()))
+    nw = rep.get("never_worse") or {}
+    for name, d in (nw.get("not_compared") or {}).items():
+        say(f"note: {name}: a 0.02 m/s / 0.02 rad/s change of the start grows {d['growth_start']:.3g}x in the "
+            f"start model's free simulation and {d['growth_fitted']:.3g}x in the fitted model's (more than 2x: "
+            f"unstable), so the never-worse check leaves its {', '.join(d['channels'])} out (docs/calibration.md, "
+            "'The result check')")
+    for name in nw.get("unstable_fit") or []:
+        say(f"CAUTION: the fitted model's free simulation of {name} is unstable where the start model's is not; "
+            "check its open-loop behaviour (uvsim simulate) before you use it")
 
 
 def _run(args) -> int:
@@ -308,7 +323,8 @@ def _run(args) -> int:
                      margin=args.margin, workers=args.workers, dask=args.dask, checkpoint=ckpt, resume=args.resume,
                      refine=not args.no_refine, free=args.free, fix=args.fix, bounds=bounds,
                      signal_weights=weights, noise=noise, horizons=horizons, max_iter=args.max_iter,
-                     gyro_bias=not args.no_gyro_bias, prior=not args.no_prior, screen=not args.no_screen,
+                     gyro_bias=not args.no_gyro_bias, prior=not args.no_prior, loss=args.loss,
+                     screen=not args.no_screen,
                      ga_channels=args.ga_channels,
                      attitude_lag=lag, low_speed_exponent=args.low_speed_exponent, progress=want_progress(args),
                      allow=parse_allow(args.allow))

@@ -17,13 +17,14 @@ import numpy as np
 from uvsim.checkpoint import fingerprint
 from uvsim.diagnosis.candidates import Candidate, catalogue, coupled_candidate, coupling_terms, observability
 from uvsim.diagnosis.decision import LEVEL, judge, wald
-from uvsim.fitting.guard import block_costs, guard, start_aligned
+from uvsim.fitting.guard import block_costs, compare_open_loop, start_aligned
 from uvsim.errors import CalibrationError, UvsimError, VehicleError
 from uvsim.fitting import fit
 from uvsim.fitting.compare import bootstrap_improvement
 from uvsim.fitting.equation_error import EquationError, measured_motion
 from uvsim.fitting.evaluate import open_loop
 from uvsim.fitting.parameters import FreeParameter, ParameterSpace, default_bounds
+from uvsim.fitting.sensitivity import initial_state_growth
 from uvsim.forces import make_term
 from uvsim.measurements import measurements_for
 
@@ -126,11 +127,16 @@ class Selector:
         noise-normalized errors per signal group and block (:func:`uvsim.fitting.guard.block_costs`);
         ``total`` is inf when a simulation diverges."""
         known = vehicle.parameters()
-        ol = open_loop(vehicle, self.val, overrides={k: v for k, v in values.items() if k in known},
-                       meas=self.meas_va)
+        over = {k: v for k, v in values.items() if k in known}
+        ol = open_loop(vehicle, self.val, overrides=over, meas=self.meas_va)
         # position and depth aligned over each run's start: the noisy first samples offset every
         # model's simulation alike and could favour one by luck (uvsim.fitting.guard.start_aligned)
-        return block_costs(self.meas_va, [start_aligned(m, o) for m, o in zip(self.meas_va, ol)])
+        out = block_costs(self.meas_va, [start_aligned(m, o) for m, o in zip(self.meas_va, ol)])
+        # runs whose free simulation amplifies its uncertain start (uvsim.fitting.sensitivity):
+        # compare_open_loop leaves their attitude, rates and accelerations out
+        growth = initial_state_growth(vehicle, self.val, self.meas_va, ol, overrides=over)
+        out["unstable"] = {k: g["channels"] for k, g in growth.items() if g["unstable"]}
+        return out
 
     def open_loop_cost(self, vehicle, values: Mapping) -> float:
         """Noise-normalized sum of squares of the free simulations of the validation runs
@@ -395,7 +401,7 @@ class Selector:
         # the open-loop guard (uvsim.fitting.guard): no logged group may get worse
         vc["open_loop"] = self.open_loop_blocks(veh, vals)
         if "open_loop" in val_cur:
-            cmp["guard"] = guard(val_cur["open_loop"], vc["open_loop"])
+            cmp["guard"] = compare_open_loop(val_cur["open_loop"], vc["open_loop"])
         row.update(result=best, values={k: best.values[k] for k in c.free}, std={k: best.std.get(k) for k in c.free},
                    train_cost=best.cost, val=vc, compare=cmp, problem=problem,
                    open_loop_cost=vc["open_loop"]["total"],

@@ -103,7 +103,7 @@ def _chunks(idx: list, sizes: list) -> list[list]:
 
 
 def build_problems(vehicle, runs, meas, space: ParameterSpace, horizon, z_ref, *, gyro_bias=True,
-                   initial_velocity="zero") -> tuple[list, list]:
+                   initial_velocity="zero", loss: str = "linear") -> tuple[list, list]:
     """:class:`WindowedProblem` s of at most :data:`RUNS_PER_PROBLEM` runs and
     :data:`SAMPLES_PER_PROBLEM` samples of one input kind each; returns (problems, run order)."""
     probs, order = [], []
@@ -117,7 +117,7 @@ def build_problems(vehicle, runs, meas, space: ParameterSpace, horizon, z_ref, *
         for sub in _chunks(idx, [runs[i].t.size for i in idx]):
             probs.append(WindowedProblem(vehicle, [runs[i] for i in sub], [meas[i] for i in sub], space, horizon,
                                          z_ref=z_ref, gyro_bias=gyro_bias, initial_velocity=initial_velocity,
-                                         yref=yref[a:a + len(sub)]))
+                                         yref=yref[a:a + len(sub)], loss=loss))
             order += sub
             a += len(sub)
     return probs, order
@@ -126,7 +126,7 @@ def build_problems(vehicle, runs, meas, space: ParameterSpace, horizon, z_ref, *
 def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence = DEFAULT_HORIZONS,
         max_iter: int = 20, gyro_bias: bool = True, noise=None, weights=None, initial_velocity: str = "zero",
         z0=None, progress=None, workers: int = 1, ftol: float = 1e-6, checkpoint=None,
-        on_iteration=None, prior_mean=None, prior_sd=None) -> FitResult:
+        on_iteration=None, prior_mean=None, prior_sd=None, loss: str = "linear") -> FitResult:
     """Fit ``space``'s free parameters of ``vehicle`` to ``runs`` (module docstring).
 
     Parameters
@@ -155,6 +155,9 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
         effective information); ``prior_sd`` {name: standard deviation} overrides
         :func:`uvsim.fitting.priors.default_prior_sd`. The reported ``std`` is then the
         posterior's.
+    loss : "linear" (least squares) or "huber": the measurement residuals beyond
+        :data:`uvsim.fitting.objective.HUBER_SCALE` noise sigmas cost linearly (outliers,
+        dropouts, bursts of model error; :func:`uvsim.fitting.objective.robust_residuals`).
     """
     runs = list(runs)
     if not runs:
@@ -174,7 +177,7 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
     problems = []
     if saved is not None and first == len(horizons):  # every stage finished: the final linearization only
         problems, order = build_problems(vehicle, runs, meas, space, horizons[-1], np.array(saved["z_start"]),
-                                         gyro_bias=gyro_bias, initial_velocity=initial_velocity)
+                                         gyro_bias=gyro_bias, initial_velocity=initial_velocity, loss=loss)
         res = solve(problems, z, saved["nus"], max_iter=0, workers=workers, prior=prior)
         # the finished fit's own cost (re-evaluated here in a batch of another size, the sum may
         # differ in its last bit with the BLAS kernels of some machines)
@@ -185,7 +188,7 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
         t0 = time.perf_counter()
         z_start = z
         problems, order = build_problems(vehicle, runs, meas, space, H, z, gyro_bias=gyro_bias,
-                                         initial_velocity=initial_velocity)
+                                         initial_velocity=initial_velocity, loss=loss)
         label = "whole runs" if H is None else f"{H:g} s windows"
         say(f"fitting {space.p} parameter(s) on {len(runs)} run(s), {label}")
 

@@ -80,19 +80,23 @@ def start_aligned(meas, evaluation: dict, window_s: float = ALIGN_WINDOW_S) -> d
     return {**evaluation, "pred": pred}
 
 
-def block_costs(meas: Sequence, results: Sequence[dict], block_s: float = BLOCK_S, *, by: str = "group") -> dict:
+def block_costs(meas: Sequence, results: Sequence[dict], block_s: float = BLOCK_S, *, by: str = "group",
+                exclude: Mapping[str, Sequence[str]] | None = None) -> dict:
     """Open-loop errors by group (``by="group"``) or channel (``by="channel"``) and block.
 
     Parameters
     ----------
     meas : the validation runs' measurement models (:mod:`uvsim.measurements`).
     results : :func:`uvsim.fitting.evaluate.open_loop` of those runs (same order).
+    exclude : run name -> channels left out of that run (e.g. where the free simulation is
+        set by its uncertain start, :mod:`uvsim.fitting.sensitivity`).
 
     Returns
     -------
     dict with ``groups``: group (or channel) -> (B,) noise-normalized sums of squares per
     block (blocks of every run, in run order), ``runs``: run name -> key -> sum, ``total``
-    (inf when a simulation diverged) and ``rmse``: key -> pooled RMSE in its unit.
+    (inf when a simulation diverged), ``rmse``: key -> pooled RMSE in its unit, and the inputs
+    (``meas``, ``results``, ``by``) for :func:`compare_open_loop`.
     """
     groups: dict[str, list] = {}
     runs: dict[str, dict] = {}
@@ -107,6 +111,10 @@ def block_costs(meas: Sequence, results: Sequence[dict], block_s: float = BLOCK_
         for g, e in res.items():
             grp = m.groups[g]
             used = m.used(g)
+            drop = [j for j, c in enumerate(grp.channels) if c in (exclude or {}).get(m.name, ())]
+            if drop:
+                used = used.copy()
+                used[:, drop] = False
             if not used.any():
                 continue
             sig = np.where(grp.logged, grp.sigma, 1.0)
@@ -130,7 +138,26 @@ def block_costs(meas: Sequence, results: Sequence[dict], block_s: float = BLOCK_
                     total += float(per_row.sum())
     rmse = {g: float(np.sqrt(sum(s for s, _ in v) / max(sum(n for _, n in v), 1))) for g, v in sq.items()}
     return {"groups": {g: np.concatenate(v) for g, v in groups.items()}, "runs": runs, "total": total,
-            "rmse": rmse}
+            "rmse": rmse, "meas": list(meas), "results": list(results), "by": by}
+
+
+def compare_open_loop(before: Mapping, after: Mapping) -> dict:
+    """:func:`guard` of two :func:`block_costs` results that also carry ``results``,
+    ``meas`` and ``unstable`` (run name -> channels whose free simulation amplifies the
+    uncertainty of its start, :func:`uvsim.fitting.sensitivity.initial_state_growth`):
+    those channels of those runs, for either model, are left out for both (the guard's
+    ``not_compared``)."""
+    unstable: dict = {}
+    for side in (before, after):
+        for name, chans in (side.get("unstable") or {}).items():
+            unstable.setdefault(name, set()).update(chans)
+    if not unstable:
+        return {**guard(before, after), "not_compared": {}}
+    exclude = {k: sorted(v) for k, v in unstable.items()}
+    by = before.get("by", "group")
+    b = block_costs(before["meas"], before["results"], by=by, exclude=exclude)
+    a = block_costs(after["meas"], after["results"], by=by, exclude=exclude)
+    return {**guard(b, a), "not_compared": exclude}
 
 
 def guard(before: Mapping, after: Mapping) -> dict:

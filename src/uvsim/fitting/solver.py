@@ -44,7 +44,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from uvsim.fitting.objective import DEFECT_SIGMA, WindowedProblem, apply_tangent, tangent_difference
+from uvsim.fitting.objective import (DEFECT_SIGMA, FILL, WindowedProblem, apply_tangent, robust_residuals,
+                                     tangent_difference)
 from uvsim.fitting.priors import data_weight
 
 #: Forward-difference steps: scaled parameters (relative) and node components (m, rad, m/s, rad/s).
@@ -160,7 +161,7 @@ def linearize(prob: WindowedProblem, z: np.ndarray, nus: list, *, jacobian: bool
                 b1[0, j] += FD_STEP_BIAS
                 pred = prob.meas[r].predict(yb, ab, b1)
                 with np.errstate(all="ignore"):
-                    m1 = prob.meas[r].normalized(pred, fill=30.0)[0]
+                    m1 = robust_residuals(prob.meas[r].normalized(pred, fill=FILL), prob.loss)[0]
                 Jn[:m_meas, nw * k + j] = (m1 - meas[0]) / FD_STEP_BIAS
                 Jn[base + nw * k + j, nw * k + j] = 1.0 / prob.gyro_bias_sd
         cluster = np.concatenate([w_local, np.repeat(np.arange(1, nw), k), np.repeat(np.arange(nw), k),
