@@ -41,8 +41,8 @@ def test_an_unstable_truth_is_not_refused_against_a_stable_start(tmp_path):
 
 
 def test_the_diagnosis_guard_leaves_out_what_either_side_marks_unstable():
-    # compare_open_loop (the diagnosis' guard): a run marked unstable by one side only is left
-    # out for both, by signal group as diagnosis compares
+    # compare_open_loop (the diagnosis' guard): a run marked unstable by either side is left out
+    # for both, by signal group as diagnosis compares; unstable for the candidate only is not ok
     import numpy as np
 
     from uvsim.fitting.guard import block_costs, compare_open_loop
@@ -57,7 +57,30 @@ def test_the_diagnosis_guard_leaves_out_what_either_side_marks_unstable():
            for i, e in enumerate(good)]
     before, after = block_costs(meas, good), block_costs(meas, bad)
     assert not compare_open_loop(before, after)["ok"]          # the attitude of run 0 is much worse
+    # unstable for the candidate only: left out, and the candidate is not vouched for
     after["unstable"] = {runs[0].name: ["roll", "pitch", "yaw"]}
     g = compare_open_loop(before, after)
-    assert g["ok"] and g["not_compared"] == {runs[0].name: ["pitch", "roll", "yaw"]}
+    assert not g["ok"] and g["newly_unstable"] == [runs[0].name] and "is unstable" in g["why"]
+    assert g["not_compared"] == {runs[0].name: ["pitch", "roll", "yaw"]}
+    assert "attitude" not in g["worse"]
+    # unstable for both: left out for both, and judged on the rest
+    before["unstable"] = {runs[0].name: ["roll"]}
+    g = compare_open_loop(before, after)
+    assert g["ok"] and g["not_compared"] == {runs[0].name: ["pitch", "roll", "yaw"]} and g["newly_unstable"] == []
     assert np.isfinite(g["groups"]["attitude"]["after"])
+
+
+def test_a_fit_unstable_where_the_start_is_stable_is_not_ok(tmp_path):
+    # benchmark seed 30: truth and start are stable on both validation runs; a "fit" with the
+    # sway added mass 15 kg above the surge one and a fifth of the yaw damping is not
+    out = generate(sample_scenario(30, profile="realsensor", **scenario(30)), tmp_path / "ds")
+    start = load_vehicle(out / "myrov.yaml")
+    P = start.parameters()
+    bad = start.with_parameters({"Y_vdot": P["X_udot"] + 15.0, "N_r": 0.2 * P["N_r"], "N_rr": 0.2 * P["N_rr"]})
+    ds = read_dataset(out)
+    meas = [measurements_for(r, start) for r in ds.runs]
+    by_name = {r.name: m for r, m in zip(ds.runs, meas)}
+    nw = never_worse(ds.runs, evaluate_runs(bad, ds.runs, meas), evaluate_runs(start, ds.runs, meas), by_name,
+                     (start, bad))
+    assert nw["unstable_fit"] and not nw["ok"]
+    assert "is unstable" in nw["why"] and set(nw["unstable_fit"]) <= set(nw["not_compared"])

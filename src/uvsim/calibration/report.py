@@ -93,7 +93,8 @@ def never_worse(runs, fitted: dict, initial: dict, meas: dict, vehicles: tuple |
     a directionally unstable vehicle) has its attitude, rate, velocity and acceleration
     channels left out of the comparison for both models; ``not_compared`` names them with
     the models' growth factors, and ``unstable_fit`` the runs where only the fitted model is
-    unstable (a caution, not a verdict: the vehicle may be).  ``fit_percent`` /
+    unstable: then ``ok`` is False (the check cannot vouch for what it left out, and the start
+    was stable there; the vehicle may be unstable too, so the message says how to keep it).  ``fit_percent`` /
     ``initial_fit_percent``: per channel, the pooled Fit % of the fitted / start model over
     what was compared."""
     from uvsim.fitting.guard import ALIGN_WINDOW_S, BLOCK_S, block_costs, compare_open_loop, start_aligned
@@ -116,10 +117,14 @@ def never_worse(runs, fitted: dict, initial: dict, meas: dict, vehicles: tuple |
     exclude = g["not_compared"]
     not_compared = {k: {"channels": v, "growth_start": g0[k]["growth"], "growth_fitted": g1[k]["growth"]}
                     for k, v in exclude.items()}
-    unstable_fit = [k for k in after["unstable"] if k not in before["unstable"]]
+    unstable_fit = g["newly_unstable"]
     what = "validates" if split == "validation" else "simulates its own training runs (no validation runs)"
     why = g["why"].replace("makes the open-loop validation worse", f"the fitted model {what} worse than the "
                                                                      "starting model")
+    why = why.replace("its free simulation of", "the fitted model's free simulation of")
+    why = why.replace("the current model's is not", "the starting model's is not")
+    if unstable_fit:
+        why += "; if the vehicle is unstable there too, keep the fit knowingly"
     method = (f"open-loop {split} runs, per channel, position and depth aligned over the first "
               f"{ALIGN_WINDOW_S:g} s, block bootstrap over {BLOCK_S:g} s blocks (uvsim.fitting.guard)")
     if exclude:

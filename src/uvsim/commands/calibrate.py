@@ -294,9 +294,6 @@ def print_summary(cal, out=None) -> None:
             f"start model's free simulation and {d['growth_fitted']:.3g}x in the fitted model's (more than 2x: "
             f"unstable), so the never-worse check leaves its {', '.join(d['channels'])} out (docs/calibration.md, "
             "'The result check')")
-    for name in nw.get("unstable_fit") or []:
-        say(f"CAUTION: the fitted model's free simulation of {name} is unstable where the start model's is not; "
-            "check its open-loop behaviour (uvsim simulate) before you use it")
 
 
 def _run(args) -> int:

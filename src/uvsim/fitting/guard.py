@@ -146,18 +146,29 @@ def compare_open_loop(before: Mapping, after: Mapping) -> dict:
     ``meas`` and ``unstable`` (run name -> channels whose free simulation amplifies the
     uncertainty of its start, :func:`uvsim.fitting.sensitivity.initial_state_growth`):
     those channels of those runs, for either model, are left out for both (the guard's
-    ``not_compared``)."""
+    ``not_compared``).  A run unstable for the candidate only (``newly_unstable``) makes
+    ``ok`` False: what was left out there cannot be vouched for, and the current model
+    was stable there."""
     unstable: dict = {}
     for side in (before, after):
         for name, chans in (side.get("unstable") or {}).items():
             unstable.setdefault(name, set()).update(chans)
     if not unstable:
-        return {**guard(before, after), "not_compared": {}}
+        return {**guard(before, after), "not_compared": {}, "newly_unstable": []}
     exclude = {k: sorted(v) for k, v in unstable.items()}
     by = before.get("by", "group")
     b = block_costs(before["meas"], before["results"], by=by, exclude=exclude)
     a = block_costs(after["meas"], after["results"], by=by, exclude=exclude)
-    return {**guard(b, a), "not_compared": exclude}
+    out = {**guard(b, a), "not_compared": exclude}
+    new = [k for k in (after.get("unstable") or {}) if k not in (before.get("unstable") or {})]
+    out["newly_unstable"] = new
+    if new:
+        msg = (f"its free simulation of {', '.join(new)} is unstable (a 0.02 m/s or rad/s change of the start "
+               "grows more than 2x) where the current model's is not, so its attitude and rates there cannot be "
+               "compared")
+        out["why"] = msg if out["ok"] else f"{out['why']}; {msg}"
+        out["ok"] = False
+    return out
 
 
 def guard(before: Mapping, after: Mapping) -> dict:
