@@ -42,7 +42,7 @@ def test_an_unstable_truth_is_not_refused_against_a_stable_start(tmp_path):
 
 def test_the_diagnosis_guard_leaves_out_what_either_side_marks_unstable():
     # compare_open_loop (the diagnosis' guard): a run marked unstable by either side is left out
-    # for both, by signal group as diagnosis compares; unstable for the candidate only is not ok
+    # for both, by signal group as diagnosis compares
     import numpy as np
 
     from uvsim.fitting.guard import block_costs, compare_open_loop
@@ -57,12 +57,13 @@ def test_the_diagnosis_guard_leaves_out_what_either_side_marks_unstable():
            for i, e in enumerate(good)]
     before, after = block_costs(meas, good), block_costs(meas, bad)
     assert not compare_open_loop(before, after)["ok"]          # the attitude of run 0 is much worse
-    # unstable for the candidate only: left out, and the candidate is not vouched for
+    # unstable for the candidate only: left out and listed; refused where asked (the calibration)
     after["unstable"] = {runs[0].name: ["roll", "pitch", "yaw"]}
     g = compare_open_loop(before, after)
-    assert not g["ok"] and g["newly_unstable"] == [runs[0].name] and "is unstable" in g["why"]
+    assert g["ok"] and g["newly_unstable"] == [runs[0].name]
     assert g["not_compared"] == {runs[0].name: ["pitch", "roll", "yaw"]}
-    assert "attitude" not in g["worse"]
+    g = compare_open_loop(before, after, refuse_newly_unstable=True)
+    assert not g["ok"] and "is unstable" in g["why"] and "attitude" not in g["worse"]
     # unstable for both: left out for both, and judged on the rest
     before["unstable"] = {runs[0].name: ["roll"]}
     g = compare_open_loop(before, after)

@@ -113,7 +113,7 @@ def never_worse(runs, fitted: dict, initial: dict, meas: dict, vehicles: tuple |
         side["unstable"] = {k: x["channels"] for k, x in growth.items() if x["unstable"]}
         sides.append((side, growth))
     (before, g0), (after, g1) = sides
-    g = compare_open_loop(before, after)
+    g = compare_open_loop(before, after, refuse_newly_unstable=True)
     exclude = g["not_compared"]
     not_compared = {k: {"channels": v, "growth_start": g0[k]["growth"], "growth_fitted": g1[k]["growth"]}
                     for k, v in exclude.items()}

@@ -141,14 +141,17 @@ def block_costs(meas: Sequence, results: Sequence[dict], block_s: float = BLOCK_
             "rmse": rmse, "meas": list(meas), "results": list(results), "by": by}
 
 
-def compare_open_loop(before: Mapping, after: Mapping) -> dict:
+def compare_open_loop(before: Mapping, after: Mapping, *, refuse_newly_unstable: bool = False) -> dict:
     """:func:`guard` of two :func:`block_costs` results that also carry ``results``,
     ``meas`` and ``unstable`` (run name -> channels whose free simulation amplifies the
     uncertainty of its start, :func:`uvsim.fitting.sensitivity.initial_state_growth`):
     those channels of those runs, for either model, are left out for both (the guard's
-    ``not_compared``).  A run unstable for the candidate only (``newly_unstable``) makes
-    ``ok`` False: what was left out there cannot be vouched for, and the current model
-    was stable there."""
+    ``not_compared``).  Runs unstable for the candidate only are listed (``newly_unstable``);
+    with ``refuse_newly_unstable`` they make ``ok`` False: what was left out there cannot be
+    vouched for, and the current model was stable there.  The calibration's check refuses
+    them; diagnosis does not, since an effect that restores position (a tether) can make the
+    test's velocity change grow without the vehicle being unstable (the foreign suite's
+    case b: its tether was refused and a thrust asymmetry named instead)."""
     unstable: dict = {}
     for side in (before, after):
         for name, chans in (side.get("unstable") or {}).items():
@@ -162,7 +165,7 @@ def compare_open_loop(before: Mapping, after: Mapping) -> dict:
     out = {**guard(b, a), "not_compared": exclude}
     new = [k for k in (after.get("unstable") or {}) if k not in (before.get("unstable") or {})]
     out["newly_unstable"] = new
-    if new:
+    if new and refuse_newly_unstable:
         msg = (f"its free simulation of {', '.join(new)} is unstable (a 0.02 m/s or rad/s change of the start "
                "grows more than 2x) where the current model's is not, so its attitude and rates there cannot be "
                "compared")
