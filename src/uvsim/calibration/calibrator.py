@@ -40,7 +40,7 @@ from uvsim.calibration.report import build_report, evaluate_runs, identifiabilit
 from uvsim.calibration.selection import check_bounds, effective_inertia_start, expand_names, joint_candidates
 from uvsim.errors import CalibrationError
 from uvsim.estimation.lag import estimate_attitude_lag
-from uvsim.fitting.objective import LOSSES
+from uvsim.fitting.objective import check_loss
 from uvsim.fitting.parameters import default_bounds
 from uvsim.logs import MANIFEST, Dataset, read_dataset
 from uvsim.measurements import CHANNEL_GROUP, measurements_for
@@ -264,8 +264,7 @@ class Calibrator:
         if self.effects:
             veh = veh.with_effects(list(self.effects))
         self.initial_vehicle_ = veh
-        if self.loss not in LOSSES:
-            raise CalibrationError(f"loss {self.loss!r}: expected one of {', '.join(LOSSES)}")
+        check_loss(self.loss)
         if not 0 < float(self.margin) < 1:
             raise CalibrationError(f"margin {self.margin!r}: expected a fraction between 0 and 1 (0.5 = +-50 %)")
         if self.ga_channels not in ("own", "all"):

@@ -14,13 +14,15 @@ import platform
 
 
 def register(sub) -> None:
+    from uvsim.fitting.objective import LOSSES
+
     p = sub.add_parser("bench", help="measure simulator / calibration speed; 'bench diagnose': scenario benchmark")
     p.add_argument("suite", nargs="?", choices=["diagnose", "diagnose-structural", "calibrate-structural"],
                    default=None,
                    help="'diagnose': diagnose randomized scenarios; 'diagnose-structural': scenarios whose data "
                         "differ from the model in structure, N per class; 'calibrate-structural': calibrate N such "
                         "datasets and compare with the start model (default: the speed figures)")
-    p.add_argument("--loss", choices=["linear", "huber"], default="linear",
+    p.add_argument("--loss", choices=LOSSES, default="linear",
                    help="(calibrate-structural) the calibration's --loss")
     p.add_argument("--compare-no-prior", action="store_true",
                    help="(calibrate-structural) calibrate each dataset also without the priors (--no-prior)")

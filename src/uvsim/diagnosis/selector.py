@@ -120,18 +120,22 @@ class Selector:
         return {"windows": w, "cost": float(w.sum()), "n": int(res.n_residuals),
                 "per_entry": float(w.sum() / max(res.n_residuals, 1))}
 
-    def open_loop_blocks(self, vehicle, values: Mapping) -> dict:
+    def open_loop_blocks(self, vehicle, values: Mapping, *, stability: bool = True) -> dict:
         """Free simulations of the validation runs from their logged starts
         (:func:`uvsim.fitting.evaluate.open_loop`, the report's before/after RMSE), position
         and depth aligned over the start (:func:`uvsim.fitting.guard.start_aligned`), as
         noise-normalized errors per signal group and block (:func:`uvsim.fitting.guard.block_costs`);
-        ``total`` is inf when a simulation diverges."""
+        ``total`` is inf when a simulation diverges.  ``stability``: also the runs whose free
+        simulation amplifies its start (``unstable``, for :func:`compare_open_loop`; two more
+        simulations of every run)."""
         known = vehicle.parameters()
         over = {k: v for k, v in values.items() if k in known}
         ol = open_loop(vehicle, self.val, overrides=over, meas=self.meas_va)
         # position and depth aligned over each run's start: the noisy first samples offset every
         # model's simulation alike and could favour one by luck (uvsim.fitting.guard.start_aligned)
         out = block_costs(self.meas_va, [start_aligned(m, o) for m, o in zip(self.meas_va, ol)])
+        if not stability:
+            return out
         # runs whose free simulation amplifies its uncertain start (uvsim.fitting.sensitivity):
         # compare_open_loop leaves their attitude, rates and accelerations out
         growth = initial_state_growth(vehicle, self.val, self.meas_va, ol, overrides=over)
@@ -141,7 +145,7 @@ class Selector:
     def open_loop_cost(self, vehicle, values: Mapping) -> float:
         """Noise-normalized sum of squares of the free simulations of the validation runs
         (:meth:`open_loop_blocks`); inf when a simulation diverges."""
-        return self.open_loop_blocks(vehicle, values)["total"]
+        return self.open_loop_blocks(vehicle, values, stability=False)["total"]
 
     def seed_retune(self, vehicle) -> dict:
         """Equation-error estimate of the re-tuned base coefficients (the start of the

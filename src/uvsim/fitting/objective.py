@@ -68,15 +68,20 @@ LOSSES = ("linear", "huber")
 HUBER_SCALE = 3.0
 
 
+def check_loss(loss: str) -> None:
+    """An unknown ``loss`` is a :class:`CalibrationError` naming the known ones."""
+    if loss not in LOSSES:
+        raise CalibrationError(f"loss {loss!r}: expected one of {', '.join(LOSSES)}")
+
+
 def robust_residuals(r: np.ndarray, loss: str = "linear", scale: float = HUBER_SCALE) -> np.ndarray:
     """Residuals whose half sum of squares is the loss: for "huber", ``rho(r) = r^2/2`` up to
     ``|r| = scale`` and ``scale |r| - scale^2/2`` beyond, written as
     ``sign(r) sqrt(2 rho(r))`` (continuous with a continuous derivative, so Gauss-Newton
     and finite differences apply unchanged)."""
+    check_loss(loss)
     if loss == "linear":
         return r
-    if loss != "huber":
-        raise CalibrationError(f"loss {loss!r}: expected one of {LOSSES}")
     a = np.abs(r)
     with np.errstate(invalid="ignore"):
         return np.where(a <= scale, r, np.sign(r) * np.sqrt(np.maximum(2.0 * scale * a - scale * scale, 0.0)))
@@ -235,7 +240,7 @@ class WindowedProblem:
 
     def __init__(self, vehicle, runs, meas, space, horizon=None, *, z_ref=None, gyro_bias=True,
                  initial_velocity: str = "zero", yref: np.ndarray | None = None, loss: str = "linear"):
-        robust_residuals(np.zeros(1), loss)  # an unknown loss is an error here, not in a worker
+        check_loss(loss)  # an unknown loss is an error here, not in a worker
         self.loss = loss
         kinds = {(r.input_kind, len(r.input_columns)) for r in runs}
         if len(kinds) != 1:
