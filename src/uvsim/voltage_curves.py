@@ -182,6 +182,13 @@ def load_voltage_curve(spec, *, field: str = "curve") -> VoltageThrustCurve:
     return VoltageThrustCurve(pwm, volts, T, nominal_voltage=nominal, name=name, source=field)
 
 
+def measured_voltage_range() -> tuple[float, float]:
+    """The supply voltages (V) every shipped family was measured between (T200: 10-20 V):
+    the physical range of a fitted ``supply_voltage`` (:mod:`uvsim.forces.actuators`)."""
+    ranges = [_family_table(name)[1] for name in FAMILIES]
+    return max(float(v[0]) for v in ranges), min(float(v[-1]) for v in ranges)
+
+
 def family_path(name: str) -> Path:
     """Directory holding the sheets of the shipped family ``name``."""
     return FAMILIES[name]

@@ -37,6 +37,7 @@ import numpy as np
 
 from uvsim.errors import CalibrationError
 from uvsim.vehicle import INERTIA_NAMES
+from uvsim.voltage_curves import measured_voltage_range
 
 #: Relative width of the softplus that keeps the second moments positive.
 INERTIA_EPS = 1e-3
@@ -246,6 +247,8 @@ def default_bounds(name: str, value: float, margin: float) -> tuple[float, float
     * thruster and generalized-force gains: (0.05, 1.5); reverse ratios: (0.1, 1.5)
       (a unit delivering more than 1.5 times its measured curve points to a wrong curve);
     * current components: (-1, 1) m/s;
+    * ``supply_voltage``: the voltages the shipped thrust-curve families were measured at
+      (10-20 V for the T200, :mod:`uvsim.voltage_curves`);
     * everything else: ``value (1 -+ margin)``, so inertias, masses and added masses stay
       positive and damping coefficients negative (paper sign); a value of 0 has no
       relative range and needs explicit bounds."""
@@ -261,6 +264,9 @@ def default_bounds(name: str, value: float, margin: float) -> tuple[float, float
         return min(REVERSE_RANGE[0], value), max(REVERSE_RANGE[1], value)
     if name in ("current_n", "current_e", "current_d"):
         return min(CURRENT_RANGE[0], value), max(CURRENT_RANGE[1], value)
+    if name == "supply_voltage":  # the measured sheets bound it: nothing is extrapolated
+        lo, hi = measured_voltage_range()
+        return min(lo, value), max(hi, value)
     if value == 0:
         raise CalibrationError(f"parameter {name} is 0 in the vehicle, so a relative margin gives no search range; "
                                f"give its bounds explicitly (--bounds {name}=LOW:HIGH)")

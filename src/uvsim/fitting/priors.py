@@ -45,8 +45,17 @@ from uvsim.fitting.parameters import ParameterSpace, default_bounds
 DEFAULT_RELATIVE_SD = 0.5
 
 
+#: Prior standard deviation of a fitted ``supply_voltage`` (V): half the span of a 4S
+#: lithium-ion pack (the BlueROV2's battery) from full, 4 x 4.2 V = 16.8 V, to a 3.2 V per
+#: cell cut-off, 12.8 V (cell limits of the lithium-ion chemistry; Blue Robotics' 14.8 V
+#: nominal 4S pack).
+SUPPLY_VOLTAGE_SD = 2.0
+
+
 def default_prior_sd(name: str, value: float) -> float:
     """Prior standard deviation of parameter ``name`` at ``value`` (module docstring)."""
+    if name == "supply_voltage":
+        return SUPPLY_VOLTAGE_SD
     try:
         lo, hi = default_bounds(name, float(value), DEFAULT_RELATIVE_SD)
     except CalibrationError:  # a coefficient that is 0 in the file has no relative width

@@ -16,7 +16,15 @@ the vehicle file's value):
 * ``thruster_x_i``, ``thruster_y_i``, ``thruster_z_i`` (m): its position (lever arm),
   when the vehicle gives thruster positions (``units``);
 * ``force_gain_X`` ... ``force_gain_N`` and ``force_reverse_X`` ... (-): the same per
-  degree of freedom for generalized-force inputs.
+  degree of freedom for generalized-force inputs;
+* ``supply_voltage`` (V), only when the thrusters' curves depend on the supply voltage
+  (``curve: {voltage_table: t200, nominal_voltage: 16}``, :mod:`uvsim.voltage_curves`):
+  the battery voltage the curves are read at where a run logged none, i.e. the curves'
+  ``nominal_voltage`` (one battery feeds every thruster: curves with different nominal
+  voltages have no such parameter). A run that logs its voltage
+  uses the logged one. Fitting it fits the thrust curve's *shape* within the measured
+  family (at low voltage the T200 loses more thrust at full command than near its dead
+  band), which no gain can.
 
 With generalized-force inputs the thruster gains and reverse ratios act through the
 allocation: the commanded ``tau`` is distributed over the thrusters by the pseudo-inverse
@@ -105,6 +113,13 @@ class Actuators(ForceTerm):
     def n_thrusters(self) -> int:
         return 0 if self.matrix is None else self.matrix.shape[1]
 
+    def _supply_voltage(self) -> float | None:
+        """The voltage-dependent curves' common nominal voltage (V); None without such curves,
+        or when their nominal voltages differ (thrusters on separate batteries: no one
+        ``supply_voltage`` describes them)."""
+        volts = {float(c.nominal_voltage) for c in (self.curves or []) if getattr(c, "voltage_dependent", False)}
+        return volts.pop() if len(volts) == 1 else None
+
     def parameters(self) -> dict[str, float]:
         """Named actuator parameters (module docstring) with their current values."""
         out = {}
@@ -117,6 +132,9 @@ class Actuators(ForceTerm):
         for j, c in enumerate(DOF_LETTERS):
             out[f"force_gain_{c}"] = float(self.force_gain[j])
             out[f"force_reverse_{c}"] = float(self.force_reverse[j])
+        v = self._supply_voltage()
+        if v is not None:
+            out["supply_voltage"] = v
         return out
 
     def with_parameters(self, values) -> "Actuators":
@@ -147,6 +165,10 @@ class Actuators(ForceTerm):
                 key = f"force_{tag}_{c}"
                 if key in own:
                     spec.setdefault(field, {})[c] = own[key]
+        if "supply_voltage" in own:  # every voltage-dependent curve is read at the fitted supply
+            for d in [spec] + list(units or []):
+                if isinstance(d.get("curve"), dict) and "voltage_table" in d["curve"]:
+                    d["curve"] = {**d["curve"], "nominal_voltage": own["supply_voltage"]}
         if units is None and any(k.startswith("thruster_") for k in own):
             # a configuration matrix without units: keep gains / ratios in lists
             g = [own.get(f"thruster_gain_{i + 1}", float(self.gains[i])) for i in range(self.n_thrusters)]
@@ -165,7 +187,10 @@ class Actuators(ForceTerm):
         # inputs are held over a sample interval, so the four RK4 stages see the same
         # array object: map PWM -> thrust once per interval (cache keyed on identity)
         prep = {"groups": groups, "u": None, "v": None, "f": None, "gain": None, "rev": None, "B": self.matrix,
-                "fgain": None, "frev": None}
+                "fgain": None, "frev": None, "supply": None}
+        if "supply_voltage" in params and self._supply_voltage() is not None:
+            sv = np.asarray(params["supply_voltage"], float)
+            prep["supply"] = np.broadcast_to(sv, (n,)) if sv.ndim else sv
         k = self.n_thrusters
 
         def family(names, defaults):
@@ -265,7 +290,12 @@ class Actuators(ForceTerm):
             raise SimulationError(f"inputs are per-thruster {kind} but the vehicle defines no thrusters")
         if prep["u"] is u and prep["v"] is ctx.voltage:
             return prep["f"]
-        f = _scaled(self.thrusts(u, kind, prep["groups"], ctx.voltage), prep["gain"], prep["rev"])
+        volt = ctx.voltage
+        if prep["supply"] is not None:  # the fitted supply where the run logged no voltage
+            sv = prep["supply"]
+            volt = (np.broadcast_to(sv, (u.shape[0],)) if volt is None
+                    else np.where(np.isnan(np.asarray(volt, float)), sv, volt))
+        f = _scaled(self.thrusts(u, kind, prep["groups"], volt), prep["gain"], prep["rev"])
         B = prep["B"]
         tau = f @ B.T if B.ndim == 2 else np.einsum("nij,nj->ni", B, f)
         prep["u"], prep["v"], prep["f"] = u, ctx.voltage, tau
