@@ -159,6 +159,13 @@ class RunMeasurements:
     def has_gyro(self) -> bool:
         return "rates" in self.groups
 
+    @property
+    def has_filter_attitude(self) -> bool:
+        """Roll and pitch logged as Euler angles beside a gyro: an attitude filter's output
+        (an AHRS / EKF), whose tilt carries a constant bias (``attitude_bias`` of :meth:`predict`)."""
+        grp = self.groups.get("attitude")
+        return self.has_gyro and grp is not None and grp.mode == "euler" and bool(grp.logged[0] and grp.logged[1])
+
     def channel_weights(self, group: str) -> np.ndarray:
         """(k,) weights: ``weights[group]`` x ``weights[channel]`` (default 1)."""
         w = float(self.weights.get(group, 1.0))
@@ -199,30 +206,35 @@ class RunMeasurements:
                     out[i, j] = np.polyfit(tv[sel] - self.t[r], xv[sel], 1)[-1]
         return out
 
-    def _lagged_euler(self, euler: np.ndarray) -> np.ndarray:
+    def _lagged_euler(self, euler: np.ndarray, offset: np.ndarray | None = None) -> np.ndarray:
         """Predicted Euler angles (..., n, 3) through the attitude filter's lag, restarted
-        at :attr:`restart_rows` from the logged attitude (module docstring)."""
+        at :attr:`restart_rows` from the logged attitude (module docstring) less the
+        filter's ``offset`` (..., 3) when it has one (the logged angles carry it)."""
         rows = np.array([0] if self.restart_rows is None else self.restart_rows, int)
         key = tuple(rows.tolist())
         if self._restart_cache is None or self._restart_cache[0] != key:
             self._restart_cache = (key, self._logged_euler_at(rows))
         start = self._restart_cache[1]
+        if offset is not None:
+            start = start - np.asarray(offset)[..., None, :]  # (..., R, 3)
         bounds = list(rows) + [self.n]
         out = np.empty_like(euler)
         for i, (a, b) in enumerate(zip(bounds[:-1], bounds[1:])):
             x = unwrap_angles(euler[..., a:b, :], axis=-2)
-            y0 = np.where(np.isfinite(start[i]), start[i], x[..., 0, :])
+            y0 = np.where(np.isfinite(start[..., i, :]), start[..., i, :], x[..., 0, :])
             y0 = x[..., 0, :] + wrap(y0 - x[..., 0, :])  # on the prediction's branch
             out[..., a:b, :] = first_order_lag(self.t[a:b], x, self.attitude_lag, y0)
         return out
 
     # ------------------------------------------------------------------ prediction
     def predict(self, y: np.ndarray, nu_dot: np.ndarray | None = None,
-                gyro_bias: np.ndarray | None = None) -> dict[str, np.ndarray]:
+                gyro_bias: np.ndarray | None = None, attitude_bias: np.ndarray | None = None) -> dict[str, np.ndarray]:
         """Predicted measurements from states ``y`` (..., n, n_y) and accelerations
         ``nu_dot`` (..., n, 6) (needed only for the accelerometer); ``gyro_bias``
-        (..., 3) rad/s.  Returns group -> (..., n, k) (attitude: (..., n, 4)
-        quaternions in quaternion mode, Euler angles otherwise)."""
+        (..., 3) rad/s; ``attitude_bias`` (..., 2) rad: the attitude filter's constant roll
+        and pitch offset (Euler mode only, :attr:`has_filter_attitude`).  Returns group ->
+        (..., n, k) (attitude: (..., n, 4) quaternions in quaternion mode, Euler angles
+        otherwise)."""
         y = np.asarray(y, float)
         out: dict[str, np.ndarray] = {}
         q = y[..., 3:7]
@@ -245,11 +257,17 @@ class RunMeasurements:
                     z = z + np.einsum("...j,j->...", rot()[..., 2, :], r)
                 out[g] = z[..., None]
             elif g == "attitude":
+                off = None
+                if attitude_bias is not None and grp.mode == "euler":
+                    ab = np.asarray(attitude_bias, float)
+                    off = np.concatenate([ab, np.zeros(ab.shape[:-1] + (1,))], -1)  # roll, pitch; yaw 0
                 if self.attitude_lag > 0:
-                    e = self._lagged_euler(quat_to_euler(q))
+                    e = self._lagged_euler(quat_to_euler(q), off)
                     out[g] = euler_to_quat(e) if grp.mode == "quaternion" else e
                 else:
                     out[g] = q if grp.mode == "quaternion" else quat_to_euler(q)
+                if off is not None:
+                    out[g] = out[g] + off[..., None, :]
             elif g == "velocity":
                 v = nu[..., :3]
                 r = self.sensors.get("dvl")

@@ -128,6 +128,10 @@ class Calibrator:
     horizons : window lengths of the joint stage's continuation, s (None: whole runs).
     max_iter : Levenberg-Marquardt iterations per continuation stage (80). A last stage that
         stops there is not converged: the result check reports it as unfinished.
+    attitude_bias : fit a constant roll and pitch offset per run whose roll and pitch come
+        from an attitude filter beside a gyro (joint stage; prior sd
+        :data:`uvsim.fitting.objective.ATTITUDE_BIAS_SIGMA`, 0.01 rad; a fitted offset beyond
+        3 prior sds is flagged).
     gyro_bias : fit a constant gyro bias per run (joint stage; the GA removes each run's
         median rate residual).
     screen : free mixed runs' candidates only if the data excite them.
@@ -174,7 +178,8 @@ class Calibrator:
                  margin: float = 0.5, bounds: Mapping | None = None, free=None, fix=None,
                  signal_weights: Mapping | None = None, noise: Mapping | None = None, ga_channels: str = "own",
                  low_speed_exponent: float = 0.0, refine: bool = True, horizons=DEFAULT_HORIZONS,
-                 max_iter: int = 80, gyro_bias: bool = True, screen: bool = True, attitude_lag="auto",
+                 max_iter: int = 80, gyro_bias: bool = True, attitude_bias: bool = True, screen: bool = True,
+                 attitude_lag="auto",
                  initial_velocity: str = "zero", prior: bool = True, loss: str = "linear",
                  workers: int = 1, dask: str | None = None, batch_rows: int = DEFAULT_BATCH_ROWS, checkpoint=None,
                  resume=None, progress: bool = False, effects=None, allow=()):
@@ -188,6 +193,7 @@ class Calibrator:
         self.low_speed_exponent, self.refine = low_speed_exponent, refine
         self.horizons, self.max_iter, self.gyro_bias, self.screen = horizons, max_iter, gyro_bias, screen
         self.attitude_lag = attitude_lag
+        self.attitude_bias = attitude_bias
         self.initial_velocity = initial_velocity
         self.prior = prior
         self.loss = loss
@@ -413,7 +419,8 @@ class Calibrator:
             "weights": self.signal_weights, "noise": self.noise, "initial_velocity": self.initial_velocity,
             "prior": bool(self.prior), "uncertainty": self.initial_vehicle_.uncertainty,
             # (the default loss leaves the key, and so earlier checkpoints, as they were)
-            **({} if self.loss == "linear" else {"loss": self.loss})})
+            **({} if self.loss == "linear" else {"loss": self.loss}),
+            "attitude_bias": bool(self.attitude_bias)})
         ck_path = self.checkpoint if self.checkpoint is not None else self.resume
         ck = None
         if ck_path is not None or self.resume is not None:
@@ -421,7 +428,8 @@ class Calibrator:
                                  resume=None if self.resume is None else joint_checkpoint_path(self.resume))
         return run_joint(start_veh, runs, meas, params, keep=keep, screen=screen,
                          bounds={k: bounds_of(k) for k in names}, horizons=horizons, max_iter=int(self.max_iter),
-                         gyro_bias=bool(self.gyro_bias), initial_velocity=self.initial_velocity,
+                         gyro_bias=bool(self.gyro_bias), attitude_bias=bool(self.attitude_bias),
+                         initial_velocity=self.initial_velocity,
                          workers=self._workers(), checkpoint=ck, progress=self.progress,
                          prior_mean=self.initial_vehicle_.parameters() if self.prior else None,
                          prior_sd=self.initial_vehicle_.uncertainty, loss=self.loss)

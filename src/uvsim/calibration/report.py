@@ -16,7 +16,7 @@ import numpy as np
 
 from uvsim.calibration.params import EFFECTIVE_INERTIA, LINEAR_DAMPING, QUADRATIC_DAMPING
 from uvsim.fitting.evaluate import open_loop
-from uvsim.fitting.objective import gyro_bias_sd
+from uvsim.fitting.objective import ATTITUDE_BIAS_SIGMA, gyro_bias_sd
 from uvsim.metrics import measurement_metrics, pooled_group_rmse
 
 #: 1-sigma above this fraction of the value: reported as "weakly_determined".
@@ -206,6 +206,21 @@ def gyro_bias_flags(res, sd: float) -> list[str]:
     return out
 
 
+def attitude_bias_flags(res) -> list[str]:
+    """Runs whose fitted attitude-filter offset is more than :data:`BIAS_FLAG_SD` prior sds
+    (:data:`uvsim.fitting.objective.ATTITUDE_BIAS_SIGMA`): a constant tilt the dynamics do not
+    give, e.g. a centre of gravity or buoyancy off the vehicle file's (free ``x_b``, ``y_b``)."""
+    out = []
+    for run, b in ({} if res is None else getattr(res, "attitude_bias", {})).items():
+        for axis, x in zip(("roll", "pitch"), b):
+            if abs(x) > BIAS_FLAG_SD * ATTITUDE_BIAS_SIGMA:
+                out.append(f"run {run}: attitude filter offset in {axis} {x:+.4f} rad is "
+                           f"{abs(x) / ATTITUDE_BIAS_SIGMA:.1f} sd of a filter's tilt error ({ATTITUDE_BIAS_SIGMA:g} "
+                           "rad): a constant tilt the dynamics do not give (a centre of gravity or buoyancy off "
+                           "the vehicle file's: free x_b, y_b; or a misaligned IMU)")
+    return out
+
+
 def prior_report(res) -> dict:
     """The report's ``prior``: the data weight and, per freed parameter, the prior mean and
     sd, the posterior sd, how far the data moved it (in prior sds) and how much they
@@ -257,6 +272,8 @@ def build_report(cal, ds, runs, problems, ga, bounds_of, t0, t_ga, t_ref) -> dic
         "gyro_bias": {} if res is None else dict(res.gyro_bias),
         "prior": prior_report(res),
         "gyro_bias_flags": gyro_bias_flags(res, gyro_bias_sd(cal.initial_vehicle_)),
+        "attitude_bias": {} if res is None else dict(res.attitude_bias),
+        "attitude_bias_flags": attitude_bias_flags(res),
         "validation_rmse": val, "validation_fit_percent": val_fit,
         "training_rmse": tr, "training_fit_percent": tr_fit,
         "initial_validation_rmse": val0, "initial_validation_fit_percent": val0_fit,

@@ -52,6 +52,9 @@ def register(sub) -> None:
                    help="Levenberg-Marquardt iterations per horizon; a last stage that stops there is reported as "
                         "unfinished (exit 2) unless --keep-worse")
     p.add_argument("--no-gyro-bias", action="store_true", help="do not fit a gyro bias per run")
+    p.add_argument("--no-attitude-bias", action="store_true",
+                   help="do not fit a roll / pitch offset per run of an attitude filter (runs logging Euler angles "
+                        "beside a gyro)")
     p.add_argument("--loss", choices=LOSSES, default="linear",
                    help="loss of the joint stage's measurement residuals: linear (least squares, default) or huber "
                         "(beyond 3 noise sigmas a residual costs linearly: spikes, dropouts, bursts of model error)")
@@ -278,6 +281,12 @@ def print_summary(cal, out=None) -> None:
             say(f"  {name:28s} " + " ".join(f"{x:+.5f}" for x in b))
         for flag in rep.get("gyro_bias_flags", []):
             say(f"  FLAG {flag}")
+    if rep.get("attitude_bias"):
+        say("attitude filter offset per run (rad, roll pitch):")
+        for name, b in rep["attitude_bias"].items():
+            say(f"  {name:28s} " + " ".join(f"{x:+.5f}" for x in b))
+        for flag in rep.get("attitude_bias_flags", []):
+            say(f"  FLAG {flag}")
     lag = rep["attitude_lag"]
     if lag["tau"]:
         say(f"attitude filter lag {lag['tau']:.3f} s ({lag['source']})")
@@ -320,7 +329,8 @@ def _run(args) -> int:
                      margin=args.margin, workers=args.workers, dask=args.dask, checkpoint=ckpt, resume=args.resume,
                      refine=not args.no_refine, free=args.free, fix=args.fix, bounds=bounds,
                      signal_weights=weights, noise=noise, horizons=horizons, max_iter=args.max_iter,
-                     gyro_bias=not args.no_gyro_bias, prior=not args.no_prior, loss=args.loss,
+                     gyro_bias=not args.no_gyro_bias,
+                     attitude_bias=not args.no_attitude_bias, prior=not args.no_prior, loss=args.loss,
                      screen=not args.no_screen,
                      ga_channels=args.ga_channels,
                      attitude_lag=lag, low_speed_exponent=args.low_speed_exponent, progress=want_progress(args),

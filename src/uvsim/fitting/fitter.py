@@ -64,10 +64,13 @@ class FitResult:
     prior_mean: dict = field(default_factory=dict)
     prior_sd: dict = field(default_factory=dict)
     data_weight: float | None = None
+    #: run name -> fitted [roll, pitch] offset (rad) of its attitude filter (runs that have one)
+    attitude_bias: dict = field(default_factory=dict)
 
     def summary(self) -> dict:
         return {"values": self.values, "std": self.std, "cost": self.cost, "n_residuals": self.n_residuals,
-                "stages": self.stages, "gyro_bias": self.gyro_bias, "at_bounds": self.at_bounds,
+                "stages": self.stages, "gyro_bias": self.gyro_bias, "attitude_bias": self.attitude_bias,
+                "at_bounds": self.at_bounds,
                 "physical_limit": self.physical_limit, "identifiability": self.identifiability}
 
 
@@ -103,7 +106,7 @@ def _chunks(idx: list, sizes: list) -> list[list]:
 
 
 def build_problems(vehicle, runs, meas, space: ParameterSpace, horizon, z_ref, *, gyro_bias=True,
-                   initial_velocity="zero", loss: str = "linear") -> tuple[list, list]:
+                   attitude_bias: bool = False, initial_velocity="zero", loss: str = "linear") -> tuple[list, list]:
     """:class:`WindowedProblem` s of at most :data:`RUNS_PER_PROBLEM` runs and
     :data:`SAMPLES_PER_PROBLEM` samples of one input kind each; returns (problems, run order)."""
     probs, order = [], []
@@ -116,15 +119,15 @@ def build_problems(vehicle, runs, meas, space: ParameterSpace, horizon, z_ref, *
         a = 0
         for sub in _chunks(idx, [runs[i].t.size for i in idx]):
             probs.append(WindowedProblem(vehicle, [runs[i] for i in sub], [meas[i] for i in sub], space, horizon,
-                                         z_ref=z_ref, gyro_bias=gyro_bias, initial_velocity=initial_velocity,
-                                         yref=yref[a:a + len(sub)], loss=loss))
+                                         z_ref=z_ref, gyro_bias=gyro_bias, attitude_bias=attitude_bias,
+                                         initial_velocity=initial_velocity, yref=yref[a:a + len(sub)], loss=loss))
             order += sub
             a += len(sub)
     return probs, order
 
 
 def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence = DEFAULT_HORIZONS,
-        max_iter: int = 20, gyro_bias: bool = True, noise=None, weights=None, initial_velocity: str = "zero",
+        max_iter: int = 20, gyro_bias: bool = True, attitude_bias: bool = False, noise=None, weights=None, initial_velocity: str = "zero",
         z0=None, progress=None, workers: int = 1, ftol: float = 1e-6, checkpoint=None,
         on_iteration=None, prior_mean=None, prior_sd=None, loss: str = "linear") -> FitResult:
     """Fit ``space``'s free parameters of ``vehicle`` to ``runs`` (module docstring).
@@ -138,6 +141,8 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
     horizons : window lengths, s, of the continuation stages (None = whole runs).
     max_iter : Levenberg-Marquardt iterations per stage.
     gyro_bias : fit a constant gyro bias per run that logs rates.
+    attitude_bias : fit a constant roll and pitch offset per run whose attitude comes from a
+        filter beside a gyro (:data:`uvsim.fitting.objective.ATTITUDE_BIAS_SIGMA` prior).
     z0 : start (scaled) instead of the space's start values.
     progress : callable(message) for stage / iteration reports.
     workers : processes for the simulations (results do not depend on it).
@@ -177,7 +182,8 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
     problems = []
     if saved is not None and first == len(horizons):  # every stage finished: the final linearization only
         problems, order = build_problems(vehicle, runs, meas, space, horizons[-1], np.array(saved["z_start"]),
-                                         gyro_bias=gyro_bias, initial_velocity=initial_velocity, loss=loss)
+                                         gyro_bias=gyro_bias, attitude_bias=attitude_bias,
+                                         initial_velocity=initial_velocity, loss=loss)
         res = solve(problems, z, saved["nus"], max_iter=0, workers=workers, prior=prior)
         # the finished fit's own cost (re-evaluated here in a batch of another size, the sum may
         # differ in its last bit with the BLAS kernels of some machines)
@@ -188,6 +194,7 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
         t0 = time.perf_counter()
         z_start = z
         problems, order = build_problems(vehicle, runs, meas, space, H, z, gyro_bias=gyro_bias,
+                                         attitude_bias=attitude_bias,
                                          initial_velocity=initial_velocity, loss=loss)
         label = "whole runs" if H is None else f"{H:g} s windows"
         say(f"fitting {space.p} parameter(s) on {len(runs)} run(s), {label}")
@@ -228,14 +235,16 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
         ident = identifiability(info / np.outer(sc, sc), space.names, C)
     else:
         C, std, ident = np.zeros((0, 0)), {}, {}
-    # per-run nuisance: gyro biases (in the problems' run order)
-    gb = {}
+    # per-run nuisance: sensor biases (in the problems' run order)
+    gb, ab = {}, {}
     k = 0
     for prob in problems:
         for r, run in enumerate(prob.runs):
-            _, b = prob.split_nuisance(r, res["nus"][k])
-            if b is not None:
-                gb[run.name] = [float(x) for x in b]
+            g, a = prob.split_bias(r, prob.split_nuisance(r, res["nus"][k])[1])
+            if g is not None:
+                gb[run.name] = [float(x) for x in g]
+            if a is not None:
+                ab[run.name] = [float(x) for x in a]
             k += 1
     n_res = int(sum(b.n for b in blocks))
     out = FitResult(space.names, values, std, C, float(res["cost"]), n_res, stages, gb, space.at_bounds(z),
@@ -246,6 +255,7 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
         out.prior_mean = {k: float(prior.mean_z[i] * sc[i]) for i, k in enumerate(space.names)}
         out.prior_sd = {k: float(prior.sd_z[i] * sc[i]) for i, k in enumerate(space.names)}
         out.data_weight = float(res["data_weight"])
+    out.attitude_bias = ab
     return out
 
 

@@ -15,7 +15,8 @@ windows of all runs and all parameter sets as rows of one batched RK4 call
    of multiple shooting: Bock & Plitt 1984; continuity is reached at convergence rather
    than imposed during the iterations, which keeps long runs well-posed);
 3. priors on the free node components (their reference is a measurement-derived
-   estimate; :data:`uvsim.fitting.nodes.PRIOR_SIGMA`) and on the gyro biases.
+   estimate; :data:`uvsim.fitting.nodes.PRIOR_SIGMA`) and on the sensor biases (gyro;
+   the roll and pitch of an attitude filter, :data:`ATTITUDE_BIAS_SIGMA`).
 
 Long horizons make the output-error cost rugged (the trajectory of an ROV that yaws away
 under the Munk moment depends very nonlinearly on the parameters); short windows keep it
@@ -49,6 +50,14 @@ DEFECT_SIGMA = np.array([0.005, 0.005, 0.005, 0.005, 0.005, 0.005, 0.005, 0.005,
 #: (``sensors.imu.gyro_bias_sd``): the in-run bias left after the autopilot's gyro calibration at
 #: boot; the ArduSub EKF of a real BlueROV2 estimated 0.001-0.017 rad/s (issue 21's logs).
 GYRO_BIAS_SIGMA = 0.02
+
+
+#: Prior standard deviation of the constant roll / pitch offset of a run's attitude filter
+#: (AHRS / EKF), rad: the filter levels on gravity as the accelerometer measures it, so a
+#: residual accelerometer bias b tilts it by about b / g; 0.01 rad for b = 0.1 m/s^2 (about
+#: 0.01 g, the order of a calibrated consumer MEMS accelerometer's offset), plus the IMU's
+#: mounting misalignment on the frame.
+ATTITUDE_BIAS_SIGMA = 0.01
 
 
 def gyro_bias_sd(vehicle) -> float:
@@ -234,12 +243,16 @@ class WindowedProblem:
     horizon : window length, s (None: whole runs).
     z_ref : parameters of the reference simulation (default ``space.z0``).
     gyro_bias : fit a constant gyro bias per run that logs rates.
+    attitude_bias : fit a constant roll and pitch offset per run whose attitude comes from a
+        filter (:attr:`uvsim.measurements.RunMeasurements.has_filter_attitude`), prior sd
+        :data:`ATTITUDE_BIAS_SIGMA`.
     loss : "linear" (least squares) or "huber" (:func:`robust_residuals`) on the
         measurement residuals; defects and priors stay quadratic.
     """
 
     def __init__(self, vehicle, runs, meas, space, horizon=None, *, z_ref=None, gyro_bias=True,
-                 initial_velocity: str = "zero", yref: np.ndarray | None = None, loss: str = "linear"):
+                 attitude_bias: bool = False, initial_velocity: str = "zero", yref: np.ndarray | None = None,
+                 loss: str = "linear"):
         check_loss(loss)  # an unknown loss is an error here, not in a worker
         self.loss = loss
         kinds = {(r.input_kind, len(r.input_columns)) for r in runs}
@@ -256,6 +269,7 @@ class WindowedProblem:
         self.bias_runs = np.array([gyro_bias and m.has_gyro for m in self.meas])
         #: prior sd of a run's gyro bias, rad/s (the vehicle's IMU spec, else GYRO_BIAS_SIGMA)
         self.gyro_bias_sd = gyro_bias_sd(vehicle)
+        self.att_bias_runs = np.array([attitude_bias and m.has_filter_attitude for m in self.meas])
         self.accel = any(m.needs_acceleration for m in self.meas)
         self.initial_velocity = initial_velocity
         z_ref = space.z0 if z_ref is None else np.asarray(z_ref, float)
@@ -291,19 +305,33 @@ class WindowedProblem:
         self._yref = Yref
 
     # ------------------------------------------------------------------ nuisance layout
+    def bias_sd(self, r: int) -> np.ndarray:
+        """Prior sds of run r's sensor-bias vector: gyro (3, rad/s) when fitted, then the
+        attitude filter's roll and pitch (2, rad) when fitted; (0,) for neither."""
+        return np.array([self.gyro_bias_sd] * (3 if self.bias_runs[r] else 0)
+                        + [ATTITUDE_BIAS_SIGMA] * (2 if self.att_bias_runs[r] else 0), float)
+
+    def split_bias(self, r: int, b):
+        """(gyro bias (..., 3) or None, attitude bias (..., 2) or None) of run r's bias vector."""
+        if b is None:
+            return None, None
+        g = 3 if self.bias_runs[r] else 0
+        return (b[..., :3] if g else None), (b[..., g:g + 2] if self.att_bias_runs[r] else None)
+
     def nuisance_size(self, r: int) -> int:
         nw = len(self.lay.bounds[r])
-        return nw * int(self.free[r].sum()) + (3 if self.bias_runs[r] else 0)
+        return nw * int(self.free[r].sum()) + self.bias_sd(r).size
 
     def split_nuisance(self, r: int, nu: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-        """(node perturbations (W_r, 12), gyro bias (3,) or None) of run r's nuisance vector."""
+        """(node perturbations (W_r, 12), sensor-bias vector (:meth:`bias_sd`) or None) of
+        run r's nuisance vector."""
         nw = len(self.lay.bounds[r])
         c = self.free[r]
         d = np.zeros((nw, 12))
         k = int(c.sum())
         d[:, c] = nu[: nw * k].reshape(nw, k)
-        b = nu[nw * k: nw * k + 3] if self.bias_runs[r] else None
-        return d, b
+        nb = self.bias_sd(r).size
+        return d, (nu[nw * k: nw * k + nb] if nb else None)
 
     def zero_nuisance(self) -> list:
         return [np.zeros(self.nuisance_size(r)) for r in range(len(self.runs))]
@@ -395,10 +423,16 @@ class WindowedProblem:
         ow, op = self.lay.own_win[r], self.lay.own_pos[r]
         return Y[:, ow, op], (None if A is None else A[:, ow, op])
 
+    def predict_run(self, r: int, y, a, bias):
+        """Run r's predicted measurements from states ``y``, accelerations ``a`` and its
+        sensor-bias vector ``bias`` (P, q_b) or None."""
+        gb, ab = self.split_bias(r, bias)
+        return self.meas[r].predict(y, a, gb, ab)
+
     def measurement_residuals(self, Y, A, r: int, bias: np.ndarray | None) -> np.ndarray:
         """Normalized measurement residuals (P, m_r) of run r."""
         y, a = self.run_prediction(Y, A, r)
-        pred = self.meas[r].predict(y, a, bias)
+        pred = self.predict_run(r, y, a, bias)
         with np.errstate(all="ignore"):
             return robust_residuals(self.meas[r].normalized(pred, fill=FILL), self.loss)
 
@@ -423,18 +457,19 @@ class WindowedProblem:
         return np.where(np.isfinite(out), out, FILL)
 
     def priors(self, D, bias, r: int) -> np.ndarray:
-        """Prior residuals (P, q_r) of run r's nuisance (node perturbations, gyro bias)."""
+        """Prior residuals (P, q_r) of run r's nuisance (node perturbations, sensor biases)."""
         w0 = self.lay.first[r]
         nw = len(self.lay.bounds[r])
         c = self.free[r]
         pr = (D[:, w0:w0 + nw] / self.prior_sigma[w0:w0 + nw][None])[..., c].reshape(D.shape[0], -1)
-        if self.bias_runs[r]:
-            pr = np.concatenate([pr, np.atleast_2d(bias) / self.gyro_bias_sd], 1)
+        sd = self.bias_sd(r)
+        if sd.size:
+            pr = np.concatenate([pr, np.atleast_2d(bias) / sd], 1)
         return pr
 
     def assemble(self, nus: list, P: int = 1):
-        """Global node perturbations D (P, W, 12) and gyro biases (per run: (P, 3) or
-        None) from per-run nuisance vectors (each (q_r,) or (P, q_r))."""
+        """Global node perturbations D (P, W, 12) and sensor-bias vectors (per run: (P, q_b)
+        or None, :meth:`bias_sd`) from per-run nuisance vectors (each (q_r,) or (P, q_r))."""
         D = np.zeros((P, self.lay.W, 12))
         biases = []
         for r, nu in enumerate(nus):
@@ -443,7 +478,8 @@ class WindowedProblem:
             k = int(self.free[r].sum())
             w0 = self.lay.first[r]
             D[:, w0:w0 + nw][..., self.free[r]] = nu[:, : nw * k].reshape(P, nw, k)
-            biases.append(nu[:, nw * k: nw * k + 3] if self.bias_runs[r] else None)
+            nb = self.bias_sd(r).size
+            biases.append(nu[:, nw * k: nw * k + nb] if nb else None)
         return D, biases
 
     def residuals(self, z: np.ndarray, nus: list) -> list:

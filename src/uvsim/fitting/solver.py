@@ -1,7 +1,8 @@
 """Levenberg-Marquardt on a windowed problem, with the per-run nuisance eliminated.
 
 The unknowns are the global parameters ``z`` (p, scaled, bounded) and, per run, the
-nuisance vector ``nu_r`` (free node components of its windows and its gyro bias).
+nuisance vector ``nu_r`` (free node components of its windows and its sensor biases:
+gyro, attitude filter).
 A run's residual depends on ``z`` and its own ``nu_r`` only, so the normal equations
 have an arrow structure and the nuisance is eliminated run by run (Schur complement,
 as in bundle adjustment: Triggs et al. 2000, "Bundle adjustment - a modern
@@ -31,7 +32,7 @@ Jacobians are forward differences: one batched simulation of all windows for the
 point, one per global parameter and one per free node component (every window's
 component perturbed at once: windows are independent rows, so each window's residuals
 see only their own node; the continuity defects, which involve two windows, are
-differentiated from the same simulations piece by piece).  Gyro-bias derivatives need
+differentiated from the same simulations piece by piece).  Sensor-bias derivatives need
 no simulation.
 
 Uncertainty: ``S`` at the solution is the information on ``z`` after the nuisance is
@@ -159,18 +160,19 @@ def linearize(prob: WindowedProblem, z: np.ndarray, nus: list, *, jacobian: bool
         sig = prob.prior_sigma[w0:w0 + nw][:, free].ravel()
         base = m_meas + m_def
         Jn[base + np.arange(nw * k), np.arange(nw * k)] = 1.0 / sig
-        if prob.bias_runs[r]:
+        bsd = prob.bias_sd(r)
+        if bsd.size:
             yb, ab = prob.run_prediction(Y[:1], None if A is None else A[:1], r)
-            for j in range(3):
+            for j in range(bsd.size):
                 b1 = b.copy()
                 b1[0, j] += FD_STEP_BIAS
-                pred = prob.meas[r].predict(yb, ab, b1)
+                pred = prob.predict_run(r, yb, ab, b1)
                 with np.errstate(all="ignore"):
                     m1 = robust_residuals(prob.meas[r].normalized(pred, fill=FILL), prob.loss)[0]
                 Jn[:m_meas, nw * k + j] = (m1 - meas[0]) / FD_STEP_BIAS
-                Jn[base + nw * k + j, nw * k + j] = 1.0 / prob.gyro_bias_sd
+                Jn[base + nw * k + j, nw * k + j] = 1.0 / bsd[j]
         cluster = np.concatenate([w_local, np.repeat(np.arange(1, nw), k), np.repeat(np.arange(nw), k),
-                                  np.zeros(3 if prob.bias_runs[r] else 0, int)])
+                                  np.zeros(bsd.size, int)])
         blocks.append(_normal_pieces(res0, Jz, Jn, cluster, nw, scores))
     return blocks
 
