@@ -16,7 +16,7 @@ from uvsim.vehicle import load_vehicle
 
 def test_an_unstable_truth_is_not_refused_against_a_stable_start(tmp_path):
     # benchmark seed 35: truth Y_vdot - X_udot = 9.2 kg (file: 0.84 kg), a straight surge validation run
-    out = generate(sample_scenario(35, profile="realsensor", **scenario(35)), tmp_path / "ds")
+    out = generate(sample_scenario(35, profile="realsensor", **scenario(35, structure=False)), tmp_path / "ds")
     truth_file = tmp_path / "truth_vehicle.yaml"
     truth_file.write_text(yaml.safe_dump(yaml.safe_load((out / "truth.yaml").read_text())["vehicle"]))
     start, truth = load_vehicle(out / "myrov.yaml"), load_vehicle(truth_file)
@@ -74,7 +74,7 @@ def test_the_diagnosis_guard_leaves_out_what_either_side_marks_unstable():
 def test_a_fit_unstable_where_the_start_is_stable_is_not_ok(tmp_path):
     # benchmark seed 30: truth and start are stable on both validation runs; a "fit" with the
     # sway added mass 15 kg above the surge one and a fifth of the yaw damping is not
-    out = generate(sample_scenario(30, profile="realsensor", **scenario(30)), tmp_path / "ds")
+    out = generate(sample_scenario(30, profile="realsensor", **scenario(30, structure=False)), tmp_path / "ds")
     start = load_vehicle(out / "myrov.yaml")
     P = start.parameters()
     bad = start.with_parameters({"Y_vdot": P["X_udot"] + 15.0, "N_r": 0.2 * P["N_r"], "N_rr": 0.2 * P["N_rr"]})

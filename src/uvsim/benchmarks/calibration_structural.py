@@ -16,10 +16,13 @@ calibration starts from in structure, not only in values:
   moved up to +-30 % half the seeds;
 * sensors as a real ROV logs them: IMU at 100 Hz (gyro and accelerometer with a bias per
   run), roll and pitch from an attitude filter with a lag and noise, depth from a pressure
-  sensor 0.15 m aft at 10 Hz, no position; telegraph PWM on all thrusters.
-
-Not in the generator (so not here): thruster position errors, time-stamp jitter and
-sensor latency, runs flown by a pilot.
+  sensor 0.15 m aft at 10 Hz, no position; telegraph PWM on all thrusters;
+* each independently on a third of the seeds: the truth's thrusters off the vehicle file's
+  positions by up to 1-3 cm per axis (``thruster_position_error``); time stamps jittered by
+  1-5 ms (``time_jitter``, a Linux logger's); IMU, attitude and depth 10-50 ms late
+  (``sensor_latency``); training and validation runs flown by a pilot on a gamepad instead of
+  telegraph PWM (``pilot_inputs``).  These are drawn after the draws above, so every seed's
+  perturbation, effects and curve are what they were before they were added.
 
 Each dataset is calibrated with the command docs/calibration.md gives for real logs
 (``uvsim calibrate --data DIR --free z_b``: :class:`uvsim.calibration.Calibrator` with
@@ -68,12 +71,28 @@ TRUTH_TOLERANCE = 0.02
 SIZE = dict(n_runs=3, n_validation=2, duration=[15, 25], rate_hz=100.0)
 
 
-def scenario(seed: int) -> dict:
-    """``sample_scenario`` overrides of benchmark seed ``seed`` (module docstring)."""
+#: The structural classes drawn on a third of the seeds each (module docstring).
+STRUCTURE_CLASSES = ("thruster_position_error", "time_jitter", "sensor_latency", "pilot_inputs")
+
+
+def scenario(seed: int, *, structure: bool = True) -> dict:
+    """``sample_scenario`` overrides of benchmark seed ``seed`` (module docstring); with
+    ``structure=False`` without the :data:`STRUCTURE_CLASSES` (the seed as the benchmark drew it
+    before they were added: the examples of docs/calibration.md)."""
     rng = np.random.default_rng([seed, 21])
     over = {**SIZE, "perturbation": round(float(rng.uniform(0.2, 0.4)), 3), "n_effects": int(rng.random() < 0.5)}
     if rng.random() < 0.5:
         over["curve_voltage"] = int(rng.choice([12, 14, 18, 20]))
+    # issue 21's structural classes, after the draws above (which they leave as they were): each on
+    # with p = 1/3, its coin and its size always drawn so that no class shifts another's draws
+    on = rng.random(4) < 1 / 3
+    position = round(float(rng.uniform(0.01, 0.03)), 4)   # m: thrusters placed by hand on the frame
+    jitter = round(float(rng.uniform(0.001, 0.005)), 4)   # s: a Linux logger's stamps, a few ms
+    latency = round(float(rng.uniform(0.01, 0.05)), 3)    # s: ArduSub's sensor/telemetry path, tens of ms
+    for key, value, flag in (("thruster_position_error", position, on[0]), ("time_jitter", jitter, on[1]),
+                             ("sensor_latency", latency, on[2]), ("pilot_inputs", True, on[3])):
+        if flag and structure:
+            over[key] = value
     return over
 
 
@@ -143,9 +162,24 @@ def truth_errors(spec, vehicles: dict) -> dict:
             for name, ch in sq.items()}
 
 
-def run_one(seed: int, *, prior: bool = True, loss: str = "linear", workers: int = 1,
+def on_voltage_family(vehicle):
+    """``vehicle`` with its thrusters on the T200 voltage family at the nominal voltage its
+    fixed curve was measured at (16 V), so that ``supply_voltage`` can be fitted."""
+    from uvsim.vehicle import vehicle_from_dict
+
+    d = vehicle.to_dict()
+    if d["thrusters"].get("curve") != "t200_16v" or any("curve" in u for u in d["thrusters"].get("units", [])):
+        raise UvsimError(f"--supply-voltage: the benchmark's start vehicle {vehicle.name!r} does not run on the "
+                         "t200_16v curve")
+    d["thrusters"] = {**d["thrusters"], "curve": {"voltage_table": "t200", "nominal_voltage": 16.0}}
+    return vehicle_from_dict(d, source=f"{vehicle.name} on the T200 voltage family")
+
+
+def run_one(seed: int, *, prior: bool = True, loss: str = "linear", supply: bool = False, workers: int = 1,
             tmp: Path | None = None) -> dict:
-    """Generate and calibrate one scenario; returns its record."""
+    """Generate and calibrate one scenario; returns its record.  ``supply``: the start
+    model's thrusters on the T200 voltage family and ``supply_voltage`` freed beside ``z_b``
+    (:func:`on_voltage_family`)."""
     from uvsim.calibration import Calibrator
     from uvsim.errors import CalibrationError
     from uvsim.scenarios import generate, load_truth, sample_scenario
@@ -157,8 +191,16 @@ def run_one(seed: int, *, prior: bool = True, loss: str = "linear", workers: int
         truth = load_truth(out)
         t0 = time.perf_counter()
         try:
-            cal = Calibrator(free="z_b", workers=workers, prior=prior, loss=loss).fit(out)
+            start = None
+            if supply:
+                from uvsim.calibration.calibrator import resolve_vehicle
+                from uvsim.logs import read_dataset
+
+                start = on_voltage_family(resolve_vehicle(None, read_dataset(out)))
+            free = "z_b,supply_voltage" if supply else "z_b"
+            cal = Calibrator(free=free, workers=workers, prior=prior, loss=loss).fit(out, start)
             rec = judge(cal.report_)
+            rec["supply_voltage"] = cal.params_.get("supply_voltage")  # fitted (V), None when not freed
             err = truth_errors(spec, {"start": cal.initial_vehicle_, "fitted": cal.vehicle_})
             rec["truth_rmse_start"], rec["truth_rmse_fitted"] = err["start"], err["fitted"]
             rec["farther_from_truth"] = sorted(c for c, e0 in err["start"].items()
@@ -169,22 +211,23 @@ def run_one(seed: int, *, prior: bool = True, loss: str = "linear", workers: int
                           "not_compared": [], "at_bounds": [],
                           "data_weight": None, "farther_from_truth": []}, str(exc)
         seconds = time.perf_counter() - t0
-    return {"seed": seed, "prior": prior, "loss": loss, **over, "effects": [e["type"] for e in truth["effects"]],
+    return {"seed": seed, "prior": prior, "loss": loss, "supply": supply, **over, "effects": [e["type"] for e in truth["effects"]],
             "curve": spec.vehicle.get("truth_curve"), **rec, "error": error, "seconds": seconds}
 
 
 def summarize(records: list[dict]) -> dict:
     out = {}
-    modes = sorted({(r["prior"], r.get("loss", "linear")) for r in records}, key=lambda m: (not m[0], m[1]))
-    for prior, loss in modes:
-        mine = [r for r in records if r["prior"] is prior and r.get("loss", "linear") == loss]
+    modes = sorted({_mode(r) for r in records}, key=lambda m: (not m[0], m[1], m[2]))
+    for prior, loss, supply in modes:
+        mine = [r for r in records if _mode(r) == (prior, loss, supply)]
         rs = [r for r in mine if r["error"] is None]
         if not rs:
             continue
         worse = [r for r in rs if r["worse"]]
         farther = [r for r in rs if r.get("farther_from_truth")]
         chans = sorted({c for r in rs for c in r["gain"]})
-        out[("prior" if prior else "no_prior") + ("" if loss == "linear" else f"+{loss}")] = {
+        out[("prior" if prior else "no_prior") + ("" if loss == "linear" else f"+{loss}")
+            + ("+supply_voltage" if supply else "")] = {
             "n": len(rs), "errors": sum(1 for r in mine if r["error"] is not None),
             "no_worse": len(rs) - len(worse), "no_worse_rate": (len(rs) - len(worse)) / len(rs),
             "worse": len(worse), "worse_reported_not_ok": sum(not r["check_ok"] for r in worse),
@@ -201,24 +244,30 @@ def summarize(records: list[dict]) -> dict:
     return out
 
 
-def run_benchmark(n: int, seed: int, *, compare_no_prior: bool = False, loss: str = "linear", workers: int = 1,
-                  results: str | Path | None = None, progress=None) -> dict:
+def _mode(rec: dict) -> tuple:
+    """How a record was calibrated: (prior, loss, supply voltage freed)."""
+    return rec["prior"], rec.get("loss", "linear"), rec.get("supply", False)
+
+
+def run_benchmark(n: int, seed: int, *, compare_no_prior: bool = False, loss: str = "linear", supply: bool = False,
+                  workers: int = 1, results: str | Path | None = None, progress=None) -> dict:
     """``n`` seeds from ``seed`` (resumed from ``results``, JSON lines)."""
     if n < 1:
         raise UvsimError(f"--scenarios {n}: need at least one scenario")
     say = progress or (lambda m: None)
     path = Path(results) if results else None
-    done = load_records(path, lambda rec: (rec["seed"], rec["prior"], rec.get("loss", "linear")), say, "calibration")
+    done = load_records(path, lambda rec: (rec["seed"], *_mode(rec)), say, "calibration")
     todo = [(s, p) for s in range(seed, seed + n) for p in ((True, False) if compare_no_prior else (True,))]
     records = []
     for i, (s, p) in enumerate(todo, 1):
-        if (s, p, loss) in done:
-            records.append(done[(s, p, loss)])
+        if (s, p, loss, supply) in done:
+            records.append(done[(s, p, loss, supply)])
             continue
-        rec = run_one(s, prior=p, loss=loss, workers=workers)
+        rec = run_one(s, prior=p, loss=loss, supply=supply, workers=workers)
         records.append(rec)
         append_record(path, rec)
-        mode = ("prior" if p else "no prior") + ("" if loss == "linear" else f", {loss}")
+        mode = ("prior" if p else "no prior") + ("" if loss == "linear" else f", {loss}") \
+            + (", supply_voltage" if supply else "")
         say(f"[{i}/{len(todo)}] seed {s} {mode}: effects {rec['effects'] or 'none'}, "
             f"curve {rec['curve'] or '16 V'}, off {rec['perturbation']:.0%}: "
             + (f"ERROR {rec['error']}" if rec["error"] else

@@ -24,6 +24,9 @@ def register(sub) -> None:
                         "datasets and compare with the start model (default: the speed figures)")
     p.add_argument("--loss", choices=LOSSES, default="linear",
                    help="(calibrate-structural) the calibration's --loss")
+    p.add_argument("--supply-voltage", action="store_true",
+                   help="(calibrate-structural) start model on the T200 voltage family at its file's 16 V and "
+                        "supply_voltage freed beside z_b (--free z_b,supply_voltage)")
     p.add_argument("--compare-no-prior", action="store_true",
                    help="(calibrate-structural) calibrate each dataset also without the priors (--no-prior)")
     p.add_argument("--scenarios", type=int, default=20, help="(diagnose) single-effect or clean scenarios")
@@ -146,7 +149,7 @@ def _calibrate_structural(args) -> int:
     from uvsim.benchmarks.calibration_structural import WORSE_POINTS, run_benchmark
 
     out = _suite(args, lambda say: run_benchmark(args.scenarios, args.seed, compare_no_prior=args.compare_no_prior,
-                                                 loss=args.loss, workers=args.workers, results=args.results,
+                                                 loss=args.loss, supply=args.supply_voltage, workers=args.workers, results=args.results,
                                                  progress=say))
     if out is None:
         return 0

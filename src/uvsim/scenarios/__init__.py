@@ -19,6 +19,10 @@ coupled_damping     drag-centre offset, m                       0.012-0.12
 periodic_force      amplitude, N (uncatalogued; on request)     0.3-3.0
 ==================  ==========================================  ==================
 
+Structural differences (issue 21, opt-in overrides, off by default): thruster positions off the
+vehicle file's (``thruster_position_error``), jittered time stamps (``time_jitter``), late sensors
+(``sensor_latency``), runs flown by a pilot (``pilot_inputs``); see spec.py.
+
 Detectability: ``effect_snr`` is the RMS, over all channels and samples of the validation
 runs, of the noise-free sensor difference with and without the effect divided by each
 channel's noise level; an effect is ``detectable`` when ``effect_snr >= 2``.  Each low end

@@ -9,6 +9,16 @@
   effects with their parameters, ``effect_snr``, noise levels, sensor settings and every
   run's shape, initial state and sensor biases.
 
+Structural overrides (spec.py): with ``vehicle.thruster_offsets`` the truth's thrusters sit at
+the file's positions plus the offsets (its allocation and moment arms use them; ``myrov.yaml``
+keeps the file's positions, ``truth.yaml`` lists both), and the logged thrust/PWM commands are
+what a controller with the file's geometry sends for the run's force (``A_file^+``).  With a
+sensor ``latency`` the truth is also integrated at ``t - latency`` (the log grid and the delayed
+times in one non-uniform grid, inputs held from each log sample to the next as before) and
+that sensor reads it there.  With ``sensors.clock`` the ``t`` column holds jittered stamps
+(:func:`uvsim.scenarios.sensors.stamps`, their own noise stream: the sensor noise of the same
+spec without jitter is unchanged).
+
 Effect visibility (``effect_snr``): every validation run is simulated once more without
 each effect (in the same batch); the noise-free sensor readings of the two differ by
 ``Delta``; ``effect_snr = sqrt(mean((Delta / sigma)^2))`` over all channels and samples of
@@ -31,7 +41,7 @@ from uvsim.logs import Run, write_dataset
 from uvsim.scenarios.effects import (CATALOGUED, MAGNITUDE_MEANING, MAGNITUDE_RANGES, CoupledDamping, ScenarioError,
                                      effect_from_dict)
 from uvsim.scenarios.inputs import actuator_inputs, force_profile, initial_velocity
-from uvsim.scenarios.sensors import GROUPS, columns, deviation_snr, measure
+from uvsim.scenarios.sensors import GROUPS, columns, deviation_snr, measure, stamps
 from uvsim.scenarios.spec import ScenarioSpec, sensor_suite
 from uvsim.scenarios.truth import base_parts, equilibrium_attitude, simulate_truth
 from uvsim.scenarios.vehicle_data import (ADDED_MASS_NAMES, INERTIA_NAMES, LINEAR_NAMES, PACKAGE_DIR,
@@ -72,6 +82,16 @@ def vehicles(spec: ScenarioSpec):
     truth = truth.with_rigid_body(buoyancy=nominal.weight + float(spec.vehicle.get("net_buoyancy", 0.0)), r_b=r_b)
     if spec.vehicle.get("truth_curve"):  # the truth's thrusters follow another curve than the file's
         truth = dataclasses.replace(truth, curve=load_thrust_table(str(spec.vehicle["truth_curve"])))
+    if "thruster_offsets" in spec.vehicle:  # the truth's thrusters are not where the file says
+        try:
+            off = np.asarray(spec.vehicle["thruster_offsets"], dtype=float)
+        except (TypeError, ValueError):
+            off = None
+        if off is None or off.shape != nominal.thruster_positions.shape or not np.all(np.isfinite(off)):
+            raise ScenarioError(f"scenario spec: vehicle.thruster_offsets = {spec.vehicle['thruster_offsets']!r}; "
+                                f"expected {nominal.n_thrusters} [dx, dy, dz] in m (one per thruster of "
+                                f"{nominal.name})")
+        truth = dataclasses.replace(truth, thruster_positions=nominal.thruster_positions + off)
     return nominal, truth
 
 
@@ -92,6 +112,12 @@ def vehicle_document(v, *, name: str, description: str, sensors: dict | None = N
     doc["damping"] = {"type": "diagonal", "linear": {k: float(v.coefficients[k]) for k in LINEAR_NAMES},
                       "quadratic": {k: float(v.coefficients[k]) for k in QUADRATIC_NAMES}}
     doc["effects"] = []
+    units = (doc.get("thrusters") or {}).get("units") or []
+    in_file = np.array([u.get("position", [0.0, 0.0, 0.0]) for u in units], dtype=float)
+    if in_file.shape == v.thruster_positions.shape and not np.array_equal(in_file, v.thruster_positions):
+        # a truth whose thrusters were moved (thruster_offsets): its own positions
+        doc["thrusters"] = {**doc["thrusters"], "units": [{**u, "position": [float(x) for x in r]}
+                                                          for u, r in zip(units, v.thruster_positions)]}
     if sensors:
         doc["sensors"] = sensors
     return plain(doc)
@@ -123,7 +149,7 @@ def simulate_spec(spec: ScenarioSpec, with_snr: bool = True) -> dict:
     n_samples = [int(round(r["duration"] / dt)) + 1 for r in runs]
     t = np.arange(max(n_samples)) * dt
     trim = veh.buoyancy - veh.weight
-    A = veh.allocation()
+    A = nominal.allocation()   # the controller's geometry: the file's (the truth's when no thruster is moved)
     logged = [actuator_inputs(force_profile(r["shape"], t), spec.input_kind, A, veh.curve, trim)[0] for r in runs]
     val = [i for i, r in enumerate(runs) if r["split"] == "validation"] or list(range(len(runs)))
     # rows: every run with all effects, then the validation runs without effect j
@@ -153,15 +179,62 @@ def simulate_spec(spec: ScenarioSpec, with_snr: bool = True) -> dict:
         nu0.append(initial_velocity(runs[i]["shape"]))
         att0.append([roll, pitch, yaw])
     U = np.array([logged[i] for i in row_run])
-    sim = simulate_truth(veh, t, U, spec.input_kind, effects=effects, active=active, pos0=np.array(pos0),
-                         quat0=np.array(quat0), nu0=np.array(nu0), max_step=spec.max_step)
+    kw = dict(effects=effects, active=active, pos0=np.array(pos0), quat0=np.array(quat0), nu0=np.array(nu0),
+              max_step=spec.max_step)
+    latencies = sorted({float(sec.get("latency", 0.0)) for sec in spec.sensors.values()} - {0.0})
+    delayed = {}
+    if not latencies:
+        sim = simulate_truth(veh, t, U, spec.input_kind, **kw)
+    else:
+        grid, on_grid, at_delay = _delay_grid(t, latencies)
+        held = np.searchsorted(t, grid + 1e-9, side="right") - 1     # the log sample whose input acts
+        full = simulate_truth(veh, grid, U[:, held], spec.input_kind, **kw)
+        sim = {"t": t, **{k: full[k][:, on_grid] for k in ("pos", "quat", "nu", "nu_dot", "thrust")}}
+        for lat, (idx, started) in at_delay.items():
+            d = {k: full[k][:, idx].copy() for k in ("pos", "quat", "nu", "nu_dot")}
+            for k in ("pos", "quat", "nu"):                        # before the start: held at the initial state
+                d[k][:, ~started] = full[k][:, :1]
+            d["nu_dot"][:, ~started] = 0.0
+            delayed[lat] = d
     return {"nominal": nominal, "truth": veh, "effects": effects, "t": t, "n_samples": n_samples, "logged": logged,
-            "sim": sim, "snr_rows": snr_rows, "validation": val, "att0": att0, "nu0": nu0, "trim": trim}
+            "sim": sim, "delayed": delayed, "snr_rows": snr_rows, "validation": val, "att0": att0, "nu0": nu0,
+            "trim": trim}
 
 
-def _truth_arrays(sim: dict, row: int, n: int, g: float, rate: float) -> dict:
-    return {"t": sim["t"][:n], "pos": sim["pos"][row, :n], "quat": sim["quat"][row, :n], "nu": sim["nu"][row, :n],
-            "nu_dot": sim["nu_dot"][row, :n], "g": g, "rate_hz": rate}
+def _delay_grid(t: np.ndarray, latencies) -> tuple[np.ndarray, np.ndarray, dict]:
+    """One grid holding the log times ``t`` and every ``t - latency >= 0``.
+
+    Returns the grid, the grid index of each log time, and per latency the grid index of each
+    ``t - latency`` (0 before the start) with a mask of those at or after the start.  A delayed
+    time within 1 ns of a log time is that log time, so the inputs switch at the log times only.
+    """
+    tol = 1e-9
+    extra = []
+    for lat in latencies:
+        x = t - lat
+        x = x[x >= -tol]
+        j = np.clip(np.searchsorted(t, x), 1, t.size - 1)
+        near = np.minimum(np.abs(t[j] - x), np.abs(t[j - 1] - x))
+        extra.append(x[near > tol])
+    grid = np.concatenate([t] + extra)
+    grid.sort()
+    grid = grid[np.r_[True, np.diff(grid) > tol]]
+    on_grid = np.searchsorted(grid, t - tol)
+    at_delay = {}
+    for lat in latencies:
+        x = t - lat
+        started = x >= -tol
+        idx = np.where(started, np.searchsorted(grid, np.maximum(x, 0.0) - tol), 0)
+        at_delay[lat] = (idx, started)
+    return grid, on_grid, at_delay
+
+
+def _truth_arrays(sim: dict, row: int, n: int, g: float, rate: float, delayed: dict | None = None) -> dict:
+    keys = ("pos", "quat", "nu", "nu_dot")
+    out = {"t": sim["t"][:n], **{k: sim[k][row, :n] for k in keys}, "g": g, "rate_hz": rate}
+    if delayed:
+        out["delayed"] = {lat: {k: d[k][row, :n] for k in keys} for lat, d in delayed.items()}
+    return out
 
 
 def effect_snr(spec: ScenarioSpec, res: dict) -> list[dict]:
@@ -174,8 +247,10 @@ def effect_snr(spec: ScenarioSpec, res: dict) -> list[dict]:
             if jj != j:
                 continue
             n_i = res["n_samples"][i]
-            with_e = measure(_truth_arrays(sim, i, n_i, veh.g, spec.rate_hz), spec.sensors, spec.runs[i], None)
-            without = measure(_truth_arrays(sim, row, n_i, veh.g, spec.rate_hz), spec.sensors, spec.runs[i], None)
+            dl = res.get("delayed")
+            with_e = measure(_truth_arrays(sim, i, n_i, veh.g, spec.rate_hz, dl), spec.sensors, spec.runs[i], None)
+            without = measure(_truth_arrays(sim, row, n_i, veh.g, spec.rate_hz, dl), spec.sensors, spec.runs[i],
+                              None)
             s, m, groups = deviation_snr(with_e, without, spec.sensors)
             ss, n = ss + s, n + m
             for g, (gs, gn) in groups.items():
@@ -197,7 +272,19 @@ def _truth_record(spec, res, snr, run_records) -> dict:
         d.update(magnitude_range=[lo, hi], magnitude_meaning=MAGNITUDE_MEANING[eff.type],
                  catalogued=eff.type in CATALOGUED, **s)
         effects.append(d)
-    return plain({
+    structure = {}
+    if "thruster_offsets" in spec.vehicle:
+        structure["thruster_positions"] = {
+            "bound_m": spec.vehicle.get("thruster_position_error"), "offsets_m": spec.vehicle["thruster_offsets"],
+            "nominal_m": nominal.thruster_positions.tolist(), "truth_m": veh.thruster_positions.tolist()}
+    if "clock" in spec.sensors:
+        structure["time_jitter_s"] = spec.sensors["clock"]["jitter"]
+    lat = {name: sec["latency"] for name, sec in spec.sensors.items() if sec.get("latency")}
+    if lat:
+        structure["sensor_latency_s"] = lat
+    if any(r["shape"].get("shape") == "pilot" for r in spec.runs):
+        structure["inputs"] = "pilot (gamepad, ArduSub manual mode)"
+    doc = {
         "generator": "uvsim.scenarios",
         "seed": spec.seed,
         "profile": spec.profile,
@@ -221,7 +308,10 @@ def _truth_record(spec, res, snr, run_records) -> dict:
                         "substeps_per_sample": int(np.ceil(1.0 / (spec.rate_hz * spec.max_step) - 1e-9))},
         "runs": run_records,
         "spec": spec.to_dict(),
-    })
+    }
+    if structure:  # issue 21's structural differences, listed only when present (older records unchanged)
+        doc["structure"] = structure
+    return plain(doc)
 
 
 def generate(spec, out_dir) -> Path:
@@ -235,13 +325,16 @@ def generate(spec, out_dir) -> Path:
     res = simulate_spec(spec)
     veh, sim = res["truth"], res["sim"]
     rng = np.random.default_rng([int(spec.noise_seed), 0x5CE7])
+    clock_rng = np.random.default_rng([int(spec.noise_seed), 0x5CE7, 1])   # time stamps: a stream of their own
     k = res["logged"][0].shape[1]
     names = _input_names(spec.input_kind, k)
     run_objs, records = [], []
     for i, r in enumerate(spec.runs):
         n_i = res["n_samples"][i]
-        readings = measure(_truth_arrays(sim, i, n_i, veh.g, spec.rate_hz), spec.sensors, r, rng)
+        readings = measure(_truth_arrays(sim, i, n_i, veh.g, spec.rate_hz, res["delayed"]), spec.sensors, r, rng)
         data = {"t": sim["t"][:n_i]}
+        if "clock" in spec.sensors:  # the logger's stamps of rows taken at the true times
+            data["t"] = stamps(sim["t"][:n_i], float(spec.sensors["clock"]["jitter"]), spec.rate_hz, clock_rng)
         data.update({c: res["logged"][i][:n_i, j] for j, c in enumerate(names)})
         data.update(columns(readings, spec.sensors))
         run_objs.append(Run(name=r["name"], path=None, data=pd.DataFrame(data), dof=r["dof"], weight=r["weight"],

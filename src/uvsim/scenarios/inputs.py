@@ -23,7 +23,17 @@ Shapes (``shape`` key):
 ``spiral``         constant surge, heave and yaw together from ``t_on`` (``forces``)
 ``telegraph``      several DOFs at once, each switching between ``+level`` and ``-level`` at
                    random times (``switches``; dwell times exponential, mean 1-3 s)
+``pilot``          a pilot on a gamepad in ArduSub's manual mode: 2-4 DOFs (mostly surge, yaw,
+                   heave), each a stick deflection ``s(t)`` in [-1, 1] (``sticks``: knots
+                   ``[t, s]``, linear between: ramps of 0.2-1 s to a deflection of 0.3-1, holds
+                   of 0.5-3 s, releases to the centre in 0.1-0.3 s, rests) times the force of a
+                   full deflection (``gains``), with the thumb's corrections: ``tau_j = gain_j
+                   s_j(t) (1 + sum_i a_i sin(2 pi f_i t + phi_i))`` (``tremor``: three sines of
+                   0.2-1.5 Hz, ``a_i`` up to 0.05 each)
 =================  ==========================================================================
+
+Every shape is allocated to the thrusters the same way (:func:`actuator_inputs`) and scaled
+down until no thruster needs more than :data:`THRUST_MARGIN` of its limit.
 """
 from __future__ import annotations
 
@@ -42,10 +52,36 @@ AMPLITUDE_RANGES = {"surge": (8.0, 25.0), "sway": (8.0, 25.0), "heave": (8.0, 25
 #: Initial speeds of ``decay`` runs with ``velocity`` (m/s or rad/s).
 DECAY_VELOCITY = {"surge": (0.2, 0.5), "sway": (0.2, 0.5), "heave": (0.15, 0.4),
                   "roll": (0.5, 1.5), "pitch": (0.5, 1.5), "yaw": (0.5, 1.5)}
-SHAPES = ("step", "step_reverse", "sine", "decay", "spiral", "telegraph")
+SHAPES = ("step", "step_reverse", "sine", "decay", "spiral", "telegraph", "pilot")
 #: Fraction of each thruster's limit (forward 51.5 N / reverse 39.9 N for the T200 at 16 V)
 #: that a run may command; larger amplitudes are scaled down when the run is drawn.
 THRUST_MARGIN = 0.8
+
+# Pilot runs (``pilot`` shape).  ArduSub's manual mode passes the sticks straight to the
+# motor mix (no stabilization, ardusub.com "Flight Modes"), so a stick deflection is a
+# generalized-force command; the numbers below describe a thumb on a gamepad stick.
+#: How often a pilot uses each DOF: forward, yaw and vertical are the main sticks; lateral is
+#: used less, roll and pitch (a button-shifted function on a BlueROV2 Heavy) rarely.
+PILOT_DOF_WEIGHTS = {"surge": 0.25, "sway": 0.14, "heave": 0.2, "roll": 0.08, "pitch": 0.08, "yaw": 0.25}
+#: Seconds a pilot takes to push a stick to a new deflection (a deliberate thumb movement,
+#: a few tenths of a second; slow ones up to 1 s).
+PILOT_RAMP = (0.2, 1.0)
+#: Seconds a deflection is held (a manoeuvre of a few body lengths at < 1 m/s).
+PILOT_HOLD = (0.5, 3.0)
+#: Seconds a released stick takes back to the centre (a spring-centred stick snaps back in
+#: ~0.05 s; a pilot usually eases off, and 0.1 s keeps the command smooth on a 100-200 Hz log).
+PILOT_RELEASE = (0.1, 0.3)
+#: Seconds at the centre between manoeuvres, and before the first.
+PILOT_REST = (0.3, 2.0)
+#: Magnitude of a held deflection (fraction of full stick).
+PILOT_DEFLECTION = (0.3, 1.0)
+#: Probability that a hold ends with the stick released (else it moves to another deflection).
+PILOT_RELEASE_P = 0.6
+#: The thumb's corrections while a stick is deflected: three sines per DOF of 0.2-1.5 Hz
+#: (slow corrections by eye; physiological tremor, 8-12 Hz, is far smaller on a stick) with
+#: relative amplitudes up to 0.05 each (at most +-15 % of the deflection).
+PILOT_TREMOR_HZ = (0.2, 1.5)
+PILOT_TREMOR_AMPLITUDE = 0.05
 
 
 def _dof_index(dof: str) -> int:
@@ -77,6 +113,14 @@ def force_profile(shape: dict, t: np.ndarray) -> np.ndarray:
         for name, level in shape["levels"].items():
             n_sw = np.searchsorted(np.asarray(shape["switches"][name], dtype=float), t, side="right")
             out[:, FORCE_NAMES.index(name)] = shape["signs"][name] * level * (1.0 - 2.0 * (n_sw % 2))
+    elif kind == "pilot":
+        for name, gain in shape["gains"].items():
+            knots = np.asarray(shape["sticks"][name], dtype=float)
+            stick = np.interp(t, knots[:, 0], knots[:, 1])
+            tr = shape["tremor"][name]
+            wobble = sum(a * np.sin(2 * np.pi * f * t + ph)
+                         for a, f, ph in zip(tr["amplitude"], tr["frequency"], tr["phase"]))
+            out[:, FORCE_NAMES.index(name)] = gain * stick * (1.0 + wobble)
     else:
         raise ScenarioError(f"run shape {kind!r}: expected one of {list(SHAPES)}")
     return out
@@ -182,7 +226,39 @@ def sample_shape(rng: np.random.Generator, shape: str, duration: float, dof: str
             switches[name] = times
             signs[name] = float(rng.choice([-1.0, 1.0]))
         return {"shape": "telegraph", "dof": "mixed", "levels": levels, "switches": switches, "signs": signs}
+    if shape == "pilot":
+        return _pilot(rng, duration, r2)
     raise ScenarioError(f"run shape {shape!r}: expected one of {list(SHAPES)}")
+
+
+def _pilot(rng: np.random.Generator, duration: float, r2) -> dict:
+    """A pilot's run (module table; constants ``PILOT_*``)."""
+    k = int(rng.integers(2, 5))
+    w = np.array([PILOT_DOF_WEIGHTS[d] for d in DOF_NAMES])
+    dofs = sorted(rng.choice(6, size=k, replace=False, p=w / w.sum()).tolist())
+    gains, sticks, tremor = {}, {}, {}
+    for j in dofs:
+        name = FORCE_NAMES[j]
+        lo, hi = AMPLITUDE_RANGES[DOF_NAMES[j]]
+        gains[name] = float(rng.uniform(lo, hi))          # force of a full deflection (the pilot gain)
+        tt = r2(rng.uniform(0.0, PILOT_REST[1]))
+        knots = [[0.0, 0.0]] + ([[tt, 0.0]] if tt > 0 else [])
+        while tt < duration:
+            level = float(rng.uniform(*PILOT_DEFLECTION) * rng.choice([-1.0, 1.0]))
+            tt = r2(tt + rng.uniform(*PILOT_RAMP))
+            knots.append([tt, level])
+            tt = r2(tt + rng.uniform(*PILOT_HOLD))
+            knots.append([tt, level])
+            if rng.random() < PILOT_RELEASE_P:
+                tt = r2(tt + rng.uniform(*PILOT_RELEASE))
+                knots.append([tt, 0.0])
+                tt = r2(tt + rng.uniform(*PILOT_REST))
+                knots.append([tt, 0.0])
+        sticks[name] = knots
+        tremor[name] = {"amplitude": [float(x) for x in rng.uniform(0.0, PILOT_TREMOR_AMPLITUDE, 3)],
+                        "frequency": [float(x) for x in rng.uniform(*PILOT_TREMOR_HZ, 3)],
+                        "phase": [float(x) for x in rng.uniform(0.0, 2 * np.pi, 3)]}
+    return {"shape": "pilot", "dof": "mixed", "gains": gains, "sticks": sticks, "tremor": tremor}
 
 
 def scale_shape(shape: dict, factor: float) -> dict:
@@ -194,4 +270,6 @@ def scale_shape(shape: dict, factor: float) -> dict:
         d["forces"] = {k: v * factor for k, v in d["forces"].items()}
     if "levels" in d:
         d["levels"] = {k: v * factor for k, v in d["levels"].items()}
+    if "gains" in d:
+        d["gains"] = {k: v * factor for k, v in d["gains"].items()}
     return d

@@ -18,6 +18,18 @@ Written independently of ``uvsim.synthetic``/``uvsim.metrics``; attitude convers
            sensor's samples; ``held``: repeated; ``interpolated``: linear, NaN after the last),
            ``sigma`` (m): NED z of the sensor point ``z + (R r_p)_z``.
 ``dvl``    ``position`` (m, body), ``sigma`` (m/s): ``v + omega x r_dvl`` (bottom lock).
+``clock``  ``jitter`` (s): the logger's time stamps; row ``k`` (true sample time ``t_k``) is
+           stamped ``t_k + e_k``, ``e_k ~ N(0, jitter^2)``, pushed later where needed so that
+           each stamp follows the one before by at least :data:`MIN_STAMP_GAP` of a sample
+           interval (:func:`stamps`).  Only the ``t`` column changes: every row still holds the
+           inputs commanded at ``t_k`` and the readings taken at ``t_k``.
+
+Any section may also have ``latency`` (s, default 0): the reading logged at ``t_k`` is the
+sensor's model applied to the truth at ``t_k - latency`` (the truth's ``delayed`` arrays,
+made by :func:`uvsim.scenarios.generate.simulate_spec`; before the run starts, ``t_k <
+latency``, the vehicle is held at its initial state with no acceleration).  The attitude
+filter's lag acts on the delayed angles; the depth sensor still delivers at the log samples
+of its own rate.
 """
 from __future__ import annotations
 
@@ -38,11 +50,21 @@ GROUPS = {
     "velocity": ("dvl", ("u", "v", "w"), "sigma"),
 }
 DEPTH_MODES = ("native", "held", "interpolated")
+#: Sections that produce log columns (``clock`` only stamps the rows).
+GROUP_SECTIONS = frozenset(sec for sec, _, _ in GROUPS.values())
+#: Smallest step between two time stamps, as a fraction of the sample interval: a stamp that
+#: would not follow its predecessor by this much is moved later (a logger stamps the rows in
+#: the order it reads them, so its time never runs backwards).
+MIN_STAMP_GAP = 0.05
+#: Largest sensor latency the settings accept, s (ArduSub telemetry and sensor pipelines delay
+#: by tens of ms; a second would be a broken link, not a latency).
+MAX_LATENCY = 1.0
 
 
 #: Required settings of each sensor section (numbers unless noted).
 SECTION_KEYS = {"mocap": ("sigma_position", "sigma_attitude"), "imu": ("position", "gyro_sigma", "acc_sigma"),
-                "euler": ("time_constant", "sigma"), "depth": ("position", "sigma"), "dvl": ("position", "sigma")}
+                "euler": ("time_constant", "sigma"), "depth": ("position", "sigma"), "dvl": ("position", "sigma"),
+                "clock": ("jitter",)}
 
 
 def validate_sensors(sensors) -> None:
@@ -64,6 +86,12 @@ def validate_sensors(sensors) -> None:
                 want = "[x, y, z] in m (body)" if key == "position" else "a positive number"
                 got = sec.get(key) if isinstance(sec, dict) else None
                 raise ScenarioError(f"scenario spec: sensors.{name}.{key} = {got!r}; expected {want}")
+        lat = sec.get("latency", 0.0) if isinstance(sec, dict) else 0.0
+        if isinstance(lat, bool) or not isinstance(lat, (int, float)) or not 0.0 <= lat <= MAX_LATENCY:
+            raise ScenarioError(f"scenario spec: sensors.{name}.latency = {lat!r}; expected seconds in "
+                                f"[0, {MAX_LATENCY:g}]")
+    if not any(name in GROUP_SECTIONS for name in sensors):
+        raise ScenarioError(f"scenario spec: sensors: no measuring sensor; expected some of {sorted(GROUP_SECTIONS)}")
     if "depth" in sensors and sensors["depth"].get("mode", "native") not in DEPTH_MODES:
         raise ScenarioError(f"scenario spec: sensors.depth.mode {sensors['depth'].get('mode')!r}; "
                             f"expected one of {list(DEPTH_MODES)}")
@@ -99,7 +127,8 @@ def measure(truth: dict, sensors: dict, run_params: dict, rng: np.random.Generat
     Parameters
     ----------
     truth : ``t`` (n_t,), ``pos`` (n_t, 3), ``quat`` (n_t, 4) scalar first, ``nu`` (n_t, 6),
-        ``nu_dot`` (n_t, 6), ``g`` (m/s^2), ``rate_hz``.
+        ``nu_dot`` (n_t, 6), ``g`` (m/s^2), ``rate_hz``; with sensor latencies ``delayed``:
+        latency (s) -> the same ``pos``, ``quat``, ``nu``, ``nu_dot`` at ``t - latency``.
     sensors : the dataset's sensor settings (module docstring).
     run_params : per-run ``gyro_bias``, ``acc_bias`` (3,).
     rng : noise generator, or None for noise- and bias-free readings.
@@ -109,24 +138,39 @@ def measure(truth: dict, sensors: dict, run_params: dict, rng: np.random.Generat
     dict group -> array (n_t, c): ``position``, ``attitude`` (quaternion), ``rates``,
     ``acceleration``, ``euler`` (n_t, 2 or 3), ``depth`` (n_t, 1), ``velocity``.
     """
-    t, pos, quat, nu, nu_dot = (truth[k] for k in ("t", "pos", "quat", "nu", "nu_dot"))
-    n_t = t.size
+    n_t = truth["t"].size
     noisy = rng is not None
 
     def noise(sigma, shape):
         return rng.normal(0.0, sigma, size=shape) if noisy else np.zeros(shape)
 
-    rot = rotations(quat)
+    views = {}
+
+    def at(section):
+        """The truth a section sees: (pos, quat, nu, nu_dot, rotations), delayed by its latency."""
+        lat = float(sensors[section].get("latency", 0.0))
+        if lat not in views:
+            src = truth
+            if lat > 0:
+                src = truth.get("delayed", {}).get(lat)
+                if src is None:
+                    raise ScenarioError(f"sensors.{section}.latency = {lat:g} s: the truth has no samples delayed "
+                                        "by it (simulate_spec makes them)")
+            views[lat] = (src["pos"], src["quat"], src["nu"], src["nu_dot"], rotations(src["quat"]))
+        return views[lat]
+
     out = {}
     if "mocap" in sensors:
         s = sensors["mocap"]
+        pos, quat, _, _, rot = at("mocap")
         out["position"] = pos + noise(s["sigma_position"], (n_t, 3))
         qm = scalar_first(rot * Rotation.from_rotvec(noise(s["sigma_attitude"], (n_t, 3))))
         qm *= np.where((qm * quat).sum(axis=1) < 0, -1.0, 1.0)[:, None]   # same hemisphere as the truth
         out["attitude"] = qm
-    v, w = nu[:, :3], nu[:, 3:]
     if "imu" in sensors:
         s = sensors["imu"]
+        _, _, nu, nu_dot, rot = at("imu")
+        v, w = nu[:, :3], nu[:, 3:]
         bias = np.asarray(run_params.get("gyro_bias", 0.0)) if noisy else 0.0
         out["rates"] = w + bias + noise(s["gyro_sigma"], (n_t, 3))
         r = np.asarray(s["position"], dtype=float)
@@ -137,6 +181,7 @@ def measure(truth: dict, sensors: dict, run_params: dict, rng: np.random.Generat
                                + noise(s["acc_sigma"], (n_t, 3)))
     if "euler" in sensors:
         s = sensors["euler"]
+        rot = at("euler")[4]
         ypr = np.unwrap(rot.as_euler("ZYX"), axis=0)
         rpy = ypr[:, ::-1]
         k = 3 if s.get("yaw", False) else 2
@@ -146,6 +191,7 @@ def measure(truth: dict, sensors: dict, run_params: dict, rng: np.random.Generat
         out["euler"] = e
     if "depth" in sensors:
         s = sensors["depth"]
+        pos, _, _, _, rot = at("depth")
         z = pos[:, 2] + rot.apply(np.asarray(s["position"], dtype=float))[:, 2]
         idx = depth_sample_index(n_t, truth["rate_hz"], s.get("rate_hz", 10.0))
         native = z[idx] + noise(s["sigma"], idx.size)
@@ -163,8 +209,20 @@ def measure(truth: dict, sensors: dict, run_params: dict, rng: np.random.Generat
         out["depth"] = d[:, None]
     if "dvl" in sensors:
         s = sensors["dvl"]
+        nu = at("dvl")[2]
+        v, w = nu[:, :3], nu[:, 3:]
         out["velocity"] = v + np.cross(w, np.asarray(s["position"], dtype=float)) + noise(s["sigma"], (n_t, 3))
     return out
+
+
+def stamps(t: np.ndarray, jitter: float, rate_hz: float, rng: np.random.Generator) -> np.ndarray:
+    """Logged time stamps of the rows taken at the true times ``t`` (``clock`` in the module
+    docstring): ``t + N(0, jitter^2)``, each at least ``MIN_STAMP_GAP / rate_hz`` after the one
+    before (a stamp that would not be is moved later, ``s_k = max(s_k, s_(k-1) + gap)``)."""
+    gap = MIN_STAMP_GAP / float(rate_hz)
+    k = np.arange(t.size)
+    s = np.asarray(t, dtype=float) + rng.normal(0.0, jitter, size=t.size)
+    return np.maximum.accumulate(s - gap * k) + gap * k
 
 
 def columns(readings: dict, sensors: dict) -> dict:

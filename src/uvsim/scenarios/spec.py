@@ -19,6 +19,14 @@ Profiles (docs/scenarios.md lists every distribution):
                     with bias, accelerometer, lagged roll/pitch), depth from a pressure sensor
                     0.15 m aft at 10 Hz, no position; the truth may move the CB (z_b) and have a
                     weak thruster.
+
+Structural overrides (issue 21; off by default, so a spec without them is what it always
+was): ``thruster_position_error`` moves the truth's thrusters off the vehicle file's positions
+(``vehicle.thruster_offsets``, drawn from the seed in a stream of its own), ``time_jitter``
+stamps the logged rows with a noisy clock (``sensors.clock``), ``sensor_latency`` delays every
+sensor but a DVL (``sensors.<section>.latency``), ``pilot_inputs`` (realsensor) replaces the
+telegraph runs by runs flown by a pilot (``pilot`` shapes, drawn in a stream of their own).
+Each leaves every other random choice of the seed as it was.
 """
 from __future__ import annotations
 
@@ -29,7 +37,7 @@ import numpy as np
 from uvsim.scenarios.effects import CATALOGUED, EFFECTS, ScenarioError, effect_from_dict, sample_effect
 from uvsim.scenarios.inputs import (AMPLITUDE_RANGES, DOF_NAMES, THRUST_MARGIN, force_profile, sample_shape,
                                     scale_shape, thrust_utilization)
-from uvsim.scenarios.sensors import DEPTH_MODES, validate_sensors
+from uvsim.scenarios.sensors import DEPTH_MODES, MAX_LATENCY, validate_sensors
 from uvsim.scenarios.vehicle_data import DEFAULT_VEHICLE_FILE, PERTURBABLE, load_vehicle_data
 
 PROFILES = ("diagnose", "issue10_timing", "realsensor")
@@ -70,7 +78,26 @@ OVERRIDES = {
     "max_step": "RK4 step bound, s",
     "curve_voltage": "diagnose: the truth's T200s run at this supply voltage (10-20 V, measured curves) while the "
                      "model's file says 16 V; PWM inputs",
+    "thruster_position_error": "bound, m, of the truth's thruster position errors: each thruster and axis off by "
+                               "U(-bound, bound) from the vehicle file (which the model keeps); thrust or PWM "
+                               "inputs (default PWM); 0: off",
+    "time_jitter": "s, standard deviation of the logged time stamps about the true sample times (kept strictly "
+                   "increasing); 0: off",
+    "sensor_latency": "s, every sensor but a DVL logs at t the truth at t - latency; inputs are logged at their "
+                      "own times; 0: off",
+    "pilot_inputs": "realsensor: training and validation runs flown by a pilot on a gamepad (ArduSub manual "
+                    "mode) instead of telegraph PWM",
 }
+#: Bounds of the structural overrides (see :func:`_check_overrides`): a thruster position error
+#: beyond 0.1 m is a wrong frame, not a measurement error (the BlueROV2 Heavy's thrusters sit
+#: within ~0.2 m of its origin); a logger's time-stamp jitter beyond 20 ms is dropped samples, not
+#: jitter (a Linux logger's is a few ms); latency up to MAX_LATENCY (sensors.py).
+MAX_THRUSTER_POSITION_ERROR = 0.1
+MAX_TIME_JITTER = 0.02
+#: Extra random streams of a seed (``default_rng([seed, profile index, stream])``): what a
+#: structural override draws does not shift the draws of the profile's own stream.
+THRUSTER_OFFSET_STREAM = 1
+PILOT_STREAM = 2
 
 
 @dataclass
@@ -168,6 +195,19 @@ def _check_overrides(over: dict) -> None:
     if "curve_voltage" in over and over["curve_voltage"] not in (10, 12, 14, 16, 18, 20):
         raise ScenarioError(f"sample_scenario: curve_voltage = {over['curve_voltage']!r}; expected one of the measured "
                             "T200 voltages 10, 12, 14, 16, 18, 20 V")
+    for key, hi in (("thruster_position_error", MAX_THRUSTER_POSITION_ERROR), ("time_jitter", MAX_TIME_JITTER),
+                    ("sensor_latency", MAX_LATENCY)):
+        v = over.get(key, 0.0)
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) \
+                or not (np.isfinite(v) and 0.0 <= v <= hi):
+            unit = "m" if key == "thruster_position_error" else "s"
+            raise ScenarioError(f"sample_scenario: {key} = {v!r}; expected a number in [0, {hi:g}] {unit} (0: off)")
+    if "pilot_inputs" in over and not isinstance(over["pilot_inputs"], (bool, np.bool_)):
+        raise ScenarioError(f"sample_scenario: pilot_inputs = {over['pilot_inputs']!r}; expected True or False")
+    if over.get("thruster_position_error") and over.get("input_kind") == "force":
+        raise ScenarioError("sample_scenario: thruster_position_error with input_kind 'force': force inputs drive "
+                            "the truth with the generalized force itself, no thruster geometry; expected input_kind "
+                            "'thrust' or 'pwm'")
     if "duration" in over:
         d = np.atleast_1d(np.asarray(over["duration"], dtype=float))
         if d.size not in (1, 2) or not np.all((d >= 1.0) & (d <= 600.0)):
@@ -241,7 +281,9 @@ def _fit_shape(shape, duration, rate, veh, trim):
     return (scale_shape(shape, scale) if scale < 1.0 else shape), _r(scale)
 
 
-def _runs(rng, shapes_train, shapes_val, durations, rate, veh, trim, imu=False) -> list:
+def _runs(rng, shapes_train, shapes_val, durations, rate, veh, trim, imu=False, pilot_rng=None) -> list:
+    """The runs of a spec.  With ``pilot_rng`` each run is a ``pilot`` shape drawn from it, and
+    the shape ``rng`` would have drawn is drawn and dropped, so the other draws stay as they are."""
     runs = []
     c, hw = np.asarray(START_CENTRE), np.asarray(START_HALF_WIDTH)
     for i, ((shape, split), dur) in enumerate(zip([(s, "train") for s in shapes_train]
@@ -251,6 +293,8 @@ def _runs(rng, shapes_train, shapes_val, durations, rate, veh, trim, imu=False) 
         else:
             name, dof = shape
             sh = sample_shape(rng, name, dur, dof=dof)
+        if pilot_rng is not None:
+            sh = sample_shape(pilot_rng, "pilot", dur)
         sh, scale = _fit_shape(sh, dur, rate, veh, trim)
         run = {"name": f"{'val' if split == 'validation' else 'run'}_{i + 1:02d}_{sh['shape']}_{sh['dof']}",
                "dof": sh["dof"], "split": split, "weight": 1.0, "duration": dur, "shape": sh, "amplitude_scale": scale,
@@ -264,8 +308,8 @@ def _runs(rng, shapes_train, shapes_val, durations, rate, veh, trim, imu=False) 
 
 def _diagnose(seed, rng, over) -> ScenarioSpec:
     kind = over.get("input_kind", str(rng.choice(INPUT_KINDS)))
-    if "curve_voltage" in over:
-        kind = over.get("input_kind", "pwm")  # a curve mismatch is a PWM matter
+    if "curve_voltage" in over or over.get("thruster_position_error"):
+        kind = over.get("input_kind", "pwm")  # a curve mismatch and the thrusters' geometry are thruster matters
     rate = float(over.get("rate_hz", rng.choice(MOCAP_RATES)))
     vehicle = _vehicle(rng, over, buoyancy=str(rng.choice(["neutral", "trimmed"])))
     veh = load_vehicle_data()
@@ -295,7 +339,7 @@ def _diagnose(seed, rng, over) -> ScenarioSpec:
 
 
 def _issue10(seed, rng, over) -> ScenarioSpec:
-    kind = over.get("input_kind", "force")
+    kind = over.get("input_kind", "pwm" if over.get("thruster_position_error") else "force")
     rate = float(over.get("rate_hz", 50.0))
     veh = load_vehicle_data()
     vehicle = _vehicle(rng, over, buoyancy="trimmed", net=_r(veh.buoyancy - veh.weight))
@@ -346,8 +390,12 @@ def _realsensor(seed, rng, over) -> ScenarioSpec:
     if over.get("dvl"):
         sensors["dvl"] = {"position": [-0.1, 0.0, 0.1], "sigma": 0.01}
     shapes = [("telegraph", None)] * (n_train + n_val)
-    runs = _runs(rng, shapes[:n_train], shapes[n_train:], durs, rate, veh, vehicle["net_buoyancy"], imu=True)
-    return ScenarioSpec(seed, "realsensor", f"realsensor profile, seed {seed}: {kind} telegraph runs, IMU at "
+    pilot_rng = (np.random.default_rng([seed, PROFILES.index("realsensor"), PILOT_STREAM])
+                 if over.get("pilot_inputs") else None)
+    runs = _runs(rng, shapes[:n_train], shapes[n_train:], durs, rate, veh, vehicle["net_buoyancy"], imu=True,
+                 pilot_rng=pilot_rng)
+    flown = "pilot" if pilot_rng is not None else "telegraph"
+    return ScenarioSpec(seed, "realsensor", f"realsensor profile, seed {seed}: {kind} {flown} runs, IMU at "
                         f"{rate:g} Hz, depth at 10 Hz ({sensors['depth']['mode']}), {len(effects)} effect(s)",
                         vehicle, kind, rate, sensors, effects, runs, noise_seed=seed)
 
@@ -360,7 +408,9 @@ def sample_scenario(seed: int, profile: str = "diagnose", **overrides) -> Scenar
     seed : non-negative integer.
     profile : "diagnose", "issue10_timing" or "realsensor" (module docstring).
     **overrides : fix some of the random choices (:data:`OVERRIDES` lists them), e.g.
-        ``n_effects=1``, ``effects=["tether"]``, ``input_kind="pwm"``, ``duration=10``.
+        ``n_effects=1``, ``effects=["tether"]``, ``input_kind="pwm"``, ``duration=10``; and the
+        structural ones, off by default (module docstring): ``thruster_position_error=0.02`` (m),
+        ``time_jitter=0.002`` (s), ``sensor_latency=0.02`` (s), ``pilot_inputs=True``.
 
     Returns
     -------
@@ -371,9 +421,37 @@ def sample_scenario(seed: int, profile: str = "diagnose", **overrides) -> Scenar
     if profile not in PROFILES:
         raise ScenarioError(f"sample_scenario: profile {profile!r}; expected one of {list(PROFILES)}")
     _check_overrides(overrides)
+    if overrides.get("pilot_inputs") and profile != "realsensor":
+        raise ScenarioError(f"sample_scenario: pilot_inputs with profile {profile!r}; only the realsensor profile's "
+                            "telegraph runs can be flown by a pilot")
     rng = np.random.default_rng([int(seed), PROFILES.index(profile)])
     spec = {"diagnose": _diagnose, "issue10_timing": _issue10, "realsensor": _realsensor}[profile](
         int(seed), rng, overrides)
     if "max_step" in overrides:
         spec.max_step = float(overrides["max_step"])
+    _structure(spec, overrides)
     return spec
+
+
+def _structure(spec: ScenarioSpec, over: dict) -> None:
+    """Record the structural overrides in ``spec`` (module docstring); nothing when they are off."""
+    notes = []
+    bound = float(over.get("thruster_position_error", 0.0))
+    if bound > 0:
+        prng = np.random.default_rng([spec.seed, PROFILES.index(spec.profile), THRUSTER_OFFSET_STREAM])
+        k = load_vehicle_data(DEFAULT_VEHICLE_FILE).n_thrusters
+        spec.vehicle["thruster_position_error"] = _r(bound)
+        spec.vehicle["thruster_offsets"] = [[_u(prng, -bound, bound) for _ in range(3)] for _ in range(k)]
+        notes.append(f"thruster positions off by up to {bound * 1000:g} mm")
+    jitter = float(over.get("time_jitter", 0.0))
+    if jitter > 0:
+        spec.sensors["clock"] = {"jitter": jitter}
+        notes.append(f"time stamps jittered by {jitter * 1000:g} ms")
+    latency = float(over.get("sensor_latency", 0.0))
+    if latency > 0:
+        for name, sec in spec.sensors.items():
+            if name not in ("dvl", "clock"):   # a DVL's own timing is not modelled; the clock has no readings
+                sec["latency"] = latency
+        notes.append(f"sensors {latency * 1000:g} ms late")
+    if notes:
+        spec.description += "; " + ", ".join(notes)
