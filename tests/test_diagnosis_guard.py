@@ -136,3 +136,17 @@ def test_a_thrust_curve_at_another_voltage_is_the_base_model_not_a_thruster_faul
     assert rec["named"] == [] and rec["correct"]
     assert rec["base_model"] == "thrust_scale"
     assert rec["worst_group_change"] is not None and rec["worst_group_change"] <= 0.10
+
+
+def test_a_voltage_family_vehicle_gets_the_battery_voltage_and_the_effect_beside_it(tmp_path):
+    """Issue 22 class 5 with an effect: PWM runs through the T200 curve measured at 20 V, the
+    model's thrusters on the voltage family at the file's 16 V, and a ballast the model lacks.
+    The base model's ``supply_voltage`` takes the curve (a thrust scale cannot: the family
+    differs in shape near the dead band), and the ballast is named beside it."""
+    from uvsim.benchmarks.structural import run_one
+
+    rec = run_one("curve_mismatch", 10001, supply=True, tmp=tmp_path)
+    assert rec["curve"] == "t200_20v_measured" and rec["true"] == ["ballast"]
+    assert rec["base_model"] == "supply_voltage"
+    assert rec["named"] == ["ballast"] and rec["correct"]
+    assert rec["worst_group_change"] is not None and rec["worst_group_change"] <= 0.10

@@ -61,9 +61,14 @@ def _overrides(cls: str, seed: int) -> tuple[str, dict, list]:
     raise UvsimError(f"structural benchmark: class {cls!r}; expected one of {list(CLASSES)}")
 
 
-def run_one(cls: str, seed: int, *, workers: int = 1, tmp: Path | None = None) -> dict:
-    """Generate and diagnose one scenario of class ``cls``; returns its record."""
+def run_one(cls: str, seed: int, *, supply: bool = False, workers: int = 1, tmp: Path | None = None) -> dict:
+    """Generate and diagnose one scenario of class ``cls``; returns its record.  ``supply``: the
+    model's thrusters on the T200 voltage family (its file's 16 V), so that the base model's
+    ``supply_voltage`` is a candidate (:func:`uvsim.benchmarks.calibration_structural.on_voltage_family`)."""
+    from uvsim.benchmarks.calibration_structural import on_voltage_family
+    from uvsim.calibration.calibrator import resolve_vehicle
     from uvsim.diagnosis import diagnose
+    from uvsim.logs import read_dataset
     from uvsim.scenarios import generate, load_truth, sample_scenario
 
     profile, over, retune = _overrides(cls, seed)
@@ -72,7 +77,8 @@ def run_one(cls: str, seed: int, *, workers: int = 1, tmp: Path | None = None) -
         out = generate(spec, Path(d) / "ds")
         truth = load_truth(out)
         t0 = time.perf_counter()
-        rep = diagnose(out, retune=retune, workers=workers).report
+        model = on_voltage_family(resolve_vehicle(None, read_dataset(out))) if supply else None
+        rep = diagnose(out, model, retune=retune, workers=workers).report
         seconds = time.perf_counter() - t0
     true = sorted({TRUTH_TO_CATALOGUE.get(e["type"], e["type"]) for e in truth["effects"]
                    if e.get("catalogued", True)})
@@ -83,7 +89,7 @@ def run_one(cls: str, seed: int, *, workers: int = 1, tmp: Path | None = None) -
         ok = bool(v.get("unexplained"))
     else:
         ok = named == true
-    return {"class": cls, "seed": seed, "input_kind": truth.get("input_kind"), "rate_hz": truth.get("rate_hz"),
+    return {"class": cls, "seed": seed, "supply": supply, "input_kind": truth.get("input_kind"), "rate_hz": truth.get("rate_hz"),
             "curve": spec.vehicle.get("truth_curve"), "truth": [e["type"] for e in truth["effects"]],
             "true": true, "out_of_catalogue": ooc, "named": named,
             "named_variants": [f"{e['effect']}:{e['variant']}" for e in rep["effects"]],
@@ -113,8 +119,8 @@ def summarize(records: list[dict]) -> dict:
     return out
 
 
-def run_benchmark(n: int, seed: int, *, classes=CLASSES, workers: int = 1, results: str | Path | None = None,
-                  progress=None) -> dict:
+def run_benchmark(n: int, seed: int, *, classes=CLASSES, supply: bool = False, workers: int = 1,
+                  results: str | Path | None = None, progress=None) -> dict:
     """``n`` scenarios per class from ``seed`` (resumed from ``results``, JSON lines)."""
     if n < 1:
         raise UvsimError(f"--scenarios {n}: need at least one scenario per class")
@@ -123,14 +129,14 @@ def run_benchmark(n: int, seed: int, *, classes=CLASSES, workers: int = 1, resul
         raise UvsimError(f"--only {bad}: unknown class(es); expected {list(CLASSES)}")
     say = progress or (lambda m: None)
     path = Path(results) if results else None
-    done = load_records(path, lambda rec: (rec["class"], rec["seed"]), say, "scenario")
+    done = load_records(path, lambda rec: (rec["class"], rec["seed"], rec.get("supply", False)), say, "scenario")
     todo = [(c, seed + OFFSET[c] + i) for c in classes for i in range(n)]
     records = []
     for i, (c, s) in enumerate(todo, 1):
-        if (c, s) in done:
-            records.append(done[(c, s)])
+        if (c, s, supply) in done:
+            records.append(done[(c, s, supply)])
             continue
-        rec = run_one(c, s, workers=workers)
+        rec = run_one(c, s, supply=supply, workers=workers)
         records.append(rec)
         append_record(path, rec)
         say(f"[{i}/{len(todo)}] {c} seed {s}: truth {rec['truth'] or 'none'}, named {rec['named'] or 'none'}, "

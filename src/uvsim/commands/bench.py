@@ -25,8 +25,9 @@ def register(sub) -> None:
     p.add_argument("--loss", choices=LOSSES, default="linear",
                    help="(calibrate-structural) the calibration's --loss")
     p.add_argument("--supply-voltage", action="store_true",
-                   help="(calibrate-structural) start model on the T200 voltage family at its file's 16 V and "
-                        "supply_voltage freed beside z_b (--free z_b,supply_voltage)")
+                   help="(calibrate-structural, diagnose-structural) start model on the T200 voltage family at "
+                        "its file's 16 V: calibration frees supply_voltage beside z_b (--free z_b,supply_voltage), "
+                        "diagnosis has it as a base-model candidate")
     p.add_argument("--compare-no-prior", action="store_true",
                    help="(calibrate-structural) calibrate each dataset also without the priors (--no-prior)")
     p.add_argument("--scenarios", type=int, default=20, help="(diagnose) single-effect or clean scenarios")
@@ -130,7 +131,7 @@ def _structural(args) -> int:
 
     classes = [c.strip() for c in args.only.split(",") if c.strip()] if args.only else list(CLASSES)
     out = _suite(args, lambda say: run_benchmark(args.scenarios, args.seed, classes=classes, workers=args.workers,
-                                                 results=args.results, progress=say))
+                                                 supply=args.supply_voltage, results=args.results, progress=say))
     if out is None:
         return 0
     s = out["summary"]
@@ -149,7 +150,8 @@ def _calibrate_structural(args) -> int:
     from uvsim.benchmarks.calibration_structural import WORSE_POINTS, run_benchmark
 
     out = _suite(args, lambda say: run_benchmark(args.scenarios, args.seed, compare_no_prior=args.compare_no_prior,
-                                                 loss=args.loss, supply=args.supply_voltage, workers=args.workers, results=args.results,
+                                                 loss=args.loss, supply=args.supply_voltage, workers=args.workers,
+                                                 results=args.results,
                                                  progress=say))
     if out is None:
         return 0

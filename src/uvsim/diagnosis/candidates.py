@@ -320,6 +320,13 @@ def _base_model(base: Mapping[str, float], n_thrusters: int, input_kind: str):
     what = "every thruster's curve" if input_kind != "force" else "the logged generalized forces"
     out.append(Candidate(BASE_MODEL, "thrust_scale", scale_spec, ["thrust_scale_scale"], sb, ss,
                          f"{what} scaled (another supply voltage, propeller or ESC than the vehicle file's)"))
+    if "supply_voltage" in base and input_kind == "pwm":  # thrusters on a voltage family (docs/thrusters.md)
+        v0 = float(base["supply_voltage"])
+        out.append(Candidate(BASE_MODEL, "supply_voltage", None, ["supply_voltage"],
+                             {"supply_voltage": default_bounds("supply_voltage", v0, BASE_MARGIN)},
+                             {"supply_voltage": v0},
+                             "the thrust curves read at another battery voltage than the file's (their shape "
+                             "near the dead band as well as their scale)"))
     damp = [n for n in BASE_DAMPING if n in base and base[n] != 0.0]
     if damp:
         b = {n: default_bounds(n, base[n], BASE_MARGIN) for n in damp}

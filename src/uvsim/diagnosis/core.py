@@ -58,8 +58,8 @@ DEFAULT_HORIZON = 3.0
 #: mismatch is absorbed before actuator faults are judged).  The hydrodynamic re-tunes compete
 #: with the effects from step 1 on: fitted first they absorb the drag of a tether or the pull of
 #: a current (foreign case b: the tether named after base_model:hydrodynamics left 221 mm of validation
-#: RMSE, 9 mm alone).
-STEP0_VARIANTS = ("thrust_scale",)
+#: RMSE, 9 mm alone).  ``supply_voltage`` exists for thrusters on a voltage-family curve only.
+STEP0_VARIANTS = ("thrust_scale", "supply_voltage")
 
 
 @dataclass

@@ -122,7 +122,8 @@ def linearize(prob: WindowedProblem, z: np.ndarray, nus: list, *, jacobian: bool
         pri = prob.priors(D, bb, r)                              # (P, q_r)
         res0 = np.concatenate([meas[0], dfc[0].ravel(), pri[0]])
         if not jacobian:
-            blocks.append(RunNormal(float(res0 @ res0), res0.size))
+            with np.errstate(over="ignore"):  # a trial step whose simulation ran away: cost inf, rejected
+                blocks.append(RunNormal(float(res0 @ res0), res0.size))
             continue
         full = np.concatenate([meas, dfc.reshape(Z.shape[0], -1), pri], 1)
         Jz = ((full[1:1 + p] - full[0]) / hz[:, None]).T
