@@ -211,7 +211,8 @@ def run_one(seed: int, *, prior: bool = True, loss: str = "linear", supply: bool
                           "not_compared": [], "at_bounds": [],
                           "data_weight": None, "farther_from_truth": []}, str(exc)
         seconds = time.perf_counter() - t0
-    return {"seed": seed, "prior": prior, "loss": loss, "supply": supply, **over, "effects": [e["type"] for e in truth["effects"]],
+    return {"seed": seed, "prior": prior, "loss": loss, "supply": supply, **over,
+            "effects": [e["type"] for e in truth["effects"]],
             "curve": spec.vehicle.get("truth_curve"), **rec, "error": error, "seconds": seconds}
 
 

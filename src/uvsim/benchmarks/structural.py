@@ -89,7 +89,8 @@ def run_one(cls: str, seed: int, *, supply: bool = False, workers: int = 1, tmp:
         ok = bool(v.get("unexplained"))
     else:
         ok = named == true
-    return {"class": cls, "seed": seed, "supply": supply, "input_kind": truth.get("input_kind"), "rate_hz": truth.get("rate_hz"),
+    return {"class": cls, "seed": seed, "supply": supply, "input_kind": truth.get("input_kind"),
+            "rate_hz": truth.get("rate_hz"),
             "curve": spec.vehicle.get("truth_curve"), "truth": [e["type"] for e in truth["effects"]],
             "true": true, "out_of_catalogue": ooc, "named": named,
             "named_variants": [f"{e['effect']}:{e['variant']}" for e in rep["effects"]],

@@ -85,7 +85,8 @@ def _bar(progress: bool, total: int):
 
 
 def run_joint(vehicle, runs, meas, params, *, keep, screen, bounds, horizons, max_iter: int, gyro_bias: bool,
-              attitude_bias: bool = False, initial_velocity: str = "zero", workers: int = 1, checkpoint: JointCheckpoint | None = None,
+              attitude_bias: bool = False, initial_velocity: str = "zero", workers: int = 1,
+              checkpoint: JointCheckpoint | None = None,
               progress: bool = False, prior_mean=None, prior_sd=None, loss: str = "linear"):
     """Screen and fit (module docstring).
 
@@ -134,7 +135,8 @@ def run_joint(vehicle, runs, meas, params, *, keep, screen, bounds, horizons, ma
 
     try:
         res = fit(vehicle, runs, space, meas=meas, horizons=horizons, max_iter=max_iter, gyro_bias=gyro_bias,
-                  attitude_bias=attitude_bias, initial_velocity=initial_velocity, workers=workers, checkpoint=checkpoint, on_iteration=on_it,
+                  attitude_bias=attitude_bias, initial_velocity=initial_velocity, workers=workers,
+                  checkpoint=checkpoint, on_iteration=on_it,
                   progress=lambda msg: log.debug(msg), prior_mean=prior_mean, prior_sd=prior_sd,
                   loss=loss)
     finally:

@@ -60,9 +60,10 @@ def expand_names(spec, known: Sequence[str], option: str = "free") -> list[str]:
     for item in split_names(spec):
         hits = [k for k in known if fnmatch.fnmatchcase(k, item)]
         if not hits and item == "supply_voltage":
-            raise CalibrationError(f"{option}: supply_voltage is a parameter only of thrusters whose curve depends on "
-                                   "the battery voltage; give the vehicle file's thrusters the T200 family with one nominal "
-                                   "voltage, curve: {voltage_table: t200, nominal_voltage: 16} (docs/thrusters.md)")
+            raise CalibrationError(f"{option}: supply_voltage is a parameter only of thrusters whose curve depends "
+                                   "on the battery voltage; give the vehicle file's thrusters the T200 family with "
+                                   "one nominal voltage, curve: {voltage_table: t200, nominal_voltage: 16} "
+                                   "(docs/thrusters.md)")
         if not hits:
             raise CalibrationError(f"{option}: unknown parameter {item!r}{_did_you_mean(item, known)} "
                                    f"(`uvsim vehicle show --json` lists a vehicle's parameters)")

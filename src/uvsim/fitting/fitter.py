@@ -127,7 +127,8 @@ def build_problems(vehicle, runs, meas, space: ParameterSpace, horizon, z_ref, *
 
 
 def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence = DEFAULT_HORIZONS,
-        max_iter: int = 20, gyro_bias: bool = True, attitude_bias: bool = False, noise=None, weights=None, initial_velocity: str = "zero",
+        max_iter: int = 20, gyro_bias: bool = True, attitude_bias: bool = False, noise=None, weights=None,
+        initial_velocity: str = "zero",
         z0=None, progress=None, workers: int = 1, ftol: float = 1e-6, checkpoint=None,
         on_iteration=None, prior_mean=None, prior_sd=None, loss: str = "linear") -> FitResult:
     """Fit ``space``'s free parameters of ``vehicle`` to ``runs`` (module docstring).
