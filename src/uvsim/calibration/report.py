@@ -113,7 +113,8 @@ def never_worse(runs, fitted: dict, initial: dict, meas: dict, vehicles: tuple |
         side["unstable"] = {k: x["channels"] for k, x in growth.items() if x["unstable"]}
         sides.append((side, growth))
     (before, g0), (after, g1) = sides
-    g = compare_open_loop(before, after, refuse_newly_unstable=True)
+    g = compare_open_loop(before, after, refuse_newly_unstable=True,
+                          names=("the starting model", "the fitted model"))
     exclude = g["not_compared"]
     not_compared = {k: {"channels": v, "growth_start": g0[k]["growth"], "growth_fitted": g1[k]["growth"]}
                     for k, v in exclude.items()}
@@ -121,8 +122,6 @@ def never_worse(runs, fitted: dict, initial: dict, meas: dict, vehicles: tuple |
     what = "validates" if split == "validation" else "simulates its own training runs (no validation runs)"
     why = g["why"].replace("makes the open-loop validation worse", f"the fitted model {what} worse than the "
                                                                      "starting model")
-    why = why.replace("its free simulation of", "the fitted model's free simulation of")
-    why = why.replace("the current model's is not", "the starting model's is not")
     if unstable_fit:
         why += "; if the vehicle is unstable there too, keep the fit knowingly"
     method = (f"open-loop {split} runs, per channel, position and depth aligned over the first "

@@ -33,6 +33,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from uvsim.fitting.compare import bootstrap_improvement
+from uvsim.fitting.sensitivity import GROWTH, PERTURBATION
 
 #: Block length of the bootstrap, s: as long as a diagnosis window (core.DEFAULT_HORIZON),
 #: so neighbouring blocks of a drifting free simulation are only weakly dependent.
@@ -141,7 +142,8 @@ def block_costs(meas: Sequence, results: Sequence[dict], block_s: float = BLOCK_
             "rmse": rmse, "meas": list(meas), "results": list(results), "by": by}
 
 
-def compare_open_loop(before: Mapping, after: Mapping, *, refuse_newly_unstable: bool = False) -> dict:
+def compare_open_loop(before: Mapping, after: Mapping, *, refuse_newly_unstable: bool = False,
+                      names: tuple = ("the current model", "the candidate")) -> dict:
     """:func:`guard` of two :func:`block_costs` results that also carry ``results``,
     ``meas`` and ``unstable`` (run name -> channels whose free simulation amplifies the
     uncertainty of its start, :func:`uvsim.fitting.sensitivity.initial_state_growth`):
@@ -151,7 +153,8 @@ def compare_open_loop(before: Mapping, after: Mapping, *, refuse_newly_unstable:
     vouched for, and the current model was stable there.  The calibration's check refuses
     them; diagnosis does not, since an effect that restores position (a tether) can make the
     test's velocity change grow without the vehicle being unstable (the foreign suite's
-    case b: its tether was refused and a thrust asymmetry named instead)."""
+    case b: its tether was refused and a thrust asymmetry named instead).  ``names``: how the
+    refusal's message calls the two models (before, after)."""
     unstable: dict = {}
     for side in (before, after):
         for name, chans in (side.get("unstable") or {}).items():
@@ -166,9 +169,9 @@ def compare_open_loop(before: Mapping, after: Mapping, *, refuse_newly_unstable:
     new = [k for k in (after.get("unstable") or {}) if k not in (before.get("unstable") or {})]
     out["newly_unstable"] = new
     if new and refuse_newly_unstable:
-        msg = (f"its free simulation of {', '.join(new)} is unstable (a 0.02 m/s or rad/s change of the start "
-               "grows more than 2x) where the current model's is not, so its attitude and rates there cannot be "
-               "compared")
+        msg = (f"{names[1]}'s free simulation of {', '.join(new)} is unstable (a {max(PERTURBATION):g} m/s or rad/s "
+               f"change of the start grows more than {GROWTH:g}x) where {names[0]}'s is not, so its attitude and "
+               "rates there cannot be compared")
         out["why"] = msg if out["ok"] else f"{out['why']}; {msg}"
         out["ok"] = False
     return out
