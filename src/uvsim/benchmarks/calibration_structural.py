@@ -175,6 +175,15 @@ def on_voltage_family(vehicle):
     return vehicle_from_dict(d, source=f"{vehicle.name} on the T200 voltage family")
 
 
+def dataset_vehicle_on_family(dataset_dir):
+    """:func:`on_voltage_family` of the vehicle a generated dataset names (the benchmarks'
+    ``--supply-voltage`` start model)."""
+    from uvsim.calibration.calibrator import resolve_vehicle
+    from uvsim.logs import read_dataset
+
+    return on_voltage_family(resolve_vehicle(None, read_dataset(dataset_dir)))
+
+
 def run_one(seed: int, *, prior: bool = True, loss: str = "linear", supply: bool = False, workers: int = 1,
             tmp: Path | None = None) -> dict:
     """Generate and calibrate one scenario; returns its record.  ``supply``: the start
@@ -191,12 +200,7 @@ def run_one(seed: int, *, prior: bool = True, loss: str = "linear", supply: bool
         truth = load_truth(out)
         t0 = time.perf_counter()
         try:
-            start = None
-            if supply:
-                from uvsim.calibration.calibrator import resolve_vehicle
-                from uvsim.logs import read_dataset
-
-                start = on_voltage_family(resolve_vehicle(None, read_dataset(out)))
+            start = dataset_vehicle_on_family(out) if supply else None
             free = "z_b,supply_voltage" if supply else "z_b"
             cal = Calibrator(free=free, workers=workers, prior=prior, loss=loss).fit(out, start)
             rec = judge(cal.report_)

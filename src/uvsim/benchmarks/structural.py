@@ -65,10 +65,8 @@ def run_one(cls: str, seed: int, *, supply: bool = False, workers: int = 1, tmp:
     """Generate and diagnose one scenario of class ``cls``; returns its record.  ``supply``: the
     model's thrusters on the T200 voltage family (its file's 16 V), so that the base model's
     ``supply_voltage`` is a candidate (:func:`uvsim.benchmarks.calibration_structural.on_voltage_family`)."""
-    from uvsim.benchmarks.calibration_structural import on_voltage_family
-    from uvsim.calibration.calibrator import resolve_vehicle
+    from uvsim.benchmarks.calibration_structural import dataset_vehicle_on_family
     from uvsim.diagnosis import diagnose
-    from uvsim.logs import read_dataset
     from uvsim.scenarios import generate, load_truth, sample_scenario
 
     profile, over, retune = _overrides(cls, seed)
@@ -77,7 +75,7 @@ def run_one(cls: str, seed: int, *, supply: bool = False, workers: int = 1, tmp:
         out = generate(spec, Path(d) / "ds")
         truth = load_truth(out)
         t0 = time.perf_counter()
-        model = on_voltage_family(resolve_vehicle(None, read_dataset(out))) if supply else None
+        model = dataset_vehicle_on_family(out) if supply else None
         rep = diagnose(out, model, retune=retune, workers=workers).report
         seconds = time.perf_counter() - t0
     true = sorted({TRUTH_TO_CATALOGUE.get(e["type"], e["type"]) for e in truth["effects"]
