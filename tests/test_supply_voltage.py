@@ -67,6 +67,10 @@ def test_bounds_are_the_measured_family_and_the_prior_a_battery():
     assert default_prior_sd("supply_voltage", 16.0) == SUPPLY_VOLTAGE_SD == 2.0
     with pytest.raises(CalibrationError, match="unknown parameter 'supply_voltage'"):
         make_space(load_vehicle("bluerov2_heavy").parameters(), ["supply_voltage"])
+    from uvsim.calibration.selection import check_bounds
+
+    with pytest.raises(CalibrationError, match="beyond the voltages the thrust curves were measured at, 10..20 V"):
+        check_bounds({"supply_voltage": (5.0, 30.0)}, _on_family().parameters())
 
 
 def test_fit_recovers_the_voltage_of_a_truth_on_another_curve(tmp_path):

@@ -13,6 +13,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from uvsim.errors import CalibrationError
+from uvsim.voltage_curves import measured_voltage_range
 
 #: seed 000 Table 3, in the order inertia, added mass, linear, quadratic damping.
 DOF_PARAMETERS = {
@@ -58,13 +59,19 @@ def default_channel_weights(dof: str) -> dict:
 
 def check_sign(name: str, lo: float, hi: float) -> None:
     """Raise :class:`CalibrationError` for bounds that allow a wrong-signed damping
-    coefficient (paper sign: <= 0) or a non-positive inertia / added mass."""
+    coefficient (paper sign: <= 0), a non-positive inertia / added mass, or a supply voltage
+    outside the measured thrust curves."""
     if name in SIGNED_NEGATIVE and hi > 0:
         raise CalibrationError(f"bounds for {name}: ({lo:g}, {hi:g}) allow a positive damping coefficient "
                                "(paper sign: damping is <= 0)")
     if lo <= 0 and (name in EFFECTIVE_INERTIA["roll"] + EFFECTIVE_INERTIA["pitch"] + EFFECTIVE_INERTIA["yaw"]
                     or name in ("m", "X_udot", "Y_vdot", "Z_wdot")):
         raise CalibrationError(f"bounds for {name}: ({lo:g}, {hi:g}) allow a non-positive inertia/added mass")
+    if name == "supply_voltage":
+        vlo, vhi = measured_voltage_range()
+        if lo < vlo or hi > vhi:
+            raise CalibrationError(f"bounds for supply_voltage: ({lo:g}, {hi:g}) V reach beyond the voltages the "
+                                   f"thrust curves were measured at, {vlo:g}..{vhi:g} V (nothing is extrapolated)")
 
 
 def parse_dofs(dofs) -> list[str]:
