@@ -1,4 +1,5 @@
-"""Tests of uvsim.thrusters: tabulated/linear thrust curves, their inverse and loading."""
+"""Tests of uvsim.thrust_curves and uvsim.thrusters: tabulated/linear thrust curves, their
+inverse and loading."""
 from __future__ import annotations
 
 import pickle
@@ -297,6 +298,20 @@ def test_curves_pickle(t200):
 
 
 def test_code_reads_no_shared_paths():
-    src = Path(__file__).resolve().parents[1] / "src" / "uvsim" / "thrusters.py"
-    text = src.read_text()
-    assert "/work/shared" not in text and "../shared" not in text
+    for name in ("thrusters.py", "thrust_curves.py"):
+        text = (Path(__file__).resolve().parents[1] / "src" / "uvsim" / name).read_text()
+        assert "/work/shared" not in text and "../shared" not in text
+
+
+def test_curve_names_stay_importable_from_uvsim_thrusters():
+    """The curve classes live in uvsim.thrust_curves; uvsim.thrusters re-exports the same
+    objects (so old imports and pickles naming uvsim.thrusters keep working)."""
+    import uvsim.thrust_curves as tc
+    import uvsim.thrusters as th
+
+    for name in ("DATA_DIR", "DEFAULT_CURVE", "KGF_TO_N", "LinearThrustCurve", "TabulatedThrustCurve",
+                 "ThrustCurve", "available_tables", "shipped_curve"):
+        assert getattr(th, name) is getattr(tc, name), name
+    assert th.shipped_curve("t200_16v") is tc.shipped_curve("t200_16v")
+    old = pickle.dumps(tc.LinearThrustCurve(0.1, 0.05), protocol=0).replace(b"uvsim.thrust_curves", b"uvsim.thrusters")
+    assert b"uvsim.thrusters" in old and pickle.loads(old) == tc.LinearThrustCurve(0.1, 0.05)

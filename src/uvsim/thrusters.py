@@ -1,480 +1,36 @@
-"""Thruster curves: ESC PWM command (microseconds) -> thrust (N), and back.
-
-A *thrust curve* is a small picklable strategy object with two vectorized methods:
-
-- ``thrust(pwm)``: any-shaped PWM array (us) -> thrust array (N), same shape;
-- ``pwm(thrust)``: the inverse, used by tests and data generators; 0 N maps to the
-  neutral command (middle of the deadband).
-
-Two kinds ship:
-
-- :class:`TabulatedThrustCurve`: a measured PWM -> thrust table interpolated piecewise
-  linearly (``np.interp``, which preserves the table's monotonicity), with an explicit
-  deadband ``[lo, hi]`` where the thrust is exactly 0, a reverse branch (``pwm < lo``,
-  thrust <= 0) and a forward branch (``pwm > hi``, thrust >= 0).  The shipped default
-  for the BlueROV2 is ``t200_16v``: Blue Robotics' published T200 bollard-thrust data at
-  16 V (T200-Public-Performance-Data-10-20V-September-2019), see
-  ``src/uvsim/data/thrusters/SOURCE.md`` and ``docs/thrusters.md``.
-- :class:`LinearThrustCurve`: separate forward/reverse gains (N/us) outside a deadband.
-
-PWM outside a curve's range, non-finite PWM, or a thrust beyond what the curve can
-produce raise :class:`uvsim.errors.SimulationError` naming the value and the valid range;
-nothing is clipped.  Malformed tables or specs raise :class:`uvsim.errors.VehicleError`
-naming the file or field.
+"""Thrusters' curves as a vehicle file gives them, and one curve per thruster.
 
 :func:`load_thrust_curve` builds a curve from the forms a vehicle YAML uses (a shipped
 table name, ``{"table": name}``, an inline ``{"pwm": [...], "thrust": [...]}`` table, a
-CSV file, or ``{"type": "linear", ...}``); :class:`ThrustCurveSet` applies one curve
-per thruster to ``(..., n_thrusters)`` arrays with one call per distinct curve.
+CSV file, ``{"type": "linear", ...}`` or a battery-aware ``{"voltage_table": ...}``);
+:class:`ThrustCurveSet` applies one curve per thruster to ``(..., n_thrusters)`` arrays
+with one call per distinct curve.
+
+The curves themselves (PWM command -> thrust) live in :mod:`uvsim.thrust_curves` (fixed
+curves and the shipped tables) and :mod:`uvsim.voltage_curves` (battery-aware).  The
+public names of :mod:`uvsim.thrust_curves` are re-exported here, where vehicle code and
+user scripts import them (``from uvsim.thrusters import TabulatedThrustCurve`` keeps
+working).  Imports run one way: thrusters -> voltage_curves -> thrust_curves.
 """
 from __future__ import annotations
 
-import functools
-from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 
 from uvsim.errors import SimulationError, VehicleError
-from uvsim.schema import check_keys, did_you_mean
-
-#: Directory of the shipped tables (``<name>.csv`` with columns pwm_us, thrust_N).
-DATA_DIR = Path(__file__).resolve().parent / "data" / "thrusters"
-
-#: Name of the default curve for BlueROV2-class vehicles (T200 at 16 V, 4S battery).
-DEFAULT_CURVE = "t200_16v"
-
-#: Standard gravity used to convert kilogram-force to newtons (exact by definition of
-#: the kgf; CGPM 1901).  Only used to document/convert published kgf tables.
-KGF_TO_N = 9.80665
-
-
-# --------------------------------------------------------------------------- base class
-class ThrustCurve:
-    """Strategy interface: PWM (us) <-> thrust (N), vectorized over any shape.
-
-    Subclasses set ``pwm_min``, ``pwm_max`` (valid command range, us), ``deadband``
-    (``(lo, hi)``, us), ``neutral`` (us) and ``name``, and implement :meth:`_thrust`
-    and :meth:`_pwm` on already-validated float arrays.
-    """
-
-    pwm_min: float
-    pwm_max: float
-    deadband: tuple[float, float]
-    neutral: float
-    name: str
-    #: True for curves whose thrust depends on the supply voltage
-    #: (:class:`uvsim.voltage_curves.VoltageThrustCurve`); fixed curves ignore it.
-    voltage_dependent: bool = False
-
-    # -- public API ------------------------------------------------------------------
-    def thrust(self, pwm: np.ndarray) -> np.ndarray:
-        """Thrust for ESC commands.
-
-        Parameters
-        ----------
-        pwm : array_like, any shape
-            ESC pulse widths, microseconds.
-
-        Returns
-        -------
-        ndarray, same shape as ``pwm``
-            Thrust along the thruster axis, N (positive = forward branch).
-
-        Raises
-        ------
-        SimulationError
-            If any value is non-finite or outside ``[pwm_min, pwm_max]``.
-        """
-        pwm = np.asarray(pwm, dtype=float)
-        if pwm.size:
-            lo, hi = pwm.min(), pwm.max()
-            # NaN makes both comparisons False, so this also catches non-finite input.
-            if not (lo >= self.pwm_min and hi <= self.pwm_max):
-                self._range_error(pwm, self.pwm_min, self.pwm_max, "PWM", "us")
-        return self._thrust(pwm)
-
-    def pwm(self, thrust: np.ndarray) -> np.ndarray:
-        """Inverse curve: the ESC command that produces ``thrust``.
-
-        0 N maps to :attr:`neutral`.  Where the curve is flat (equal thrust at several
-        commands) the command nearest to neutral is returned, so
-        ``thrust(pwm(T)) == T`` (to round-off) for every reachable ``T``.
-
-        Parameters
-        ----------
-        thrust : array_like, any shape
-            Thrust, N.
-
-        Returns
-        -------
-        ndarray, same shape as ``thrust``
-            PWM, microseconds.
-
-        Raises
-        ------
-        SimulationError
-            If any value is non-finite or beyond ``[max_reverse, max_forward]``.
-        """
-        thrust = np.asarray(thrust, dtype=float)
-        if thrust.size:
-            lo, hi = thrust.min(), thrust.max()
-            if not (lo >= self.max_reverse and hi <= self.max_forward):
-                self._range_error(thrust, self.max_reverse, self.max_forward, "thrust", "N")
-        return self._pwm(thrust)
-
-    @property
-    def max_forward(self) -> float:
-        """Largest thrust the curve produces (N, >= 0)."""
-        return float(self._thrust(np.array(self.pwm_max)))
-
-    @property
-    def max_reverse(self) -> float:
-        """Most negative thrust the curve produces (N, <= 0)."""
-        return float(self._thrust(np.array(self.pwm_min)))
-
-    def to_mapping(self) -> dict:
-        """A mapping that :func:`load_thrust_curve` turns back into an equal curve."""
-        raise NotImplementedError
-
-    # -- helpers for subclasses ----------------------------------------------------------
-    def _thrust(self, pwm: np.ndarray) -> np.ndarray:  # pragma: no cover - abstract
-        raise NotImplementedError
-
-    def _pwm(self, thrust: np.ndarray) -> np.ndarray:  # pragma: no cover - abstract
-        raise NotImplementedError
-
-    def _key(self) -> tuple:  # pragma: no cover - abstract
-        raise NotImplementedError
-
-    def __eq__(self, other: object) -> bool:
-        return type(other) is type(self) and self._key() == other._key()  # type: ignore[attr-defined]
-
-    def __hash__(self) -> int:
-        return hash(self._key())
-
-    def _range_error(self, values, vmin, vmax, what, unit):
-        bad = ~((values >= vmin) & (values <= vmax))
-        idx = np.unravel_index(int(np.argmax(bad)), values.shape) if values.ndim else ()
-        first = values[idx]
-        n_bad = int(bad.sum())
-        where = f" at index {tuple(int(i) for i in idx)}" if values.ndim else ""
-        raise SimulationError(
-            f"thrust curve {self.name!r}: {what} {float(first):g} {unit}{where} is outside the "
-            f"valid range [{vmin:g}, {vmax:g}] {unit} ({n_bad} of {values.size} values out of "
-            f"range; values are never clipped)"
-        )
-
-
-# ------------------------------------------------------------------------- tabulated
-class TabulatedThrustCurve(ThrustCurve):
-    """Measured PWM -> thrust table, interpolated piecewise linearly.
-
-    Parameters
-    ----------
-    pwm : array_like, shape (n,)
-        Commands, us, finite and strictly increasing, n >= 2.
-    thrust : array_like, shape (n,)
-        Thrust at each command, N, finite and non-decreasing, <= 0 below the deadband,
-        >= 0 above it and exactly 0 inside it.
-    deadband : (lo, hi), optional
-        Closed interval of commands with zero thrust, ``pwm[0] <= lo <= hi <= pwm[-1]``.
-        Default: the first and last table commands whose thrust is 0 (for ``t200_16v``
-        that is 1472-1528 us).  Between ``lo`` and the last reverse point (and ``hi``
-        and the first forward point) thrust is interpolated linearly to 0.
-    neutral : float, optional
-        Command that :meth:`pwm` returns for 0 N; default the deadband midpoint.
-    name : str
-        Used in error messages and by :meth:`to_mapping` (a shipped table's name).
-    source : str
-        Where the numbers came from (file or field), used in validation errors.
-
-    Notes
-    -----
-    ``np.interp`` is used over the whole (deadband-augmented) table, so one call serves
-    any array shape; it returns the tabulated values exactly at the table commands and
-    exactly 0 inside the deadband.  When the knots are uniformly spaced (as in the Blue
-    Robotics sheets) large arrays use an equivalent search-free formula instead.
-    """
-
-    def __init__(self, pwm, thrust, *, deadband=None, neutral=None, name="table", source=None):
-        source = source or name
-        pwm = _as_1d(pwm, f"{source}: pwm")
-        thrust = _as_1d(thrust, f"{source}: thrust")
-        if pwm.size != thrust.size:
-            raise VehicleError(
-                f"{source}: pwm and thrust must have the same length, got {pwm.size} and {thrust.size}"
-            )
-        if pwm.size < 2:
-            raise VehicleError(f"{source}: a thrust table needs at least 2 points, got {pwm.size}")
-        if not np.all(np.diff(pwm) > 0):
-            i = int(np.argmax(~(np.diff(pwm) > 0)))
-            raise VehicleError(
-                f"{source}: pwm must be strictly increasing, but pwm[{i}]={pwm[i]:g} and "
-                f"pwm[{i + 1}]={pwm[i + 1]:g}"
-            )
-        if not np.all(np.diff(thrust) >= 0):
-            i = int(np.argmax(~(np.diff(thrust) >= 0)))
-            raise VehicleError(
-                f"{source}: thrust must be non-decreasing in pwm (a monotone curve), but "
-                f"thrust={thrust[i]:g} N at {pwm[i]:g} us and {thrust[i + 1]:g} N at {pwm[i + 1]:g} us"
-            )
-
-        if deadband is None:
-            zero = np.flatnonzero(thrust == 0.0)
-            if zero.size == 0:
-                raise VehicleError(
-                    f"{source}: the table has no zero-thrust entry, so the deadband cannot be "
-                    f"inferred; give deadband: [lo, hi] (us)"
-                )
-            lo, hi = float(pwm[zero[0]]), float(pwm[zero[-1]])
-        else:
-            lo, hi = _pair(deadband, f"{source}: deadband")
-            if not lo <= hi:
-                raise VehicleError(f"{source}: deadband must satisfy lo <= hi, got [{lo:g}, {hi:g}]")
-            if lo < pwm[0] or hi > pwm[-1]:
-                raise VehicleError(
-                    f"{source}: deadband [{lo:g}, {hi:g}] us must lie inside the table's pwm "
-                    f"range [{pwm[0]:g}, {pwm[-1]:g}] us"
-                )
-        inside = (pwm >= lo) & (pwm <= hi)
-        if np.any(thrust[inside] != 0.0):
-            i = int(np.flatnonzero(inside & (thrust != 0.0))[0])
-            raise VehicleError(
-                f"{source}: thrust must be 0 inside the deadband [{lo:g}, {hi:g}] us, but is "
-                f"{thrust[i]:g} N at {pwm[i]:g} us"
-            )
-        if np.any(thrust[pwm < lo] > 0.0):
-            i = int(np.flatnonzero((pwm < lo) & (thrust > 0.0))[0])
-            raise VehicleError(
-                f"{source}: thrust must be <= 0 below the deadband (reverse branch, pwm < {lo:g} us), "
-                f"but is {thrust[i]:g} N at {pwm[i]:g} us"
-            )
-        if np.any(thrust[pwm > hi] < 0.0):
-            i = int(np.flatnonzero((pwm > hi) & (thrust < 0.0))[0])
-            raise VehicleError(
-                f"{source}: thrust must be >= 0 above the deadband (forward branch, pwm > {hi:g} us), "
-                f"but is {thrust[i]:g} N at {pwm[i]:g} us"
-            )
-        if neutral is None:
-            neutral = 0.5 * (lo + hi)
-        neutral = float(neutral)
-        if not (np.isfinite(neutral) and lo <= neutral <= hi):
-            raise VehicleError(f"{source}: neutral {neutral:g} us must lie in the deadband [{lo:g}, {hi:g}] us")
-
-        # Table as given (for to_mapping / equality) and the interpolation knots: the
-        # table points plus (lo, 0) and (hi, 0) where the table has no point there.
-        self.table_pwm = _readonly(pwm)
-        self.table_thrust = _readonly(thrust)
-        extra = [v for v in sorted({lo, hi}) if v not in pwm]
-        order = np.argsort(np.concatenate([pwm, extra]), kind="stable")
-        self._xp = _readonly(np.concatenate([pwm, extra])[order])
-        self._fp = _readonly(np.concatenate([thrust, np.zeros(len(extra))])[order])
-        # Uniformly spaced knots (the Blue Robotics sheets: 4 us steps) allow a
-        # search-free evaluation, about twice as fast as np.interp on large arrays.
-        step = np.diff(self._xp)
-        self._step = float(step[0]) if np.all(step == step[0]) else None
-        self.pwm_min, self.pwm_max = float(pwm[0]), float(pwm[-1])
-        self.deadband = (lo, hi)
-        self.neutral = neutral
-        self.name = str(name)
-        self._deadband_given = deadband is not None
-        self._neutral_given = neutral != 0.5 * (lo + hi)
-
-    # -- evaluation -------------------------------------------------------------------
-    def _thrust(self, pwm):
-        if self._step is None or pwm.size < 64:
-            return np.interp(pwm, self._xp, self._fp)
-        # Uniform knots: segment index by division, then the same linear interpolation
-        # as np.interp, written so that knots (t = 0, or t = 1 at the last knot) return
-        # the table value exactly and zero-thrust segments return exactly 0.
-        u = (pwm - self._xp[0]) / self._step
-        i = np.minimum(u.astype(np.intp), self._xp.size - 2)
-        t = u - i
-        return self._fp[i] * (1.0 - t) + self._fp[i + 1] * t
-
-    def _pwm(self, thrust):
-        xp, fp = self._xp, self._fp
-        # Forward (T > 0): first knot with fp >= T; the knot before it has fp < T, so the
-        # segment rises strictly.  Reverse (T < 0): last knot with fp <= T; the next knot
-        # has fp > T.  Both pick the command nearest to neutral on flat stretches.
-        i_f = np.clip(np.searchsorted(fp, thrust, side="left"), 1, fp.size - 1)
-        i_r = np.clip(np.searchsorted(fp, thrust, side="right"), 1, fp.size - 1)
-        i = np.where(thrust > 0, i_f, i_r)
-        x0, x1, f0, f1 = xp[i - 1], xp[i], fp[i - 1], fp[i]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            out = x0 + (thrust - f0) / (f1 - f0) * (x1 - x0)
-        return np.where(thrust == 0, self.neutral, out)
-
-    # -- construction -----------------------------------------------------------------
-    @classmethod
-    def from_csv(cls, path, *, deadband=None, neutral=None, name=None) -> "TabulatedThrustCurve":
-        """Read a table from a CSV file with columns ``pwm_us`` and ``thrust_N``.
-
-        Lines starting with ``#`` are comments.  Raises :class:`VehicleError` naming the
-        file if it is missing, lacks a column or holds non-numbers.
-        """
-        import pandas as pd  # local import: pandas is only needed to read files
-
-        path = Path(path)
-        try:
-            df = pd.read_csv(path, comment="#", skipinitialspace=True)
-        except FileNotFoundError:
-            raise VehicleError(f"thrust curve file {path} does not exist") from None
-        except (ValueError, pd.errors.ParserError) as exc:
-            raise VehicleError(f"thrust curve file {path} could not be parsed as CSV: {exc}") from None
-        df.columns = [str(c).strip() for c in df.columns]
-        missing = [c for c in ("pwm_us", "thrust_N") if c not in df.columns]
-        if missing:
-            raise VehicleError(
-                f"thrust curve file {path}: missing column(s) {missing}; expected columns "
-                f"pwm_us, thrust_N (got {list(df.columns)})"
-            )
-        cols = {}
-        for c in ("pwm_us", "thrust_N"):
-            vals = pd.to_numeric(df[c], errors="coerce").to_numpy(dtype=float)
-            if not np.all(np.isfinite(vals)):
-                row = int(np.flatnonzero(~np.isfinite(vals))[0])
-                raise VehicleError(
-                    f"thrust curve file {path}: column {c} row {row + 1} is {df[c].iloc[row]!r}, "
-                    f"expected a finite number"
-                )
-            cols[c] = vals
-        return cls(cols["pwm_us"], cols["thrust_N"], deadband=deadband, neutral=neutral,
-                   name=name or path.stem, source=str(path))
-
-    @classmethod
-    def from_mapping(cls, d: Mapping[str, Any], *, field: str = "curve",
-                     base_dir=None) -> "TabulatedThrustCurve":
-        """Build from a YAML mapping.
-
-        Forms: ``{"table": "t200_16v"}`` (a shipped table), ``{"csv": "file.csv"}``
-        (relative to ``base_dir``), or ``{"pwm": [...], "thrust": [...]}``; each may add
-        ``deadband: [lo, hi]`` and ``neutral``.  ``field`` names the YAML location in
-        error messages.
-        """
-        if not isinstance(d, Mapping):
-            raise VehicleError(f"{field}: expected a mapping, got {type(d).__name__}")
-        _check_keys(d, {"table", "csv", "pwm", "thrust", "deadband", "neutral", "type"}, field)
-        forms = [k for k in ("table", "csv", "pwm") if k in d]
-        if len(forms) != 1 or ("pwm" in d) != ("thrust" in d):
-            raise VehicleError(
-                f"{field}: give exactly one of 'table: NAME', 'csv: FILE' or 'pwm: [...]' "
-                f"with 'thrust: [...]' (got keys {sorted(d)})"
-            )
-        deadband = d.get("deadband")
-        if deadband is not None:
-            deadband = _pair(deadband, f"{field}.deadband")
-        neutral = d.get("neutral")
-        if neutral is not None:
-            neutral = _number(neutral, f"{field}.neutral")
-        if "table" in d:
-            if deadband is None and neutral is None:
-                return shipped_curve(d["table"], field=f"{field}.table")
-            return cls.from_csv(_shipped_path(d["table"], f"{field}.table"), deadband=deadband,
-                                neutral=neutral, name=str(d["table"]))
-        if "csv" in d:
-            p = Path(str(d["csv"]))
-            if not p.is_absolute() and base_dir is not None:
-                p = Path(base_dir) / p
-            return cls.from_csv(p, deadband=deadband, neutral=neutral)
-        return cls(d["pwm"], d["thrust"], deadband=deadband, neutral=neutral,
-                   name="inline", source=field)
-
-    def to_mapping(self) -> dict:
-        if self.name in available_tables() and shipped_curve(self.name) == self:
-            return {"table": self.name}
-        out = {"pwm": self.table_pwm.tolist(), "thrust": self.table_thrust.tolist(),
-               "deadband": list(self.deadband)}
-        if self._neutral_given:
-            out["neutral"] = self.neutral
-        return out
-
-    def _key(self):
-        return (tuple(self.table_pwm.tolist()), tuple(self.table_thrust.tolist()),
-                self.deadband, self.neutral)
-
-    def __repr__(self) -> str:
-        return (f"TabulatedThrustCurve(name={self.name!r}, pwm=[{self.pwm_min:g}..{self.pwm_max:g}] us, "
-                f"deadband={self.deadband}, thrust=[{self.max_reverse:.3f}, {self.max_forward:.3f}] N)")
-
-
-# ---------------------------------------------------------------------------- linear
-class LinearThrustCurve(ThrustCurve):
-    """Piecewise-linear curve with asymmetric gains and a deadband.
-
-    ``thrust = forward_gain * (pwm - hi)`` for ``pwm > hi``,
-    ``thrust = reverse_gain * (pwm - lo)`` for ``pwm < lo`` and 0 in ``[lo, hi]``.
-    With the default zero-width deadband ``lo = hi = neutral`` this is
-    ``gain * (pwm - neutral)``; a wider deadband shifts each branch so the thrust is
-    continuous at the deadband edges (no jump).
-
-    Parameters
-    ----------
-    forward_gain, reverse_gain : float
-        Slopes, N/us, > 0 (reverse thrust = -reverse_gain * (lo - pwm)).
-    neutral : float
-        Command for zero thrust, us (default 1500).
-    deadband : (lo, hi), optional
-        Default ``(neutral, neutral)``.
-    pwm_range : (min, max)
-        Valid commands, us (default 1100-1900, the T200/Basic ESC range).
-    """
-
-    def __init__(self, forward_gain, reverse_gain, *, neutral=1500.0, deadband=None,
-                 pwm_range=(1100.0, 1900.0), name="linear", source=None):
-        source = source or name
-        self.forward_gain = _number(forward_gain, f"{source}: forward_gain")
-        self.reverse_gain = _number(reverse_gain, f"{source}: reverse_gain")
-        for k in ("forward_gain", "reverse_gain"):
-            if not getattr(self, k) > 0:
-                raise VehicleError(f"{source}: {k} must be > 0 N/us, got {getattr(self, k):g}")
-        self.neutral = _number(neutral, f"{source}: neutral")
-        lo, hi = (self.neutral, self.neutral) if deadband is None else _pair(deadband, f"{source}: deadband")
-        pmin, pmax = _pair(pwm_range, f"{source}: pwm_range")
-        if not (pmin <= lo <= self.neutral <= hi <= pmax):
-            raise VehicleError(
-                f"{source}: need pwm_range[0] <= deadband lo <= neutral <= deadband hi <= pwm_range[1], "
-                f"got pwm_range=[{pmin:g}, {pmax:g}], deadband=[{lo:g}, {hi:g}], neutral={self.neutral:g}"
-            )
-        self.deadband = (lo, hi)
-        self.pwm_min, self.pwm_max = pmin, pmax
-        self.name = str(name)
-
-    def _thrust(self, pwm):
-        lo, hi = self.deadband
-        return (self.forward_gain * np.maximum(pwm - hi, 0.0)
-                + self.reverse_gain * np.minimum(pwm - lo, 0.0))
-
-    def _pwm(self, thrust):
-        lo, hi = self.deadband
-        return np.where(thrust > 0, hi + thrust / self.forward_gain,
-                        np.where(thrust < 0, lo + thrust / self.reverse_gain, self.neutral))
-
-    @classmethod
-    def from_mapping(cls, d: Mapping[str, Any], *, field: str = "curve") -> "LinearThrustCurve":
-        """``{"type": "linear", "forward_gain": .., "reverse_gain": .., "neutral": ..,
-        "deadband": [lo, hi], "pwm_range": [min, max]}`` (gains N/us)."""
-        _check_keys(d, {"type", "forward_gain", "reverse_gain", "neutral", "deadband", "pwm_range"}, field)
-        for k in ("forward_gain", "reverse_gain"):
-            if k not in d:
-                raise VehicleError(f"{field}: linear thrust curve needs '{k}' (N/us)")
-        kw = {k: d[k] for k in ("neutral", "deadband", "pwm_range") if k in d}
-        return cls(d["forward_gain"], d["reverse_gain"], name="linear", source=field, **kw)
-
-    def to_mapping(self) -> dict:
-        return {"type": "linear", "forward_gain": self.forward_gain, "reverse_gain": self.reverse_gain,
-                "neutral": self.neutral, "deadband": list(self.deadband),
-                "pwm_range": [self.pwm_min, self.pwm_max]}
-
-    def _key(self):
-        return (self.forward_gain, self.reverse_gain, self.neutral, self.deadband,
-                self.pwm_min, self.pwm_max)
-
-    def __repr__(self) -> str:
-        return (f"LinearThrustCurve(forward_gain={self.forward_gain:g}, reverse_gain={self.reverse_gain:g}, "
-                f"neutral={self.neutral:g}, deadband={self.deadband}, "
-                f"pwm_range=({self.pwm_min:g}, {self.pwm_max:g}))")
+from uvsim.schema import did_you_mean
+from uvsim.thrust_curves import (  # noqa: F401  (re-exported, see the module docstring)
+    DATA_DIR,
+    DEFAULT_CURVE,
+    KGF_TO_N,
+    LinearThrustCurve,
+    TabulatedThrustCurve,
+    ThrustCurve,
+    available_tables,
+    shipped_curve,
+)
+from uvsim.voltage_curves import load_voltage_curve
 
 
 # ------------------------------------------------------------------ per-thruster set
@@ -527,29 +83,6 @@ class ThrustCurveSet:
 
 
 # --------------------------------------------------------------------------- loading
-def available_tables() -> list[str]:
-    """Names of the shipped tables (``src/uvsim/data/thrusters/*.csv``)."""
-    return sorted(p.stem for p in DATA_DIR.glob("*.csv"))
-
-
-def _shipped_path(name, field) -> Path:
-    names = available_tables()
-    if not isinstance(name, str) or name not in names:
-        raise VehicleError(f"{field}: unknown thrust curve {name!r}{did_you_mean(name, names)}; shipped tables: {names}")
-    return DATA_DIR / f"{name}.csv"
-
-
-@functools.lru_cache(maxsize=None)
-def _cached_shipped(name: str) -> TabulatedThrustCurve:
-    return TabulatedThrustCurve.from_csv(DATA_DIR / f"{name}.csv", name=name)
-
-
-def shipped_curve(name: str, *, field: str = "curve") -> TabulatedThrustCurve:
-    """The shipped table ``name`` (e.g. ``"t200_16v"``); one shared, read-only instance."""
-    _shipped_path(name, field)
-    return _cached_shipped(name)
-
-
 def load_thrust_curve(spec, *, field: str = "curve", base_dir=None) -> ThrustCurve:
     """Build a thrust curve from a vehicle-file specification.
 
@@ -578,8 +111,6 @@ def load_thrust_curve(spec, *, field: str = "curve", base_dir=None) -> ThrustCur
         return shipped_curve(spec, field=field)
     if isinstance(spec, Mapping):
         if "voltage_table" in spec:
-            from uvsim.voltage_curves import load_voltage_curve
-
             return load_voltage_curve(spec, field=field)
         kind = spec.get("type", "table")
         if kind == "linear":
@@ -594,42 +125,7 @@ def load_thrust_curve(spec, *, field: str = "curve", base_dir=None) -> ThrustCur
     )
 
 
-# --------------------------------------------------------------------------- helpers
-def _as_1d(x, what) -> np.ndarray:
-    try:
-        a = np.asarray(x, dtype=float)
-    except (TypeError, ValueError):
-        raise VehicleError(f"{what}: expected a list of numbers, got {x!r}") from None
-    if a.ndim != 1:
-        raise VehicleError(f"{what}: expected a 1-D list of numbers, got shape {a.shape}")
-    if not np.all(np.isfinite(a)):
-        i = int(np.flatnonzero(~np.isfinite(a))[0])
-        raise VehicleError(f"{what}: entry {i} is {a[i]}, expected a finite number")
-    return a
-
-
-def _pair(x, what) -> tuple[float, float]:
-    a = _as_1d(x, what)
-    if a.size != 2:
-        raise VehicleError(f"{what}: expected two numbers [lo, hi], got {list(a)}")
-    return float(a[0]), float(a[1])
-
-
-def _number(x, what) -> float:
-    try:
-        v = float(x)
-    except (TypeError, ValueError):
-        raise VehicleError(f"{what}: expected a number, got {x!r}") from None
-    if not np.isfinite(v):
-        raise VehicleError(f"{what}: expected a finite number, got {v}")
-    return v
-
-
-def _check_keys(d, allowed, field):
-    check_keys(d, sorted(allowed), field, error=VehicleError)
-
-
-def _readonly(a: np.ndarray) -> np.ndarray:
-    a = np.array(a, dtype=float)
-    a.setflags(write=False)
-    return a
+__all__ = [
+    "DATA_DIR", "DEFAULT_CURVE", "KGF_TO_N", "LinearThrustCurve", "TabulatedThrustCurve", "ThrustCurve",
+    "ThrustCurveSet", "available_tables", "load_thrust_curve", "shipped_curve",
+]

@@ -4,7 +4,7 @@ A thruster's bollard thrust at a fixed ESC command falls with the battery voltag
 T200 gives 51.4 N at 1900 us and 16 V, 28.7 N at 10 V; ``data/thrusters/t200_voltage``).
 :class:`VoltageThrustCurve` holds one measured table per voltage on a common PWM grid
 and evaluates ``thrust(pwm, voltage)`` bilinearly: linear in PWM between table points
-(as :class:`uvsim.thrusters.TabulatedThrustCurve` does) and linear in voltage between
+(as :class:`uvsim.thrust_curves.TabulatedThrustCurve` does) and linear in voltage between
 the two bracketing sheets.  Without a voltage (``voltage=None``, or NaN for a row) it
 uses :attr:`nominal_voltage`.
 
@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from uvsim.errors import SimulationError, VehicleError
-from uvsim.thrusters import DATA_DIR, KGF_TO_N, TabulatedThrustCurve, ThrustCurve
+from uvsim.thrust_curves import DATA_DIR, KGF_TO_N, TabulatedThrustCurve, ThrustCurve
 
 #: Shipped voltage families: name -> directory of ``<name>_<V>v.csv`` sheets.
 FAMILIES = {"t200": DATA_DIR / "t200_voltage"}
@@ -141,7 +141,7 @@ class VoltageThrustCurve(ThrustCurve):
 
 @functools.lru_cache(maxsize=None)
 def _family_table(name: str):
-    import pandas as pd  # local import, as in uvsim.thrusters
+    import pandas as pd  # local import, as in uvsim.thrust_curves
 
     root = FAMILIES[name]
     sheets = []

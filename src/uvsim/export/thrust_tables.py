@@ -28,12 +28,12 @@ def curve_knots(curve) -> tuple[np.ndarray, np.ndarray]:
     """PWM knots (us) and thrust (N) of ``curve`` at its nominal voltage.
 
     * tabulated curve: its table plus the dead-band edges (the curve interpolates to 0 there,
-      :class:`uvsim.thrusters.TabulatedThrustCurve`);
+      :class:`uvsim.thrust_curves.TabulatedThrustCurve`);
     * linear curve: ``pwm_min``, the dead band's edges, ``pwm_max``;
     * battery-aware curve: its PWM grid with the nominal voltage's sheet (bilinear, so
       linear in PWM between grid points at a fixed voltage).
     Any other curve is refused (a table could only approximate it)."""
-    from uvsim.thrusters import LinearThrustCurve, TabulatedThrustCurve
+    from uvsim.thrust_curves import LinearThrustCurve, TabulatedThrustCurve
     from uvsim.voltage_curves import VoltageThrustCurve
 
     if isinstance(curve, TabulatedThrustCurve):

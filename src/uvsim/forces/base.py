@@ -29,6 +29,8 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from uvsim.forces.registry import build_term
+
 
 @dataclass
 class Context:
@@ -140,9 +142,7 @@ class ForceTerm:
         """A copy with some named parameters replaced (used to write fitted vehicles)."""
         d = self.to_dict()
         _replace_in(d, values)
-        from uvsim.forces import make_term
-
-        return make_term(d, context=self.kind)
+        return build_term(d, context=self.kind)
 
 
 def _replace_in(d: dict, values: Mapping[str, float]) -> None:
