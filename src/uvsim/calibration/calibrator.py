@@ -39,9 +39,9 @@ from uvsim.calibration.params import DOF_PARAMETERS, default_channel_weights, pa
 from uvsim.calibration.report import build_report, evaluate_runs, identifiability_report
 from uvsim.calibration.selection import check_bounds, effective_inertia_start, expand_names, joint_candidates
 from uvsim.errors import CalibrationError
-from uvsim.estimation.lag import estimate_attitude_lag
+from uvsim.estimation.lag import attitude_lag_setting
 from uvsim.fitting.objective import check_loss
-from uvsim.fitting.parameters import default_bounds
+from uvsim.fitting.parameters import default_bounds, physical_bounds
 from uvsim.logs import MANIFEST, Dataset, read_dataset
 from uvsim.measurements import CHANNEL_GROUP, measurements_for
 from uvsim.plausibility import check_runs, parse_allow
@@ -49,8 +49,6 @@ from uvsim.vehicle import load_vehicle
 
 log = logging.getLogger("uvsim")
 DEFAULT_HORIZONS = (2.0,)
-#: An estimated attitude lag shorter than this many sample intervals is not used.
-LAG_MIN_SAMPLES = 1.5
 
 
 def _as_dataset(data) -> Dataset:
@@ -111,8 +109,10 @@ class Calibrator:
     mutation_indpb, mutation_sigma, seeded_fraction, seeded_sigma : GA details the
         paper does not give (see :class:`uvsim.calibration.ga.GASettings`).
     seed : random seed; the same seed gives the identical result (also with workers).
-    margin : default relative search range of inertias, added masses and damping
-        (0.5 = +-50 %); other families: :func:`uvsim.fitting.parameters.default_bounds`.
+    margin : default relative search range of inertias, added masses and damping in the GA
+        stage, and in the joint stage without priors (0.5 = +-50 %); other families:
+        :func:`uvsim.fitting.parameters.default_bounds`. With priors (the default) the joint
+        stage's bounds are physical limits only: :func:`uvsim.fitting.parameters.physical_bounds`.
     bounds : {name: (low, high)} explicit bounds (every stage).
     free : names or families (``"z_b,thruster_gain_*"``) freed in the joint stage in
         addition to the default set; fix : names or families never fitted.
@@ -241,18 +241,7 @@ class Calibrator:
 
     def _lag(self, runs) -> dict:
         """The attitude lag to use (``attitude_lag``) and how it was obtained."""
-        if isinstance(self.attitude_lag, str):
-            if self.attitude_lag != "auto":
-                raise CalibrationError(f"attitude_lag {self.attitude_lag!r}: expected 'auto' or a time constant in s")
-            est = estimate_attitude_lag(runs)
-            dt = float(np.median([np.median(np.diff(r.t)) for r in runs]))
-            tau = est["tau"] if est["tau"] is not None and est["tau"] > LAG_MIN_SAMPLES * dt else 0.0
-            return {**est, "tau": float(tau), "estimated_tau": est["tau"],
-                    "source": "estimated from the gyro and the logged angles"}
-        tau = float(self.attitude_lag)
-        if not (np.isfinite(tau) and tau >= 0):
-            raise CalibrationError(f"attitude_lag: expected a time constant >= 0 s or 'auto', got {tau!r}")
-        return {"tau": tau, "source": "given"}
+        return attitude_lag_setting(runs, self.attitude_lag)
 
     def _meas(self, runs, weights=None, **kw) -> list:
         return [measurements_for(r, self.initial_vehicle_, noise=self.noise, weights=weights,
@@ -311,6 +300,11 @@ class Calibrator:
         def bounds_of(k):  # explicit, else the default family bounds around the vehicle's value
             return bounds[k] if k in bounds else default_bounds(k, float(base[k]), float(self.margin))
 
+        def joint_bounds_of(k):  # with priors: physical limits only (the prior keeps values near the file's)
+            if k in bounds or not self.prior:
+                return bounds_of(k)
+            return physical_bounds(k, float(base[k]), float(self.margin))
+
         # ---------------------------------------------------------------- GA stage
         ga_dofs = [d for d in ga_dofs if any(k not in fixed for k in DOF_PARAMETERS[d])]
         ga = {"best": {}, "logbooks": {}, "evaluations": 0, "generations_run": 0, "wall_s": 0.0}
@@ -328,7 +322,7 @@ class Calibrator:
         params = dict(ga_values)
         meas = self._meas(runs, self.signal_weights)
         if self.refine:
-            start, joint_bounds = effective_inertia_start(params, base, extra, fixed, bounds_of, bounds)
+            start, joint_bounds = effective_inertia_start(params, base, extra, fixed, joint_bounds_of, bounds)
             params.update(start)
             start_veh = veh.with_parameters(params) if params else veh
             fit_res, screen = self._run_joint(ds, start_veh, runs, meas, dofs, ga_dofs, fixed, extra, joint_bounds,

@@ -18,3 +18,13 @@ def parse_pairs(text: str | None, option: str) -> dict[str, float] | None:
         except ValueError:
             raise UvsimError(f"{option}: value of {k.strip()!r} is not a number: {v!r}") from None
     return out
+
+
+def lag_option(text: str):
+    """``--attitude-lag``: "auto" or a time constant in s."""
+    if text == "auto":
+        return "auto"
+    try:
+        return float(text)
+    except ValueError:
+        raise UvsimError(f"--attitude-lag: expected 'auto' or a time constant in s, got {text!r}") from None

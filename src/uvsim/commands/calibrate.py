@@ -18,7 +18,7 @@ import math
 import sys
 from pathlib import Path
 
-from uvsim.commands import parse_pairs
+from uvsim.commands import lag_option, parse_pairs
 from uvsim.commands.checks import (add_allow_argument, add_progress_arguments, calibration_problems, check_outputs,
                                    check_runs_at_door, fail_if, say, want_progress)
 from uvsim.errors import UvsimError
@@ -72,7 +72,9 @@ def register(sub) -> None:
     p.add_argument("--population", type=int, default=60, help="GA population per DOF (seed 000: 60)")
     p.add_argument("--generations", type=int, default=30, help="GA generations (seed 000: 30)")
     p.add_argument("--margin", type=float, default=0.5,
-                   help="search range of inertias, added masses and damping around their values (0.5 = +-50%%)")
+                   help="search range of inertias, added masses and damping around their values in the GA stage, "
+                        "and in the joint stage with --no-prior (0.5 = +-50%%); with priors the joint stage's bounds "
+                        "are physical limits (sign, factor 10)")
     p.add_argument("--workers", type=int, default=1, help="local worker processes (GA and joint fit)")
     p.add_argument("--dask", default=None, metavar="ADDRESS",
                    help="dask.distributed scheduler address, or 'local' (GA evaluations; needs uvsim[dask])")
@@ -127,15 +129,6 @@ def parse_horizons(text: str | None):
         except ValueError:
             raise UvsimError(f"--horizons: expected window lengths in s or 'whole', got {item!r}") from None
     return tuple(out)
-
-
-def _lag_option(text: str):
-    if text == "auto":
-        return "auto"
-    try:
-        return float(text)
-    except ValueError:
-        raise UvsimError(f"--attitude-lag: expected 'auto' or a time constant in s, got {text!r}") from None
 
 
 def _fmt(v):
@@ -314,7 +307,7 @@ def _run(args) -> int:
     out = Path(args.out)
     ckpt = args.checkpoint or str(out.with_suffix(out.suffix + ".ckpt"))
     weights, noise = parse_pairs(args.weights, "--weights"), parse_pairs(args.noise, "--noise")
-    bounds, horizons, lag = parse_bounds(args.bounds), parse_horizons(args.horizons), _lag_option(args.attitude_lag)
+    bounds, horizons, lag = parse_bounds(args.bounds), parse_horizons(args.horizons), lag_option(args.attitude_lag)
     check_outputs({"--out": out, "--json": args.json, "--checkpoint": ckpt}, {"--plots": args.plots})
     if args.resume:
         from uvsim.calibration.joint import joint_checkpoint_path

@@ -34,6 +34,9 @@ from uvsim.kinematics import unwrap_angles
 
 #: Largest lag searched, s.
 MAX_LAG_S = 1.0
+#: An estimated lag shorter than this many sample intervals is not used: the logged inputs'
+#: zero-order hold and the sampling alone make the angles trail by about half an interval.
+LAG_MIN_SAMPLES = 1.5
 #: Relative tolerance for "uniform" time steps (lfilter path).
 UNIFORM_RTOL = 1e-6
 
@@ -139,3 +142,28 @@ def estimate_attitude_lag(runs, *, max_lag: float = MAX_LAG_S) -> dict:
     return {"tau": tau, "per_run": {nm: best([pc]) for nm, pc in zip(names, pieces)},
             "rms_without": float(np.sqrt(_sse(0.0, pieces) / n)), "rms_with": float(np.sqrt(_sse(tau, pieces) / n)),
             "runs_used": names}
+
+
+def attitude_lag_setting(runs, setting="auto") -> dict:
+    """The attitude lag a fit uses (shared by calibration and diagnosis).
+
+    ``setting``: ``"auto"`` (estimated from the runs' gyro and logged angles by
+    :func:`estimate_attitude_lag`, used when longer than :data:`LAG_MIN_SAMPLES` sample
+    intervals, else 0) or a time constant in s (0: none).  Returns a dict with ``tau`` (s,
+    the value to use) and ``source``; with ``"auto"`` also the estimate's fields and
+    ``estimated_tau``."""
+    if isinstance(setting, str):
+        if setting != "auto":
+            raise CalibrationError(f"attitude_lag {setting!r}: expected 'auto' or a time constant in s")
+        est = estimate_attitude_lag(runs)
+        dt = float(np.median([np.median(np.diff(r.t)) for r in runs]))
+        tau = est["tau"] if est["tau"] is not None and est["tau"] > LAG_MIN_SAMPLES * dt else 0.0
+        return {**est, "tau": float(tau), "estimated_tau": est["tau"],
+                "source": "estimated from the gyro and the logged angles"}
+    try:
+        tau = float(setting)
+    except (TypeError, ValueError):
+        tau = float("nan")
+    if not (np.isfinite(tau) and tau >= 0):
+        raise CalibrationError(f"attitude_lag: expected a time constant >= 0 s or 'auto', got {setting!r}")
+    return {"tau": tau, "source": "given"}

@@ -36,7 +36,8 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from uvsim.errors import CalibrationError
-from uvsim.vehicle import INERTIA_NAMES
+from uvsim.forces.damping import LINEAR_NAMES, QUADRATIC_NAMES
+from uvsim.vehicle import ADDED_MASS_NAMES, INERTIA_NAMES
 from uvsim.voltage_curves import measured_voltage_range
 
 #: Relative width of the softplus that keeps the second moments positive.
@@ -272,6 +273,40 @@ def default_bounds(name: str, value: float, margin: float) -> tuple[float, float
                                f"give its bounds explicitly (--bounds {name}=LOW:HIGH)")
     lo, hi = sorted((value * (1 - margin), value * (1 + margin)))
     return lo, hi
+
+
+#: How far the joint fit's physical bounds let a mass, moment of inertia, added mass or damping
+#: coefficient move from the vehicle file's value: a factor of 10 either way. The sign is the
+#: physical limit (a body's diagonal added mass is >= 0, a passive hull's diagonal damping
+#: dissipates, a mass is > 0); the factor only keeps the solver's steps finite. A coefficient
+#: ten times off the file is a wrong vehicle file, not a calibration (the start models this
+#: project calibrates are 20-40 % off: issue 21).
+PHYSICAL_FACTOR = 10.0
+
+
+def physical_bounds(name: str, value: float, margin: float) -> tuple[float, float]:
+    """Bounds of parameter ``name`` for a fit whose start model is also its prior
+    (:mod:`uvsim.fitting.priors`: the prior, not the bounds, keeps a coefficient near
+    the file's value; issue 21 "bounds are physical limits only").
+
+    * diagonal damping (``X_u`` ... ``N_rr``, paper sign <= 0):
+      ``(PHYSICAL_FACTOR value, 0)``, so no longer dissipative is the limit;
+    * added masses (``X_udot`` ... ``N_rdot``, positive magnitudes): ``(0, PHYSICAL_FACTOR value)``;
+    * mass and principal moments of inertia: ``(value / PHYSICAL_FACTOR, PHYSICAL_FACTOR value)``
+      (the triangle inequalities are kept by :func:`physical_moments`);
+    * everything else: :func:`default_bounds` (positions, gains, currents and the supply
+      voltage already have ranges that are not relative to the file's value).
+
+    A value of 0 (or of the wrong sign) has no relative range and raises, as in
+    :func:`default_bounds`."""
+    value = float(value)
+    if name in LINEAR_NAMES + QUADRATIC_NAMES and value < 0:
+        return PHYSICAL_FACTOR * value, 0.0
+    if name in ADDED_MASS_NAMES and value > 0:
+        return 0.0, PHYSICAL_FACTOR * value
+    if name in POSITIVE and value > 0:
+        return value / PHYSICAL_FACTOR, PHYSICAL_FACTOR * value
+    return default_bounds(name, value, margin)
 
 
 def make_space(vehicle_params: Mapping[str, float], names: Sequence[str], *, margin: float = 0.5,
