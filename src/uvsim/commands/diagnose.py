@@ -10,7 +10,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from uvsim.commands import parse_pairs
+from uvsim.commands import lag_option, parse_pairs
 from uvsim.commands.checks import add_allow_argument, check_outputs, check_runs_at_door, diagnosis_problems, fail_if, say
 
 
@@ -39,6 +39,9 @@ def register(subparsers) -> None:
     p.add_argument("--max-effects", type=int, default=2, help="most effects to add (default 2)")
     p.add_argument("--top", type=int, default=3, help="candidates fitted through the simulator per step (default 3)")
     p.add_argument("--max-iter", type=int, default=12, help="Levenberg-Marquardt iterations per fit (default 12)")
+    p.add_argument("--attitude-lag", default="auto", metavar="auto|SECONDS",
+                   help="time constant of the attitude filter's lag on logged Euler angles: 'auto' (default, "
+                        "estimated from the gyro, as uvsim calibrate does), a number, or 0 for none")
     p.add_argument("--workers", type=int, default=1, help="processes for the simulations (same result)")
     p.add_argument("--checkpoint", help="file saved after every finished fit (default: the --json or --out file "
                                         "plus .ckpt; none without either)")
@@ -131,7 +134,7 @@ def run(args) -> int:
         diag = diagnose(ds, veh, retune=_list(args.retune), only=_list(args.only), noise=noise, weights=weights,
                         horizon=args.horizon, max_effects=args.max_effects, top=args.top, max_iter=args.max_iter,
                         workers=args.workers, progress=progress, allow=parse_allow(args.allow), checkpoint=ckpt,
-                        resume=args.resume)
+                        resume=args.resume, attitude_lag=lag_option(args.attitude_lag))
     except KeyboardInterrupt:
         held = ckpt or args.resume
         if held and Path(held).is_file():
@@ -148,6 +151,8 @@ def run(args) -> int:
         notes.append(line)
     for n in rep.get("sampling_notes", []):
         say("diagnose", f"note: {n}")
+    if rep["attitude_lag"]["tau"]:
+        say("diagnose", f"attitude filter lag {rep['attitude_lag']['tau']:.3f} s ({rep['attitude_lag']['source']})")
     rep["input_notes"] = notes
     problems = diagnosis_problems(rep, diag.validation)
     rep["status"] = {"ok": not problems, "problems": problems}

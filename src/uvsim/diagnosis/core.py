@@ -40,6 +40,7 @@ from uvsim.diagnosis.decision import (LEVEL, MIN_RELATIVE, VAL_LEVEL, WALD_P, al
                                       inertia_challenger, parsimonious, richer_challenger, simplest_sufficient)
 from uvsim.diagnosis.residual import concentration, verdict
 from uvsim.diagnosis.selector import VARIANT_SHARE, Selector
+from uvsim.estimation.lag import attitude_lag_setting
 from uvsim.errors import CalibrationError, UvsimError
 from uvsim.fitting.evaluate import open_loop, pooled
 from uvsim.forces import make_term
@@ -104,7 +105,8 @@ def _split(dataset: Dataset) -> tuple[list, list, str]:
 def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: Sequence[str] | None = None,
              noise: Mapping[str, float] | None = None, weights: Mapping[str, float] | None = None,
              horizon: float = DEFAULT_HORIZON, max_effects: int = 2, top: int = 3, max_iter: int = 12,
-             workers: int = 1, progress=None, allow=(), checkpoint=None, resume=None) -> Diagnosis:
+             workers: int = 1, progress=None, allow=(), checkpoint=None, resume=None,
+             attitude_lag="auto") -> Diagnosis:
     """Diagnose which catalogue effects the model lacks (module docstring).
 
     Parameters
@@ -128,6 +130,10 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     resume : checkpoint file to continue from (its finished fits are not repeated); it
         must come from the same dataset, vehicle and settings.  With ``checkpoint`` unset
         the resumed run keeps saving to ``resume``.
+    attitude_lag : time constant (s) of the attitude filter that logged the Euler angles, or
+        "auto" (default): estimated from the training runs' gyro and angles and used when
+        longer than 1.5 sample intervals, as the calibration does
+        (:func:`uvsim.estimation.lag.attitude_lag_setting`); 0: none.
     """
     t_start = time.perf_counter()
     say = progress or (lambda msg: None)
@@ -147,16 +153,18 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     if not (horizon is None or (np.isfinite(horizon) and horizon > 0)):
         raise CalibrationError(f"horizon must be a positive number of seconds, got {horizon!r}")
     train, val, split_note = _split(dataset)
+    lag = attitude_lag_setting(train, attitude_lag)
     kinds = {(r.input_kind, len(r.input_columns)) for r in train + val}
     if len(kinds) > 1:
         raise CalibrationError(f"{dataset.path}: runs mix input kinds {sorted(kinds)}; diagnose one kind at a time")
     key = fingerprint({"vehicle": veh.to_dict(), "runs": [(r.name, float(np.nansum(r.data.to_numpy())))
                                                           for r in train + val],
                        "retune": list(retune or []), "only": None if only is None else sorted(only),
-                       "noise": noise, "weights": weights, "horizon": horizon, "top": top, "max_iter": max_iter})
+                       "noise": noise, "weights": weights, "horizon": horizon, "top": top, "max_iter": max_iter,
+                       "attitude_lag": lag["tau"]})
     store, on_fit = _checkpoint_store(checkpoint, resume, key, say)
     sel = Selector(veh, train, val, retune=retune, noise=noise, weights=weights, horizon=horizon,
-                   max_iter=max_iter, workers=workers, say=say, store=store, on_fit=on_fit)
+                   max_iter=max_iter, workers=workers, say=say, store=store, on_fit=on_fit, attitude_lag=lag["tau"])
 
     # 1. baseline ----------------------------------------------------------------------
     values: dict = {}
@@ -288,6 +296,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
                       "variant_share": VARIANT_SHARE, "at_noise": AT_NOISE},
         "noise": {r.name: m.describe() for r, m in zip(train + val, sel.meas_tr + sel.meas_va)},
         "sampling_notes": [n for m in sel.meas_tr + sel.meas_va for n in m.notes],
+        "attitude_lag": lag,
         "vehicle": veh.name,
         "data": str(dataset.path),
         "runs": {"train": [r.name for r in train], "validation": [r.name for r in val], "split": split_note},

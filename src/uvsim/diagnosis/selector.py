@@ -48,6 +48,12 @@ FTOL = 1e-4
 FORCE_EFFECTS = ("tether", "ballast", "current")
 
 
+def has_moment_arm(c: Candidate) -> bool:
+    """Whether ``c`` frees where its force acts (an attachment or a position off the origin),
+    so that it can exert a moment about the body origin."""
+    return any(n.startswith(("tether_attach_", "ballast_x", "ballast_y", "ballast_z")) for n in c.free)
+
+
 class Selector:
     """State and steps of one diagnosis (module docstring).
 
@@ -55,13 +61,16 @@ class Selector:
     ``on_fit(store)`` is called after every new fit (to save the checkpoint)."""
 
     def __init__(self, vehicle, train, val, *, retune, noise, weights, horizon, max_iter, workers, say,
-                 store=None, on_fit=None):
+                 store=None, on_fit=None, attitude_lag: float = 0.0):
         self.base_vehicle = vehicle
         self.train, self.val = train, val
         self.noise, self.weights = noise, weights
         self.horizon, self.max_iter, self.workers, self.say = horizon, max_iter, workers, say
-        self.meas_tr = [measurements_for(r, vehicle, noise=noise, weights=weights, run_weight=1.0) for r in train]
-        self.meas_va = [measurements_for(r, vehicle, noise=noise, weights=weights, run_weight=1.0) for r in val]
+        # the calibration's measurement model: logged Euler angles trail by the attitude filter's lag
+        self.meas_tr = [measurements_for(r, vehicle, noise=noise, weights=weights, run_weight=1.0,
+                                         attitude_lag=attitude_lag) for r in train]
+        self.meas_va = [measurements_for(r, vehicle, noise=noise, weights=weights, run_weight=1.0,
+                                         attitude_lag=attitude_lag) for r in val]
         self.motions = [measured_motion(r) for r in train]
         self.retune = list(retune or [])
         p = vehicle.parameters()
@@ -328,13 +337,19 @@ class Selector:
             if not any(m.have[:3].any() for m in self.motions if m is not None):
                 # no linear velocities in the log (IMU + depth): the equation error has only the
                 # rotational DOFs and cannot rank effects that act mainly as forces, so the
-                # simplest variant of each of them is fitted through the simulator as well
+                # simplest variant of each of them that can exert a moment is fitted through the
+                # simulator as well (without x/y and velocities, the gyro and the attitude, which
+                # see the moment, carry most of what is logged: a pull at the body origin shows
+                # only in depth and the accelerometer)
                 have = {x[0].effect for x in picked}
                 for eff in FORCE_EFFECTS:
                     lst = [(c, s) for c, s in by_effect.get(eff, []) if eff not in have]
+                    lst = [cs for cs in lst if has_moment_arm(cs[0])] or lst
                     if lst:
                         c, s = min(lst, key=lambda cs: cs[0].complexity)
-                        picked.append((c, s, 0.0))
+                        # its screening (rotational DOFs only) is no guide to where the force acts:
+                        # the catalogue's multi-start as well
+                        picked.append((c, {**(s or {}), "multistart": True}, 0.0))
         else:
             picked = choice
         # through the simulator in screening order; stop at the first accepted candidate unless
@@ -377,13 +392,17 @@ class Selector:
         # the catalogue's starts
         starts = [{**values_cur, **c.start, **s["values"]}] if s and s.get("values") else \
             [{**values_cur, **st} for st in _starts(c)]
+        multistart = bool(s and s.get("multistart") and s.get("values")) and len(_starts(c)) > 1
+        if multistart:  # a tether: anchors in four directions beside the screening start (_starts)
+            starts += [{**values_cur, **st} for st in _starts(c)]
         free = list(cur["free"]) + c.free
         bounds = {**cur["bounds"], **c.bounds}
+        label = c.label + (f" + {len(cur['free'])} current" if cur["free"] else "")
         best = None
         for st in starts:
             sp = self.space(veh, free, bounds, st, values_cur)
             try:
-                res = self.fit_train(veh, sp, c.label + (f" + {len(cur['free'])} current" if cur["free"] else ""))
+                res = self.fit_train(veh, sp, label)
             except (UvsimError, np.linalg.LinAlgError):
                 continue
             if best is None or res.cost < best.cost:
