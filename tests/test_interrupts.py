@@ -30,11 +30,20 @@ GA = ["--vehicle", "bluerov2_heavy_initial", "--dof", "surge", "--population", "
       "--workers", "2", "--no-progress"]
 
 
+def _default_sigint():
+    """In the child before exec: SIGINT to its default disposition, as in a terminal. A test
+    run started in the background by a shell without job control (``make test &``, ``nohup``)
+    inherits SIGINT ignored, Python then installs no KeyboardInterrupt handler, and the
+    command would rightly ignore the test's Ctrl-C."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _start(tmp: Path, ds: Path, out: Path, *extra) -> subprocess.Popen:
     env = dict(os.environ, PYTHONPATH=SRC + os.pathsep + os.environ.get("PYTHONPATH", ""))
     cmd = [sys.executable, "-m", "uvsim.cli", "calibrate", "--data", str(ds), *GA, "--out", str(out),
            "--json", str(out.with_suffix(".json")), *extra]
-    return subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    return subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=_default_sigint)
 
 
 def _ours(tmp: Path) -> list:

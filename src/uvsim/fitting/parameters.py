@@ -297,8 +297,8 @@ def physical_bounds(name: str, value: float, margin: float) -> tuple[float, floa
     * everything else: :func:`default_bounds` (positions, gains, currents and the supply
       voltage already have ranges that are not relative to the file's value).
 
-    A value of 0 (or of the wrong sign) has no relative range and raises, as in
-    :func:`default_bounds`."""
+    A value of 0 has no relative range and raises, as in :func:`default_bounds`; a value of
+    the wrong sign (which a vehicle file cannot hold) falls back to :func:`default_bounds` too."""
     value = float(value)
     if name in LINEAR_NAMES + QUADRATIC_NAMES and value < 0:
         return PHYSICAL_FACTOR * value, 0.0
