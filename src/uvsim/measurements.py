@@ -50,7 +50,7 @@ from typing import Mapping
 import numpy as np
 
 from uvsim.errors import CalibrationError
-from uvsim.estimation.lag import first_order_lag
+from uvsim.estimation.lag import first_order_lag, lag_time_constant
 from uvsim.estimation.noise import SampleKind, noise_sigma, sample_kind
 from uvsim.kinematics import euler_to_quat, quat_conjugate, quat_multiply, quat_to_euler, quat_to_rotation, unwrap_angles
 from uvsim.logs import ACCEL_COLUMNS, DEPTH_COLUMN, EULER_COLUMNS, POSITION_COLUMNS, RATE_COLUMNS, VELOCITY_COLUMNS
@@ -386,12 +386,7 @@ def measurements_for(run, vehicle=None, *, noise: Mapping[str, float] | None = N
     attitude_lag : time constant (s) of the attitude filter's first-order lag
         (module docstring; 0: none).
     """
-    try:
-        attitude_lag = float(attitude_lag)
-    except (TypeError, ValueError):
-        attitude_lag = float("nan")
-    if not (np.isfinite(attitude_lag) and attitude_lag >= 0):
-        raise CalibrationError(f"attitude_lag: expected a time constant >= 0 s, got {attitude_lag!r}")
+    attitude_lag = lag_time_constant(attitude_lag)
     noise = dict(noise or {})
     known = set(GROUPS) | set(CHANNEL_GROUP)
     for what, d in (("noise", noise), ("weights", weights or {})):

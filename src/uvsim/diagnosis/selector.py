@@ -392,8 +392,8 @@ class Selector:
         # the catalogue's starts
         starts = [{**values_cur, **c.start, **s["values"]}] if s and s.get("values") else \
             [{**values_cur, **st} for st in _starts(c)]
-        multistart = bool(s and s.get("multistart") and s.get("values")) and len(_starts(c)) > 1
-        if multistart:  # a tether: anchors in four directions beside the screening start (_starts)
+        if s and s.get("multistart") and s.get("values") and len(_starts(c)) > 1:
+            # a tether: anchors in four directions (_starts) beside the screening start
             starts += [{**values_cur, **st} for st in _starts(c)]
         free = list(cur["free"]) + c.free
         bounds = {**cur["bounds"], **c.bounds}

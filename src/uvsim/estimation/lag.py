@@ -144,6 +144,18 @@ def estimate_attitude_lag(runs, *, max_lag: float = MAX_LAG_S) -> dict:
             "runs_used": names}
 
 
+def lag_time_constant(value, *, expected: str = "a time constant >= 0 s") -> float:
+    """``value`` as a lag time constant in s (finite, >= 0), else :class:`CalibrationError`
+    naming ``attitude_lag``, what was ``expected`` and what was given."""
+    try:
+        tau = float(value)
+    except (TypeError, ValueError):
+        tau = float("nan")
+    if not (np.isfinite(tau) and tau >= 0):
+        raise CalibrationError(f"attitude_lag: expected {expected}, got {value!r}")
+    return tau
+
+
 def attitude_lag_setting(runs, setting="auto") -> dict:
     """The attitude lag a fit uses (shared by calibration and diagnosis).
 
@@ -160,10 +172,4 @@ def attitude_lag_setting(runs, setting="auto") -> dict:
         tau = est["tau"] if est["tau"] is not None and est["tau"] > LAG_MIN_SAMPLES * dt else 0.0
         return {**est, "tau": float(tau), "estimated_tau": est["tau"],
                 "source": "estimated from the gyro and the logged angles"}
-    try:
-        tau = float(setting)
-    except (TypeError, ValueError):
-        tau = float("nan")
-    if not (np.isfinite(tau) and tau >= 0):
-        raise CalibrationError(f"attitude_lag: expected a time constant >= 0 s or 'auto', got {setting!r}")
-    return {"tau": tau, "source": "given"}
+    return {"tau": lag_time_constant(setting, expected="a time constant >= 0 s or 'auto'"), "source": "given"}

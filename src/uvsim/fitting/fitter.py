@@ -250,13 +250,12 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
     n_res = int(sum(b.n for b in blocks))
     out = FitResult(space.names, values, std, C, float(res["cost"]), n_res, stages, gb, space.at_bounds(z),
                     space.physical_limit(z), ident, z, res["nus"], problems, [b.window_sse for b in blocks],
-                    order)
+                    order, attitude_bias=ab)
     if prior is not None:
         sc = space.scale
         out.prior_mean = {k: float(prior.mean_z[i] * sc[i]) for i, k in enumerate(space.names)}
         out.prior_sd = {k: float(prior.sd_z[i] * sc[i]) for i, k in enumerate(space.names)}
         out.data_weight = float(res["data_weight"])
-    out.attitude_bias = ab
     return out
 
 
