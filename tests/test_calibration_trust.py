@@ -21,14 +21,14 @@ def heave(tmp_path_factory):
 
 
 def test_the_iteration_limit_is_not_reported_as_success(heave, tmp_path, capsys):
-    """The joint fit converges in about 20 iterations here; with --max-iter 3 it stops at the
-    limit, which is 'unfinished' (exit 2), never a silent success."""
+    """The joint fit converges in 3 iterations here; with --max-iter 1 it stops at the limit,
+    which is 'unfinished' (exit 2), never a silent success."""
     argv = ["calibrate", "--data", str(heave), "--vehicle", "bluerov2_heavy", "--population", "6",
-            "--generations", "2", "--seed", "3", "--max-iter", "3", "--out", str(tmp_path / "f.yaml"),
+            "--generations", "2", "--seed", "3", "--max-iter", "1", "--out", str(tmp_path / "f.yaml"),
             "--json", str(tmp_path / "r.json")]
     assert main(argv) == 2
     err = capsys.readouterr().err
-    assert "unfinished: the joint fit's last stage stopped at the iteration limit (3 iterations)" in err
+    assert "unfinished: the joint fit's last stage stopped at the iteration limit (1 iterations)" in err
     rep = json.loads((tmp_path / "r.json").read_text())
     assert rep["refinement"]["stages"][-1]["message"].startswith("maximum number of iterations")
     assert not rep["status"]["ok"]

@@ -49,6 +49,17 @@ from uvsim.vehicle import load_vehicle
 
 log = logging.getLogger("uvsim")
 DEFAULT_HORIZONS = (2.0,)
+#: Continuity factors of the joint stage's last horizon (:func:`uvsim.fitting.fit`): the
+#: continuity defects' sd is DEFECT_SIGMA x 0.05 (0.25 mm, 0.5 mrad/s ...), so that what the
+#: fit improves is close to the free simulation the result check compares (docs/calibration.md,
+#: "Continuity"; the soft default of diagnosis let a fit trade open-loop depth for windowed cost).
+DEFAULT_CONTINUITY = (0.05,)
+#: The joint stage stops when an iteration lowers the cost by less than this fraction of it
+#: (:func:`uvsim.fitting.fit`'s ``ftol``). 1e-5 of a cost of N noise-normalized residuals is far
+#: below the cost's own sampling spread (sqrt(2N)); with the tight continuity above, ``fit``'s
+#: 1e-6 spent 16 more iterations on the shipped tank dataset for changes in the 4th digit
+#: (25 iterations, 30.5 s, against 9 and 13.3 s; docs/calibration.md, "Speed").
+JOINT_FTOL = 1e-5
 
 
 def _as_dataset(data) -> Dataset:
@@ -126,6 +137,9 @@ class Calibrator:
         amplitude) ** -low_speed_exponent; 0 (default): the manifest weights.
     refine : run the joint stage (default True).
     horizons : window lengths of the joint stage's continuation, s (None: whole runs).
+    continuity : factors of the joint stage's continuity-defect sd at its last horizon, one
+        stage each (:func:`uvsim.fitting.fit`); default :data:`DEFAULT_CONTINUITY`.  1 is
+        diagnosis' softer setting, under which windows restart more freely.
     max_iter : Levenberg-Marquardt iterations per continuation stage (80). A last stage that
         stops there is not converged: the result check reports it as unfinished.
     attitude_bias : fit a constant roll and pitch offset per run whose roll and pitch come
@@ -178,6 +192,7 @@ class Calibrator:
                  margin: float = 0.5, bounds: Mapping | None = None, free=None, fix=None,
                  signal_weights: Mapping | None = None, noise: Mapping | None = None, ga_channels: str = "own",
                  low_speed_exponent: float = 0.0, refine: bool = True, horizons=DEFAULT_HORIZONS,
+                 continuity=DEFAULT_CONTINUITY,
                  max_iter: int = 80, gyro_bias: bool = True, attitude_bias: bool = True, screen: bool = True,
                  attitude_lag="auto",
                  initial_velocity: str = "zero", prior: bool = True, loss: str = "linear",
@@ -192,6 +207,7 @@ class Calibrator:
         self.signal_weights, self.noise, self.ga_channels = signal_weights, noise, ga_channels
         self.low_speed_exponent, self.refine = low_speed_exponent, refine
         self.horizons, self.max_iter, self.gyro_bias, self.screen = horizons, max_iter, gyro_bias, screen
+        self.continuity = continuity
         self.attitude_lag = attitude_lag
         self.attitude_bias = attitude_bias
         self.initial_velocity = initial_velocity
@@ -239,6 +255,16 @@ class Calibrator:
             raise CalibrationError("horizons: give at least one window length")
         return out
 
+    def _continuity(self) -> list:
+        cs = [self.continuity] if isinstance(self.continuity, (int, float)) else list(self.continuity or ())
+        for c in cs:
+            if not (isinstance(c, (int, float)) and np.isfinite(c) and c > 0):
+                raise CalibrationError(f"continuity: expected positive factors of the continuity defects' sd "
+                                       f"(1 = uvsim.fitting.objective.DEFECT_SIGMA), got {c!r}")
+        if not cs:
+            raise CalibrationError("continuity: give at least one factor")
+        return [float(c) for c in cs]
+
     def _lag(self, runs) -> dict:
         """The attitude lag to use (``attitude_lag``) and how it was obtained."""
         return attitude_lag_setting(runs, self.attitude_lag)
@@ -265,6 +291,7 @@ class Calibrator:
         if self.ga_channels not in ("own", "all"):
             raise CalibrationError(f"ga_channels {self.ga_channels!r}: expected 'own' or 'all'")
         horizons = self._horizons()
+        self._continuity()  # a bad value is an error before the GA, not after it
         base = veh.parameters()
         train = [r for r in ds.runs if r.split == "train"]
         present = [d for d in DOF_PARAMETERS if any(r.dof == d for r in train)]
@@ -409,7 +436,8 @@ class Calibrator:
         key = fingerprint({
             "vehicle": start_veh.to_dict(), "runs": [(r.name, float(np.nansum(r.data.to_numpy()))) for r in runs],
             "keep": keep, "screen": screen, "bounds": {k: list(bounds_of(k)) for k in names},
-            "horizons": horizons, "max_iter": self.max_iter, "gyro_bias": self.gyro_bias, "lag": self.lag_["tau"],
+            "horizons": horizons, "continuity": self._continuity(), "ftol": JOINT_FTOL, "max_iter": self.max_iter,
+            "gyro_bias": self.gyro_bias, "lag": self.lag_["tau"],
             "weights": self.signal_weights, "noise": self.noise, "initial_velocity": self.initial_velocity,
             "prior": bool(self.prior), "uncertainty": self.initial_vehicle_.uncertainty,
             # (the default loss leaves the key, and so earlier checkpoints, as they were)
@@ -421,7 +449,8 @@ class Calibrator:
             ck = JointCheckpoint(None if ck_path is None else joint_checkpoint_path(ck_path), key,
                                  resume=None if self.resume is None else joint_checkpoint_path(self.resume))
         return run_joint(start_veh, runs, meas, params, keep=keep, screen=screen,
-                         bounds={k: bounds_of(k) for k in names}, horizons=horizons, max_iter=int(self.max_iter),
+                         bounds={k: bounds_of(k) for k in names}, horizons=horizons,
+                         continuity=self._continuity(), ftol=JOINT_FTOL, max_iter=int(self.max_iter),
                          gyro_bias=bool(self.gyro_bias), attitude_bias=bool(self.attitude_bias),
                          initial_velocity=self.initial_velocity,
                          workers=self._workers(), checkpoint=ck, progress=self.progress,

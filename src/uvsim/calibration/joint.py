@@ -25,8 +25,8 @@ from uvsim.fitting.fitter import build_problems
 
 log = logging.getLogger("uvsim")
 #: What a resumed calibration must keep equal (for the mismatch message).
-MUST_MATCH = ("--data, --vehicle, --dof, --free/--fix/--bounds, --weights, --noise, --horizons and the GA "
-              "settings")
+MUST_MATCH = ("--data, --vehicle, --dof, --free/--fix/--bounds, --weights, --noise, --horizons, --continuity "
+              "and the GA settings")
 
 
 def joint_checkpoint_path(path) -> Path:
@@ -87,7 +87,8 @@ def _bar(progress: bool, total: int):
 def run_joint(vehicle, runs, meas, params, *, keep, screen, bounds, horizons, max_iter: int, gyro_bias: bool,
               attitude_bias: bool = False, initial_velocity: str = "zero", workers: int = 1,
               checkpoint: JointCheckpoint | None = None,
-              progress: bool = False, prior_mean=None, prior_sd=None, loss: str = "linear"):
+              progress: bool = False, prior_mean=None, prior_sd=None, loss: str = "linear",
+              continuity=(1.0,), ftol: float = 1e-6):
     """Screen and fit (module docstring).
 
     Parameters
@@ -101,6 +102,8 @@ def run_joint(vehicle, runs, meas, params, *, keep, screen, bounds, horizons, ma
     prior_mean, prior_sd : {name: value} (every parameter) and {name: sd} (some): the prior
         of :func:`uvsim.fitting.fit` (None: no prior).
     loss : "linear" or "huber" (:func:`uvsim.fitting.fit`).
+    continuity : continuity factors of the last horizon's stages (:func:`uvsim.fitting.fit`).
+    ftol : relative cost decrease below which a stage stops (:func:`uvsim.fitting.fit`).
 
     Returns
     -------
@@ -125,12 +128,13 @@ def run_joint(vehicle, runs, meas, params, *, keep, screen, bounds, horizons, ma
     if not names:
         return None, report
     space = make_space(params, names, bounds=bounds)
-    bar = _bar(progress, max_iter * len(horizons))
+    n_stages = len(horizons) - 1 + len(continuity)
+    bar = _bar(progress, max_iter * n_stages)
 
     def on_it(stage, it, cost):
         if bar is not None:
             bar.n = stage * max_iter + it
-            bar.set_postfix(stage=f"{stage + 1}/{len(horizons)}", cost=f"{cost:.5g}")
+            bar.set_postfix(stage=f"{stage + 1}/{n_stages}", cost=f"{cost:.5g}")
             bar.refresh()
 
     try:
@@ -138,7 +142,7 @@ def run_joint(vehicle, runs, meas, params, *, keep, screen, bounds, horizons, ma
                   attitude_bias=attitude_bias, initial_velocity=initial_velocity, workers=workers,
                   checkpoint=checkpoint, on_iteration=on_it,
                   progress=lambda msg: log.debug(msg), prior_mean=prior_mean, prior_sd=prior_sd,
-                  loss=loss)
+                  loss=loss, continuity=continuity, ftol=ftol)
     finally:
         if bar is not None:
             bar.n = bar.total

@@ -2,7 +2,7 @@
 
     uvsim calibrate --data DIR [--vehicle NAME|FILE] [--dof surge,...] [--free z_b,thruster_gain_*]
                     [--fix NAME,...] [--bounds NAME=LO:HI,...] [--weights NAME=W,...] [--noise NAME=SIGMA,...]
-                    [--horizons 2,6] [--no-gyro-bias] [--no-prior] [--loss huber] [--seed S]
+                    [--horizons 2,6] [--continuity 0.05] [--no-gyro-bias] [--no-prior] [--loss huber] [--seed S]
                     [--population P --generations G]
                     [--workers N] [--dask ADDR|local] [--checkpoint CKPT] [--resume CKPT] [--no-refine]
                     --out fitted.yaml [--json report.json] [--plots DIR] [--progress]
@@ -48,6 +48,10 @@ def register(sub) -> None:
                    help="1-sigma noise level by group or channel (default: estimated from each run)")
     p.add_argument("--horizons", default=None, metavar="H1,H2,...",
                    help="window lengths (s) of the joint fit's continuation, 'whole' for whole runs (default 2)")
+    p.add_argument("--continuity", default=None, metavar="C1,C2,...",
+                   help="factors of the continuity defects' sd at the last horizon, one stage each (default 0.05: "
+                        "windows restart little, so the fit improves the free simulation; 1 is diagnosis' softer "
+                        "setting)")
     p.add_argument("--max-iter", type=int, default=80,
                    help="Levenberg-Marquardt iterations per horizon; a last stage that stops there is reported as "
                         "unfinished (exit 2) unless --keep-worse")
@@ -128,6 +132,24 @@ def parse_horizons(text: str | None):
             out.append(float(item))
         except ValueError:
             raise UvsimError(f"--horizons: expected window lengths in s or 'whole', got {item!r}") from None
+    return tuple(out)
+
+
+def parse_continuity(text: str | None):
+    """``"1,0.05"`` -> ``(1.0, 0.05)``; None -> the Calibrator's default."""
+    from uvsim.calibration.calibrator import DEFAULT_CONTINUITY
+
+    if not text:
+        return DEFAULT_CONTINUITY
+    out = []
+    for item in text.split(","):
+        try:
+            c = float(item)
+        except ValueError:
+            raise UvsimError(f"--continuity: expected positive numbers, got {item.strip()!r}") from None
+        if not (math.isfinite(c) and c > 0):
+            raise UvsimError(f"--continuity: expected positive numbers, got {item.strip()!r}")
+        out.append(c)
     return tuple(out)
 
 
@@ -321,7 +343,8 @@ def _run(args) -> int:
     cal = Calibrator(dofs=args.dof, population=args.population, generations=args.generations, seed=args.seed,
                      margin=args.margin, workers=args.workers, dask=args.dask, checkpoint=ckpt, resume=args.resume,
                      refine=not args.no_refine, free=args.free, fix=args.fix, bounds=bounds,
-                     signal_weights=weights, noise=noise, horizons=horizons, max_iter=args.max_iter,
+                     signal_weights=weights, noise=noise, horizons=horizons,
+                     continuity=parse_continuity(args.continuity), max_iter=args.max_iter,
                      gyro_bias=not args.no_gyro_bias,
                      attitude_bias=not args.no_attitude_bias, prior=not args.no_prior, loss=args.loss,
                      screen=not args.no_screen,

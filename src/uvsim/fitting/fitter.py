@@ -4,7 +4,10 @@ The fit minimizes the windowed prediction error of :mod:`uvsim.fitting.objective
 with the nuisance-eliminating Levenberg-Marquardt of :mod:`uvsim.fitting.solver`,
 over a *continuation* in the window length (``horizons``, e.g. ``(2.0, 6.0)`` s: the
 result of each stage starts the next; short windows keep the cost close to quadratic,
-longer ones add the long-horizon information), for runs of any input kinds (one
+longer ones add the long-horizon information) and then in the continuity of the windows
+(``continuity``, factors of the continuity defects' standard deviation at the last
+horizon, e.g. ``(1.0, 0.05)``: a smaller factor lets the windows restart less, so the cost
+comes closer to the free simulation's, :mod:`uvsim.fitting.objective`), for runs of any input kinds (one
 windowed problem per input kind, one shared parameter vector).  It is the refinement
 of :class:`uvsim.calibration.Calibrator` and the candidate fit of
 :func:`uvsim.diagnosis.diagnose`.
@@ -36,6 +39,9 @@ NULL_TOL = 1e-3
 #: |correlation| above which two parameters are reported as strongly correlated.
 CORR_REPORT = 0.9
 DEFAULT_HORIZONS = (2.0,)
+#: Continuity factors of the stages at the last horizon (1: the defects' sd is
+#: :data:`uvsim.fitting.objective.DEFECT_SIGMA`); diagnosis uses this default.
+DEFAULT_CONTINUITY = (1.0,)
 
 
 @dataclass
@@ -106,7 +112,8 @@ def _chunks(idx: list, sizes: list) -> list[list]:
 
 
 def build_problems(vehicle, runs, meas, space: ParameterSpace, horizon, z_ref, *, gyro_bias=True,
-                   attitude_bias: bool = False, initial_velocity="zero", loss: str = "linear") -> tuple[list, list]:
+                   attitude_bias: bool = False, initial_velocity="zero", loss: str = "linear",
+                   continuity: float = 1.0) -> tuple[list, list]:
     """:class:`WindowedProblem` s of at most :data:`RUNS_PER_PROBLEM` runs and
     :data:`SAMPLES_PER_PROBLEM` samples of one input kind each; returns (problems, run order)."""
     probs, order = [], []
@@ -120,7 +127,8 @@ def build_problems(vehicle, runs, meas, space: ParameterSpace, horizon, z_ref, *
         for sub in _chunks(idx, [runs[i].t.size for i in idx]):
             probs.append(WindowedProblem(vehicle, [runs[i] for i in sub], [meas[i] for i in sub], space, horizon,
                                          z_ref=z_ref, gyro_bias=gyro_bias, attitude_bias=attitude_bias,
-                                         initial_velocity=initial_velocity, yref=yref[a:a + len(sub)], loss=loss))
+                                         initial_velocity=initial_velocity, yref=yref[a:a + len(sub)], loss=loss,
+                                         continuity=continuity))
             order += sub
             a += len(sub)
     return probs, order
@@ -130,7 +138,8 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
         max_iter: int = 20, gyro_bias: bool = True, attitude_bias: bool = False, noise=None, weights=None,
         initial_velocity: str = "zero",
         z0=None, progress=None, workers: int = 1, ftol: float = 1e-6, checkpoint=None,
-        on_iteration=None, prior_mean=None, prior_sd=None, loss: str = "linear") -> FitResult:
+        on_iteration=None, prior_mean=None, prior_sd=None, loss: str = "linear",
+        continuity: Sequence = DEFAULT_CONTINUITY) -> FitResult:
     """Fit ``space``'s free parameters of ``vehicle`` to ``runs`` (module docstring).
 
     Parameters
@@ -140,6 +149,9 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
     space : the free parameters.
     meas : their measurement models (built from ``noise``/``weights`` when omitted).
     horizons : window lengths, s, of the continuation stages (None = whole runs).
+    continuity : factors of the continuity defects' standard deviation: the stages before the
+        last horizon use the first, the last horizon one stage per factor in turn (so the
+        defaults, ``(1.0,)``, give one stage per horizon).
     max_iter : Levenberg-Marquardt iterations per stage.
     gyro_bias : fit a constant gyro bias per run that logs rates.
     attitude_bias : fit a constant roll and pitch offset per run whose attitude comes from a
@@ -173,6 +185,11 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
     say = progress or (lambda msg: None)
     z = space.z0 if z0 is None else np.asarray(z0, float)
     horizons = list(horizons)
+    continuity = [continuity] if isinstance(continuity, (int, float)) else list(continuity)
+    if not horizons or not continuity:
+        raise CalibrationError("fit: give at least one horizon and one continuity factor")
+    # the stages: (window length, continuity factor)
+    plan = [(H, continuity[0]) for H in horizons[:-1]] + [(horizons[-1], c) for c in continuity]
     prior = None if prior_mean is None else make_prior(space, prior_mean, prior_sd)
     saved = checkpoint.load() if checkpoint is not None else None
     stages = [] if saved is None else list(saved["stages"])
@@ -181,29 +198,29 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
         z = np.array(saved["z"], float)
     res = None
     problems = []
-    if saved is not None and first == len(horizons):  # every stage finished: the final linearization only
-        problems, order = build_problems(vehicle, runs, meas, space, horizons[-1], np.array(saved["z_start"]),
+    if saved is not None and first == len(plan):  # every stage finished: the final linearization only
+        problems, order = build_problems(vehicle, runs, meas, space, plan[-1][0], np.array(saved["z_start"]),
                                          gyro_bias=gyro_bias, attitude_bias=attitude_bias,
-                                         initial_velocity=initial_velocity, loss=loss)
+                                         initial_velocity=initial_velocity, loss=loss, continuity=plan[-1][1])
         res = solve(problems, z, saved["nus"], max_iter=0, workers=workers, prior=prior)
         # the finished fit's own cost (re-evaluated here in a batch of another size, the sum may
         # differ in its last bit with the BLAS kernels of some machines)
         res["cost"] = stages[-1]["cost"]
-    for si, H in enumerate(horizons):
+    for si, (H, cont) in enumerate(plan):
         if si < first:
             continue
         t0 = time.perf_counter()
         z_start = z
         problems, order = build_problems(vehicle, runs, meas, space, H, z, gyro_bias=gyro_bias,
                                          attitude_bias=attitude_bias,
-                                         initial_velocity=initial_velocity, loss=loss)
-        label = "whole runs" if H is None else f"{H:g} s windows"
+                                         initial_velocity=initial_velocity, loss=loss, continuity=cont)
+        label = ("whole runs" if H is None else f"{H:g} s windows") + ("" if cont == 1 else f", continuity {cont:g}")
         say(f"fitting {space.p} parameter(s) on {len(runs)} run(s), {label}")
 
         def on_step(st, si=si, z_start=z_start, label=label):
             if checkpoint is not None:
                 checkpoint.save({"stage": si, "z": z_start, "stages": stages, "solver": st},
-                                progress=f"stage {si + 1} of {len(horizons)} ({label}), iteration {st['iteration']}")
+                                progress=f"stage {si + 1} of {len(plan)} ({label}), iteration {st['iteration']}")
 
         def on_it(it, c, si=si, label=label):
             say(f"  {label}: iteration {it}, cost {c:.6g}")
@@ -214,7 +231,7 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
         res = solve(problems, z, max_iter=max_iter, workers=workers, ftol=ftol, progress=on_it, state=st0,
                     on_step=on_step, prior=prior)
         z = res["z"]
-        stages.append({"horizon_s": H, "iterations": res["iterations"], "cost": float(res["cost"]),
+        stages.append({"horizon_s": H, "continuity": cont, "iterations": res["iterations"], "cost": float(res["cost"]),
                        "message": res["message"], "windows": int(sum(p.lay.W for p in problems)),
                        "simulated_parameter_sets": int(res["evaluations"]),
                        "seconds": float(time.perf_counter() - t0),
@@ -222,7 +239,7 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
         if checkpoint is not None:
             checkpoint.save({"stage": si + 1, "z": z, "z_start": z_start, "nus": res["nus"], "stages": stages,
                              "solver": None},
-                            progress=f"stage {si + 1} of {len(horizons)} ({label}) finished")
+                            progress=f"stage {si + 1} of {len(plan)} ({label}) finished")
     blocks = res["blocks"]
     cov = covariance(res.get("posterior_blocks", blocks)) if space.p else None
     sc = space.scale

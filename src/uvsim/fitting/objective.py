@@ -11,9 +11,17 @@ windows of all runs and all parameter sets as rows of one batched RK4 call
    by the window that starts at or before it (the sample that ends a window is
    predicted by the next one, whose node it is);
 2. continuity defects: the free node components of window ``k`` minus the end state of
-   window ``k - 1``, divided by :data:`DEFECT_SIGMA` (the lifted, soft-constrained form
-   of multiple shooting: Bock & Plitt 1984; continuity is reached at convergence rather
-   than imposed during the iterations, which keeps long runs well-posed);
+   window ``k - 1``, divided by :data:`DEFECT_SIGMA` times the problem's ``continuity``
+   factor (the lifted, soft-constrained form of multiple shooting: Bock & Plitt 1984;
+   continuity is approached at convergence rather than imposed during the iterations,
+   which keeps long runs well-posed).  When the model lacks something the data contain,
+   a soft defect is where its error goes: each window restarts from a node that absorbs a
+   little of the drift, so a fit can buy a lower windowed cost with a free simulation that
+   drifts further (issue 21: open-loop depth worse than the start model's on the very runs
+   it was fitted to).  A smaller ``continuity`` factor brings the cost closer to the free
+   simulation's (the penalty method's limit is hard continuity: one simulation per run
+   from its first node); the calibration tightens it (:mod:`uvsim.fitting.fitter`,
+   ``continuity``), diagnosis keeps 1;
 3. priors on the free node components (their reference is a measurement-derived
    estimate; :data:`uvsim.fitting.nodes.PRIOR_SIGMA`) and on the sensor biases (gyro;
    the roll and pitch of an attitude filter, :data:`ATTITUDE_BIAS_SIGMA`).
@@ -252,9 +260,15 @@ class WindowedProblem:
 
     def __init__(self, vehicle, runs, meas, space, horizon=None, *, z_ref=None, gyro_bias=True,
                  attitude_bias: bool = False, initial_velocity: str = "zero", yref: np.ndarray | None = None,
-                 loss: str = "linear"):
+                 loss: str = "linear", continuity: float = 1.0):
         check_loss(loss)  # an unknown loss is an error here, not in a worker
         self.loss = loss
+        c = float(continuity) if isinstance(continuity, (int, float)) else float("nan")
+        if not (np.isfinite(c) and c > 0):
+            raise CalibrationError(f"continuity: expected a positive factor of the continuity defects' standard "
+                                   f"deviation (1 = DEFECT_SIGMA), got {continuity!r}")
+        #: standard deviation of each continuity defect component (DEFECT_SIGMA x continuity)
+        self.defect_sigma = DEFECT_SIGMA * c
         kinds = {(r.input_kind, len(r.input_columns)) for r in runs}
         if len(kinds) != 1:
             raise CalibrationError(f"runs mix input kinds/counts: {sorted(kinds)}; fit them in separate groups")
@@ -453,7 +467,7 @@ class WindowedProblem:
         nodes = apply_tangent(self.x_ref[w0 + 1:w0 + nw][None], D[:, w0 + 1:w0 + nw])
         d = tangent_difference(nodes, ends)
         with np.errstate(all="ignore"):
-            out = (d / DEFECT_SIGMA)[..., self.free[r]]
+            out = (d / self.defect_sigma)[..., self.free[r]]
         return np.where(np.isfinite(out), out, FILL)
 
     def priors(self, D, bias, r: int) -> np.ndarray:

@@ -50,7 +50,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from uvsim.fitting.objective import (DEFECT_SIGMA, FILL, WindowedProblem, apply_tangent, robust_residuals,
+from uvsim.fitting.objective import (FILL, WindowedProblem, apply_tangent, robust_residuals,
                                      tangent_difference)
 from uvsim.fitting.priors import data_weight
 
@@ -143,15 +143,15 @@ def linearize(prob: WindowedProblem, z: np.ndarray, nus: list, *, jacobian: bool
             w0 = prob.lay.first[r]
             ends0 = prob.end_states(Y[:1], r)[0, :-1, :13]
             node0 = apply_tangent(prob.x_ref[w0 + 1:w0 + nw], D0[0, w0 + 1:w0 + nw])
-            d0 = tangent_difference(node0, ends0)[:, free] / DEFECT_SIGMA[free]
+            d0 = tangent_difference(node0, ends0)[:, free] / prob.defect_sigma[free]
             for j, c in enumerate(free):
                 ci = int(np.flatnonzero(comps == c)[0])
                 ends_p = prob.end_states(Y[1 + p + ci:2 + p + ci], r)[0, :-1, :13]
-                d_end = (tangent_difference(node0, ends_p)[:, free] / DEFECT_SIGMA[free] - d0) / FD_STEP_NODE
+                d_end = (tangent_difference(node0, ends_p)[:, free] / prob.defect_sigma[free] - d0) / FD_STEP_NODE
                 dd = D0[0, w0 + 1:w0 + nw].copy()
                 dd[:, c] += FD_STEP_NODE
                 node_p = apply_tangent(prob.x_ref[w0 + 1:w0 + nw], dd)
-                d_node = (tangent_difference(node_p, ends0)[:, free] / DEFECT_SIGMA[free] - d0) / FD_STEP_NODE
+                d_node = (tangent_difference(node_p, ends0)[:, free] / prob.defect_sigma[free] - d0) / FD_STEP_NODE
                 for w in range(1, nw):
                     rows = m_meas + (w - 1) * k + np.arange(k)
                     Jn[rows, (w - 1) * k + j] = d_end[w - 1]
