@@ -40,7 +40,7 @@ from uvsim.calibration.report import build_report, evaluate_runs, identifiabilit
 from uvsim.calibration.selection import check_bounds, effective_inertia_start, expand_names, joint_candidates
 from uvsim.errors import CalibrationError
 from uvsim.estimation.lag import attitude_lag_setting
-from uvsim.fitting.objective import check_loss
+from uvsim.fitting.objective import check_loss, continuity_factors
 from uvsim.fitting.parameters import default_bounds, physical_bounds
 from uvsim.logs import MANIFEST, Dataset, read_dataset
 from uvsim.measurements import CHANNEL_GROUP, measurements_for
@@ -256,14 +256,7 @@ class Calibrator:
         return out
 
     def _continuity(self) -> list:
-        cs = [self.continuity] if isinstance(self.continuity, (int, float)) else list(self.continuity or ())
-        for c in cs:
-            if not (isinstance(c, (int, float)) and np.isfinite(c) and c > 0):
-                raise CalibrationError(f"continuity: expected positive factors of the continuity defects' sd "
-                                       f"(1 = uvsim.fitting.objective.DEFECT_SIGMA), got {c!r}")
-        if not cs:
-            raise CalibrationError("continuity: give at least one factor")
-        return [float(c) for c in cs]
+        return continuity_factors(self.continuity)
 
     def _lag(self, runs) -> dict:
         """The attitude lag to use (``attitude_lag``) and how it was obtained."""
@@ -433,10 +426,11 @@ class Calibrator:
         if not self.screen:
             keep, screen = keep + screen, []
         names = keep + screen
+        continuity = self._continuity()
         key = fingerprint({
             "vehicle": start_veh.to_dict(), "runs": [(r.name, float(np.nansum(r.data.to_numpy()))) for r in runs],
             "keep": keep, "screen": screen, "bounds": {k: list(bounds_of(k)) for k in names},
-            "horizons": horizons, "continuity": self._continuity(), "ftol": JOINT_FTOL, "max_iter": self.max_iter,
+            "horizons": horizons, "continuity": continuity, "ftol": JOINT_FTOL, "max_iter": self.max_iter,
             "gyro_bias": self.gyro_bias, "lag": self.lag_["tau"],
             "weights": self.signal_weights, "noise": self.noise, "initial_velocity": self.initial_velocity,
             "prior": bool(self.prior), "uncertainty": self.initial_vehicle_.uncertainty,
@@ -450,7 +444,7 @@ class Calibrator:
                                  resume=None if self.resume is None else joint_checkpoint_path(self.resume))
         return run_joint(start_veh, runs, meas, params, keep=keep, screen=screen,
                          bounds={k: bounds_of(k) for k in names}, horizons=horizons,
-                         continuity=self._continuity(), ftol=JOINT_FTOL, max_iter=int(self.max_iter),
+                         continuity=continuity, ftol=JOINT_FTOL, max_iter=int(self.max_iter),
                          gyro_bias=bool(self.gyro_bias), attitude_bias=bool(self.attitude_bias),
                          initial_velocity=self.initial_velocity,
                          workers=self._workers(), checkpoint=ck, progress=self.progress,

@@ -138,19 +138,14 @@ def parse_horizons(text: str | None):
 def parse_continuity(text: str | None):
     """``"1,0.05"`` -> ``(1.0, 0.05)``; None -> the Calibrator's default."""
     from uvsim.calibration.calibrator import DEFAULT_CONTINUITY
+    from uvsim.fitting.objective import continuity_factors
 
     if not text:
         return DEFAULT_CONTINUITY
-    out = []
-    for item in text.split(","):
-        try:
-            c = float(item)
-        except ValueError:
-            raise UvsimError(f"--continuity: expected positive numbers, got {item.strip()!r}") from None
-        if not (math.isfinite(c) and c > 0):
-            raise UvsimError(f"--continuity: expected positive numbers, got {item.strip()!r}")
-        out.append(c)
-    return tuple(out)
+    try:
+        return tuple(continuity_factors([float(item) for item in text.split(",")]))
+    except (ValueError, UvsimError):
+        raise UvsimError(f"--continuity: expected positive numbers separated by commas, got {text!r}") from None
 
 
 def _fmt(v):

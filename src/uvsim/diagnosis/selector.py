@@ -390,11 +390,13 @@ class Selector:
         veh = vehicle_cur.with_effects([c.spec]) if c.spec is not None else vehicle_cur
         # start from the screening estimate (the best of its multi-start); without one, from
         # the catalogue's starts
-        starts = [{**values_cur, **c.start, **s["values"]}] if s and s.get("values") else \
-            [{**values_cur, **st} for st in _starts(c)]
-        if s and s.get("multistart") and s.get("values") and len(_starts(c)) > 1:
-            # a tether: anchors in four directions (_starts) beside the screening start
-            starts += [{**values_cur, **st} for st in _starts(c)]
+        catalogue = [{**values_cur, **st} for st in _starts(c)]
+        if s and s.get("values"):
+            starts = [{**values_cur, **c.start, **s["values"]}]
+            if s.get("multistart") and len(catalogue) > 1:
+                starts += catalogue  # a tether: anchors in four directions beside the screening start
+        else:
+            starts = catalogue
         free = list(cur["free"]) + c.free
         bounds = {**cur["bounds"], **c.bounds}
         label = c.label + (f" + {len(cur['free'])} current" if cur["free"] else "")

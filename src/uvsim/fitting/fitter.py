@@ -27,7 +27,7 @@ from typing import Sequence
 import numpy as np
 
 from uvsim.errors import CalibrationError
-from uvsim.fitting.objective import WindowedProblem, whole_runs
+from uvsim.fitting.objective import WindowedProblem, continuity_factors, whole_runs
 from uvsim.fitting.parameters import ParameterSpace
 from uvsim.fitting.priors import make_prior
 from uvsim.fitting.solver import covariance, solve
@@ -185,9 +185,9 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
     say = progress or (lambda msg: None)
     z = space.z0 if z0 is None else np.asarray(z0, float)
     horizons = list(horizons)
-    continuity = [continuity] if isinstance(continuity, (int, float)) else list(continuity)
-    if not horizons or not continuity:
-        raise CalibrationError("fit: give at least one horizon and one continuity factor")
+    continuity = continuity_factors(continuity)
+    if not horizons:
+        raise CalibrationError("fit: give at least one horizon")
     # the stages: (window length, continuity factor)
     plan = [(H, continuity[0]) for H in horizons[:-1]] + [(horizons[-1], c) for c in continuity]
     prior = None if prior_mean is None else make_prior(space, prior_mean, prior_sd)

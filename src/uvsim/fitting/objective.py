@@ -91,6 +91,21 @@ def check_loss(loss: str) -> None:
         raise CalibrationError(f"loss {loss!r}: expected one of {', '.join(LOSSES)}")
 
 
+def continuity_factors(value) -> list[float]:
+    """``value`` (a factor or a sequence of them) as a non-empty list of positive finite
+    continuity factors (multiples of :data:`DEFECT_SIGMA`), else a :class:`CalibrationError`
+    naming ``continuity`` and the value given.  Shared by the windowed problem, :func:`fit`
+    and the calibration's settings."""
+    values = [value] if isinstance(value, (int, float)) else list(value or ())
+    if not values:
+        raise CalibrationError("continuity: give at least one factor")
+    for c in values:
+        if not (isinstance(c, (int, float)) and np.isfinite(c) and c > 0):
+            raise CalibrationError(f"continuity: expected positive factors of the continuity defects' standard "
+                                   f"deviation (1 = DEFECT_SIGMA), got {c!r}")
+    return [float(c) for c in values]
+
+
 def robust_residuals(r: np.ndarray, loss: str = "linear", scale: float = HUBER_SCALE) -> np.ndarray:
     """Residuals whose half sum of squares is the loss: for "huber", ``rho(r) = r^2/2`` up to
     ``|r| = scale`` and ``scale |r| - scale^2/2`` beyond, written as
@@ -263,12 +278,10 @@ class WindowedProblem:
                  loss: str = "linear", continuity: float = 1.0):
         check_loss(loss)  # an unknown loss is an error here, not in a worker
         self.loss = loss
-        c = float(continuity) if isinstance(continuity, (int, float)) else float("nan")
-        if not (np.isfinite(c) and c > 0):
-            raise CalibrationError(f"continuity: expected a positive factor of the continuity defects' standard "
-                                   f"deviation (1 = DEFECT_SIGMA), got {continuity!r}")
+        if not isinstance(continuity, (int, float)):
+            raise CalibrationError(f"continuity: a windowed problem takes one factor, got {continuity!r}")
         #: standard deviation of each continuity defect component (DEFECT_SIGMA x continuity)
-        self.defect_sigma = DEFECT_SIGMA * c
+        self.defect_sigma = DEFECT_SIGMA * continuity_factors(continuity)[0]
         kinds = {(r.input_kind, len(r.input_columns)) for r in runs}
         if len(kinds) != 1:
             raise CalibrationError(f"runs mix input kinds/counts: {sorted(kinds)}; fit them in separate groups")
