@@ -74,6 +74,15 @@ G_DEFAULT = 9.81
 LAG_RESTART_HALF_S = 0.1
 
 
+def channel_weight(weights: Mapping[str, float] | None, group: str, channel: str) -> float:
+    """The weight of ``channel`` of ``group``: ``weights[group]`` x ``weights[channel]``
+    (each default 1).  A channel named like its group (``depth``) is weighted once:
+    ``{"depth": 10}`` weighs depth 10, not 100."""
+    weights = weights or {}
+    w = float(weights.get(group, 1.0))
+    return w if channel == group else w * float(weights.get(channel, 1.0))
+
+
 def wrap(a):
     """Angles wrapped to (-pi, pi]."""
     return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
@@ -144,6 +153,9 @@ class RunMeasurements:
     #: rows where the lag filter restarts from the logged attitude (window starts of a
     #: windowed fit, :meth:`for_windows`); None: once, at the first row
     restart_rows: np.ndarray | None = None
+    #: channel -> factor on its weight that makes it count per second of log rather than per
+    #: sample (:func:`per_second_factors`; empty: per sample)
+    rate_factors: dict = field(default_factory=dict)
     _restart_cache: tuple | None = field(default=None, repr=False, compare=False)
 
     # ------------------------------------------------------------------ structure
@@ -167,9 +179,9 @@ class RunMeasurements:
         return self.has_gyro and grp is not None and grp.mode == "euler" and bool(grp.logged[0] and grp.logged[1])
 
     def channel_weights(self, group: str) -> np.ndarray:
-        """(k,) weights: ``weights[group]`` x ``weights[channel]`` (default 1)."""
-        w = float(self.weights.get(group, 1.0))
-        return np.array([w * float(self.weights.get(c, 1.0)) for c in GROUPS[group]])
+        """(k,) weights: ``weights[group]`` x ``weights[channel]`` (default 1; :func:`channel_weight`)."""
+        return np.array([channel_weight(self.weights, group, c) * float(self.rate_factors.get(c, 1.0))
+                         for c in GROUPS[group]])
 
     def used(self, group: str) -> np.ndarray:
         """(n, k) bool: entries that enter a fit (valid and weight > 0)."""
@@ -368,9 +380,41 @@ def _noise_for(group: str, values: np.ndarray, native: np.ndarray) -> float:
     return noise_sigma(values, native)
 
 
+#: How the samples of channels logged at different rates are weighted (:func:`measurements_for`).
+SAMPLE_WEIGHTINGS = ("per_sample", "per_second")
+
+
+def check_sample_weighting(value) -> str:
+    """``value`` if it is one of :data:`SAMPLE_WEIGHTINGS`, else a CalibrationError."""
+    if value not in SAMPLE_WEIGHTINGS:
+        raise CalibrationError(f"sample_weighting {value!r}: expected one of {list(SAMPLE_WEIGHTINGS)}")
+    return value
+
+
+def per_second_factors(t: np.ndarray, groups: Mapping[str, "Group"]) -> dict:
+    """Channel -> ``f_max / f_c``: the run's fastest native sample rate over the channel's own
+    (native samples per second of the run, :class:`uvsim.estimation.noise.SampleKind`).
+
+    Multiplied into a channel's weight, it makes every logged channel count per second of log
+    rather than per sample: a 10 Hz depth beside a 100 Hz IMU gets 10.  When the model lacks
+    something in the data (real logs always do), the residuals of every channel are correlated
+    over seconds, far longer than a sample, so a 100 Hz channel does not carry ten times the
+    information of a 10 Hz one although per-sample weighting counts it so (the sum of
+    squared prediction errors weighs samples by their number, which is the maximum-likelihood
+    weighting only for white residuals: Ljung 1999, ch. 7)."""
+    dur = float(t[-1] - t[0]) if t.size > 1 else 0.0
+    if dur <= 0:
+        return {}
+    rate = {c: grp.valid[:, j].sum() / dur for grp in groups.values() for j, c in enumerate(grp.channels)
+            if grp.logged[j] and grp.valid[:, j].any()}
+    top = max(rate.values(), default=0.0)
+    return {c: float(top / r) for c, r in rate.items()} if top > 0 else {}
+
+
 def measurements_for(run, vehicle=None, *, noise: Mapping[str, float] | None = None,
                      weights: Mapping[str, float] | None = None, run_weight: float | None = None,
-                     sensors: Mapping[str, np.ndarray] | None = None, attitude_lag: float = 0.0) -> RunMeasurements:
+                     sensors: Mapping[str, np.ndarray] | None = None, attitude_lag: float = 0.0,
+                     sample_weighting: str = "per_sample") -> RunMeasurements:
     """The measurement model of ``run`` (a :class:`uvsim.logs.Run`).
 
     Parameters
@@ -385,8 +429,11 @@ def measurements_for(run, vehicle=None, *, noise: Mapping[str, float] | None = N
     sensors : sensor positions overriding the vehicle's.
     attitude_lag : time constant (s) of the attitude filter's first-order lag
         (module docstring; 0: none).
+    sample_weighting : "per_sample" (every sample of every channel alike) or "per_second"
+        (channels logged at a lower rate weighted up by :func:`per_second_factors`).
     """
     attitude_lag = lag_time_constant(attitude_lag)
+    check_sample_weighting(sample_weighting)
     noise = dict(noise or {})
     known = set(GROUPS) | set(CHANNEL_GROUP)
     for what, d in (("noise", noise), ("weights", weights or {})):
@@ -454,5 +501,7 @@ def measurements_for(run, vehicle=None, *, noise: Mapping[str, float] | None = N
         build("rates", run.velocity[:, 3:], [c in cols for c in RATE_COLUMNS])
     if run.has_acceleration:
         build("acceleration", run.acceleration, [True, True, True])
+    factors = per_second_factors(t, groups) if sample_weighting == "per_second" else {}
     return RunMeasurements(run.name, t, groups, sens, g, dict(weights or {}), notes,
-                           float(run.weight if run_weight is None else run_weight), attitude_lag)
+                           float(run.weight if run_weight is None else run_weight), attitude_lag,
+                           rate_factors=factors)

@@ -51,7 +51,7 @@ import numpy as np
 
 from uvsim.errors import CalibrationError
 from uvsim.kinematics import attitude_error_angle, quat_to_euler
-from uvsim.measurements import UNITS, rotation_vector_error, wrap
+from uvsim.measurements import UNITS, channel_weight, rotation_vector_error, wrap
 
 #: Signal groups and their channel names, in a fixed order.
 GROUPS = {
@@ -281,9 +281,7 @@ def component_weights(group: str, weights: Mapping[str, float] | None) -> np.nda
     ``weights[channel]`` (default 1) for each of its channels (e.g. ``{"attitude": 2,
     "roll": 0}``).  Attitude components are the error rotation vector's body x, y, z
     parts, which are the roll, pitch, yaw errors for small tilts."""
-    weights = weights or {}
-    g = float(weights.get(group, 1.0))
-    return np.array([g * float(weights.get(c, 1.0)) for c in GROUPS[group]])
+    return np.array([channel_weight(weights, group, c) for c in GROUPS[group]])
 
 
 def normalized_residuals(measured: Mapping[str, np.ndarray], predicted: Mapping[str, np.ndarray],

@@ -43,7 +43,7 @@ from uvsim.estimation.lag import attitude_lag_setting
 from uvsim.fitting.objective import check_loss, continuity_factors
 from uvsim.fitting.parameters import default_bounds, physical_bounds
 from uvsim.logs import MANIFEST, Dataset, read_dataset
-from uvsim.measurements import CHANNEL_GROUP, measurements_for
+from uvsim.measurements import CHANNEL_GROUP, channel_weight, check_sample_weighting, measurements_for
 from uvsim.plausibility import check_runs, parse_allow
 from uvsim.vehicle import load_vehicle
 
@@ -60,6 +60,10 @@ DEFAULT_CONTINUITY = (0.05,)
 #: 1e-6 spent 16 more iterations on the shipped tank dataset for changes in the 4th digit
 #: (25 iterations, 30.5 s, against 9 and 13.3 s; docs/calibration.md, "Speed").
 JOINT_FTOL = 1e-5
+#: How samples of channels logged at different rates count (:func:`uvsim.measurements.measurements_for`):
+#: per second of log, so that a 10 Hz depth is not outweighed tenfold by a 100 Hz IMU whose
+#: model errors are as correlated (docs/calibration.md, "Sample weighting").
+DEFAULT_SAMPLE_WEIGHTING = "per_second"
 
 
 def _as_dataset(data) -> Dataset:
@@ -89,10 +93,8 @@ def resolve_vehicle(vehicle, ds: Dataset):
 
 
 def _combine_weights(default: Mapping, user: Mapping | None) -> dict:
-    """Channel weights default[c] x user[group(c)] x user[c]."""
-    user = dict(user or {})
-    return {c: float(default.get(c, 1.0)) * float(user.get(g, 1.0)) * float(user.get(c, 1.0))
-            for c, g in CHANNEL_GROUP.items()}
+    """Channel weights default[c] x user[group(c)] x user[c] (:func:`uvsim.measurements.channel_weight`)."""
+    return {c: float(default.get(c, 1.0)) * channel_weight(user, g, c) for c, g in CHANNEL_GROUP.items()}
 
 
 def _amplitude(meas) -> float:
@@ -133,6 +135,12 @@ class Calibrator:
     noise : 1-sigma noise levels by group or channel (default: estimated per run).
     ga_channels : "own" (each DOF's GA looks at its own channels,
         :data:`uvsim.calibration.params.DOF_CHANNELS`; seed 000) or "all".
+    sample_weighting : "per_second" (default, :data:`DEFAULT_SAMPLE_WEIGHTING`): a channel
+        logged at a lower rate than the run's fastest is weighted up by the ratio of the
+        rates (a 10 Hz depth beside a 100 Hz IMU by 10), so every channel counts per second
+        of log (:func:`uvsim.measurements.per_second_factors`); "per_sample": every sample
+        alike. Joint stage only (the GA's fitness already averages each channel over its own
+        samples); channels logged at one rate (motion capture) are unaffected.
     low_speed_exponent : GA run weight = manifest weight x (amplitude / median
         amplitude) ** -low_speed_exponent; 0 (default): the manifest weights.
     refine : run the joint stage (default True).
@@ -191,7 +199,7 @@ class Calibrator:
                  mutation_sigma: float = 0.1, seeded_fraction: float = 0.1, seeded_sigma: float = 0.02,
                  margin: float = 0.5, bounds: Mapping | None = None, free=None, fix=None,
                  signal_weights: Mapping | None = None, noise: Mapping | None = None, ga_channels: str = "own",
-                 low_speed_exponent: float = 0.0, refine: bool = True, horizons=DEFAULT_HORIZONS,
+                 sample_weighting: str = DEFAULT_SAMPLE_WEIGHTING, low_speed_exponent: float = 0.0, refine: bool = True, horizons=DEFAULT_HORIZONS,
                  continuity=DEFAULT_CONTINUITY,
                  max_iter: int = 80, gyro_bias: bool = True, attitude_bias: bool = True, screen: bool = True,
                  attitude_lag="auto",
@@ -205,6 +213,7 @@ class Calibrator:
         self.seeded_fraction, self.seeded_sigma = seeded_fraction, seeded_sigma
         self.margin, self.bounds, self.free, self.fix = margin, bounds, free, fix
         self.signal_weights, self.noise, self.ga_channels = signal_weights, noise, ga_channels
+        self.sample_weighting = sample_weighting
         self.low_speed_exponent, self.refine = low_speed_exponent, refine
         self.horizons, self.max_iter, self.gyro_bias, self.screen = horizons, max_iter, gyro_bias, screen
         self.continuity = continuity
@@ -263,6 +272,7 @@ class Calibrator:
         return attitude_lag_setting(runs, self.attitude_lag)
 
     def _meas(self, runs, weights=None, **kw) -> list:
+        kw.setdefault("sample_weighting", self.sample_weighting)
         return [measurements_for(r, self.initial_vehicle_, noise=self.noise, weights=weights,
                                  attitude_lag=self.lag_["tau"], **kw) for r in runs]
 
@@ -279,6 +289,7 @@ class Calibrator:
             veh = veh.with_effects(list(self.effects))
         self.initial_vehicle_ = veh
         check_loss(self.loss)
+        check_sample_weighting(self.sample_weighting)
         if not 0 < float(self.margin) < 1:
             raise CalibrationError(f"margin {self.margin!r}: expected a fraction between 0 and 1 (0.5 = +-50 %)")
         if self.ga_channels not in ("own", "all"):
@@ -376,7 +387,8 @@ class Calibrator:
         for d in ga_dofs:
             w = _combine_weights(default_channel_weights(d) if self.ga_channels == "own" else {}, uw)
             idx = np.array([i for i, r in enumerate(runs) if r.dof == d])
-            ms = self._meas([runs[i] for i in idx], w, run_weight=1.0)
+            # per sample: the GA's fitness already averages each channel over its own samples
+            ms = self._meas([runs[i] for i in idx], w, run_weight=1.0, sample_weighting="per_sample")
             meas += ms
             if not any(used_channels(m) for m in ms):
                 raise CalibrationError(
@@ -432,7 +444,8 @@ class Calibrator:
             "keep": keep, "screen": screen, "bounds": {k: list(bounds_of(k)) for k in names},
             "horizons": horizons, "continuity": continuity, "ftol": JOINT_FTOL, "max_iter": self.max_iter,
             "gyro_bias": self.gyro_bias, "lag": self.lag_["tau"],
-            "weights": self.signal_weights, "noise": self.noise, "initial_velocity": self.initial_velocity,
+            "weights": self.signal_weights, "sample_weighting": self.sample_weighting, "noise": self.noise,
+            "initial_velocity": self.initial_velocity,
             "prior": bool(self.prior), "uncertainty": self.initial_vehicle_.uncertainty,
             # (the default loss leaves the key, and so earlier checkpoints, as they were)
             **({} if self.loss == "linear" else {"loss": self.loss}),

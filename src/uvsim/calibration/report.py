@@ -302,6 +302,7 @@ def build_report(cal, ds, runs, problems, ga, bounds_of, t0, t_ga, t_ref) -> dic
                      "refine": cal.refine, "horizons": cal._horizons(), "continuity": cal._continuity(),
                      "max_iter": cal.max_iter,
                      "gyro_bias": cal.gyro_bias, "screen": cal.screen, "attitude_lag": cal.attitude_lag,
-                     "initial_velocity": cal.initial_velocity, "prior": cal.prior, "loss": cal.loss},
+                     "initial_velocity": cal.initial_velocity, "prior": cal.prior, "loss": cal.loss,
+                     "sample_weighting": cal.sample_weighting},
         "logbook": {d: [dict(rec) for rec in lb] for d, lb in ga["logbooks"].items()},
     }

@@ -2,7 +2,7 @@
 
     uvsim calibrate --data DIR [--vehicle NAME|FILE] [--dof surge,...] [--free z_b,thruster_gain_*]
                     [--fix NAME,...] [--bounds NAME=LO:HI,...] [--weights NAME=W,...] [--noise NAME=SIGMA,...]
-                    [--horizons 2,6] [--continuity 0.05] [--no-gyro-bias] [--no-prior] [--loss huber] [--seed S]
+                    [--horizons 2,6] [--continuity 0.05] [--no-gyro-bias] [--no-prior] [--loss huber] [--sample-weighting per_sample] [--seed S]
                     [--population P --generations G]
                     [--workers N] [--dask ADDR|local] [--checkpoint CKPT] [--resume CKPT] [--no-refine]
                     --out fitted.yaml [--json report.json] [--plots DIR] [--progress]
@@ -27,7 +27,9 @@ ADDED_MASS_ROWS = ("X_udot", "Y_vdot", "Z_wdot", "K_pdot", "M_qdot", "N_rdot")
 
 
 def register(sub) -> None:
+    from uvsim.calibration.calibrator import DEFAULT_SAMPLE_WEIGHTING
     from uvsim.fitting.objective import LOSSES
+    from uvsim.measurements import SAMPLE_WEIGHTINGS
 
     p = sub.add_parser("calibrate", help="fit a vehicle model to logged runs (seed 000 GA per DOF + joint "
                                          "prediction-error fit of all runs)")
@@ -62,6 +64,10 @@ def register(sub) -> None:
     p.add_argument("--loss", choices=LOSSES, default="linear",
                    help="loss of the joint stage's measurement residuals: linear (least squares, default) or huber "
                         "(beyond 3 noise sigmas a residual costs linearly: spikes, dropouts, bursts of model error)")
+    p.add_argument("--sample-weighting", choices=SAMPLE_WEIGHTINGS, default=DEFAULT_SAMPLE_WEIGHTING,
+                   help="per_second (default): a channel logged at a lower rate than the run's fastest is weighted "
+                        "up by the ratio of the rates (10 Hz depth beside a 100 Hz IMU: x10); per_sample: every "
+                        "sample alike")
     p.add_argument("--no-prior", action="store_true",
                    help="joint fit by least squares within the bounds only, without the starting vehicle as a prior "
                         "(default: maximum a posteriori, docs/calibration.md 'Priors')")
@@ -342,6 +348,7 @@ def _run(args) -> int:
                      continuity=parse_continuity(args.continuity), max_iter=args.max_iter,
                      gyro_bias=not args.no_gyro_bias,
                      attitude_bias=not args.no_attitude_bias, prior=not args.no_prior, loss=args.loss,
+                     sample_weighting=args.sample_weighting,
                      screen=not args.no_screen,
                      ga_channels=args.ga_channels,
                      attitude_lag=lag, low_speed_exponent=args.low_speed_exponent, progress=want_progress(args),
