@@ -57,6 +57,14 @@ def test_per_second_factors_weight_a_slow_channel_up_by_the_rate_ratio():
     np.testing.assert_allclose(w.channel_weights("rates"), [0.0, 1.0, 1.0])
 
 
+def test_dropouts_do_not_weight_a_channel_up():
+    run = _imu_depth_run(10)
+    gone = run.data["depth"].to_numpy().copy()
+    gone[500:1500] = np.nan  # the depth sensor silent for 10 of the 20 s
+    run.data["depth"] = gone
+    assert measurements_for(run, sample_weighting="per_second").rate_factors["depth"] == pytest.approx(10.0)
+
+
 def test_channels_at_one_rate_are_unaffected():
     m = measurements_for(_imu_depth_run(1), sample_weighting="per_second")
     assert m.rate_factors == pytest.approx({"depth": 1.0, "p": 1.0, "q": 1.0, "r": 1.0})

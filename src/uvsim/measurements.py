@@ -392,8 +392,10 @@ def check_sample_weighting(value) -> str:
 
 
 def per_second_factors(t: np.ndarray, groups: Mapping[str, "Group"]) -> dict:
-    """Channel -> ``f_max / f_c``: the run's fastest native sample rate over the channel's own
-    (native samples per second of the run, :class:`uvsim.estimation.noise.SampleKind`).
+    """Channel -> ``f_max / f_c``: the run's fastest native sample rate over the channel's own.
+    A channel's rate is one over the median interval between its native samples
+    (:class:`uvsim.estimation.noise.SampleKind`), so dropouts do not lower it: seconds without a
+    sample carry no information, and the samples around them are not weighted up for them.
 
     Multiplied into a channel's weight, it makes every logged channel count per second of log
     rather than per sample: a 10 Hz depth beside a 100 Hz IMU gets 10.  When the model lacks
@@ -402,13 +404,15 @@ def per_second_factors(t: np.ndarray, groups: Mapping[str, "Group"]) -> dict:
     information of a 10 Hz one although per-sample weighting counts it so (the sum of
     squared prediction errors weighs samples by their number, which is the maximum-likelihood
     weighting only for white residuals: Ljung 1999, ch. 7)."""
-    dur = float(t[-1] - t[0]) if t.size > 1 else 0.0
-    if dur <= 0:
-        return {}
-    rate = {c: grp.valid[:, j].sum() / dur for grp in groups.values() for j, c in enumerate(grp.channels)
-            if grp.logged[j] and grp.valid[:, j].any()}
+    t = np.asarray(t, float)
+    rate = {}
+    for grp in groups.values():
+        for j, c in enumerate(grp.channels):
+            dt = np.diff(t[grp.valid[:, j]]) if grp.logged[j] else np.zeros(0)
+            if dt.size and np.median(dt) > 0:
+                rate[c] = 1.0 / float(np.median(dt))
     top = max(rate.values(), default=0.0)
-    return {c: float(top / r) for c, r in rate.items()} if top > 0 else {}
+    return {c: top / r for c, r in rate.items()}
 
 
 def measurements_for(run, vehicle=None, *, noise: Mapping[str, float] | None = None,
