@@ -41,7 +41,7 @@ def test_per_second_factors_weight_a_slow_channel_up_by_the_rate_ratio():
     run = _imu_depth_run(10)
     m = measurements_for(run, sample_weighting="per_second")
     assert m.rate_factors == pytest.approx({"depth": 10.0, "p": 1.0, "q": 1.0, "r": 1.0})
-    assert per_second_factors(m.t, m.groups) == m.rate_factors
+    assert per_second_factors(m.groups) == m.rate_factors
     assert measurements_for(run).rate_factors == {}  # per_sample: the function's default
     # the residual vector: depth entries sqrt(10) larger, the gyro's unchanged
     pred = {g: np.zeros_like(grp.values) for g, grp in m.groups.items()}

@@ -391,11 +391,12 @@ def check_sample_weighting(value) -> str:
     return value
 
 
-def per_second_factors(t: np.ndarray, groups: Mapping[str, "Group"]) -> dict:
+def per_second_factors(groups: Mapping[str, "Group"]) -> dict:
     """Channel -> ``f_max / f_c``: the run's fastest native sample rate over the channel's own.
     A channel's rate is one over the median interval between its native samples
-    (:class:`uvsim.estimation.noise.SampleKind`), so dropouts do not lower it: seconds without a
-    sample carry no information, and the samples around them are not weighted up for them.
+    (``SampleKind.native_interval_s``, :class:`uvsim.estimation.noise.SampleKind`), so dropouts
+    do not lower it: seconds without a sample carry no information, and the samples around
+    them are not weighted up for them.
 
     Multiplied into a channel's weight, it makes every logged channel count per second of log
     rather than per sample: a 10 Hz depth beside a 100 Hz IMU gets 10.  When the model lacks
@@ -404,13 +405,8 @@ def per_second_factors(t: np.ndarray, groups: Mapping[str, "Group"]) -> dict:
     information of a 10 Hz one although per-sample weighting counts it so (the sum of
     squared prediction errors weighs samples by their number, which is the maximum-likelihood
     weighting only for white residuals: Ljung 1999, ch. 7)."""
-    t = np.asarray(t, float)
-    rate = {}
-    for grp in groups.values():
-        for j, c in enumerate(grp.channels):
-            dt = np.diff(t[grp.valid[:, j]]) if grp.logged[j] else np.zeros(0)
-            if dt.size and np.median(dt) > 0:
-                rate[c] = 1.0 / float(np.median(dt))
+    rate = {c: 1.0 / grp.kinds[j].native_interval_s for grp in groups.values() for j, c in enumerate(grp.channels)
+            if grp.kinds[j] is not None and grp.kinds[j].native_interval_s > 0}  # NaN (< 2 samples): left out
     top = max(rate.values(), default=0.0)
     return {c: top / r for c, r in rate.items()}
 
@@ -505,7 +501,7 @@ def measurements_for(run, vehicle=None, *, noise: Mapping[str, float] | None = N
         build("rates", run.velocity[:, 3:], [c in cols for c in RATE_COLUMNS])
     if run.has_acceleration:
         build("acceleration", run.acceleration, [True, True, True])
-    factors = per_second_factors(t, groups) if sample_weighting == "per_second" else {}
+    factors = per_second_factors(groups) if sample_weighting == "per_second" else {}
     return RunMeasurements(run.name, t, groups, sens, g, dict(weights or {}), notes,
                            float(run.weight if run_weight is None else run_weight), attitude_lag,
                            rate_factors=factors)
