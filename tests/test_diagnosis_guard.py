@@ -80,6 +80,46 @@ def test_a_lag_of_half_a_sample_is_the_input_timing_not_an_actuator():
     assert judge(_row(lag, {"thruster_lag_time_constant": 0.2}), None)[0]
 
 
+def _drift_row(c, *, wald_p, windowed, p_better, groups):
+    """A fitted candidate whose windowed validation gain is below MIN_RELATIVE, with the
+    guard's open-loop groups given as (relative change, share of resamples worse)."""
+    g = {k: {"relative": rel, "p_worse": pw, "before": 1.0, "after": 1.0 + rel} for k, (rel, pw) in groups.items()}
+    ok = all(rel <= TOLERANCE for rel, _ in groups.values())
+    cmp = {"wald": {"p": wald_p}, "relative": windowed, "p_better": p_better,
+           "guard": {"ok": ok, "groups": g, "why": "no logged group's open-loop validation error is worse"}}
+    return {"candidate": c, "compare": cmp, "problem": None, "values": {"current_n": 0.02, "current_e": 0.0},
+            "at_bounds": []}
+
+
+def test_a_drift_the_windows_hide_is_accepted_on_the_free_simulation():
+    """Benchmark seed 85's numbers: a current removes 3.4 % of the windowed validation cost
+    (below MIN_RELATIVE) and 98.5 % of the open-loop position error.  The free simulation of
+    the held-out runs accepts it; each missing piece of that evidence refuses it."""
+    from uvsim.diagnosis.decision import MIN_RELATIVE, OPEN_LOOP_GAIN, OPEN_LOOP_WALD_P
+
+    cur = catalogue(input_kind="pwm", n_thrusters=8, dt=0.1, p_ref=np.zeros(3), has_position=True, z_max=None,
+                    only=["current"])[0]
+    seed85 = dict(wald_p=1e-12, windowed=0.034, p_better=1.0, groups={"position": (-0.985, 0.0),
+                                                                       "attitude": (-0.37, 0.0)})
+    assert seed85["windowed"] < MIN_RELATIVE
+    ok, why = judge(_drift_row(cur, **seed85), None)
+    assert ok and "free simulation" in why and "position -98 %" in why
+    # the open-loop gain must be large ...
+    small = {**seed85, "groups": {"position": (-0.9 * OPEN_LOOP_GAIN, 0.0), "attitude": (-0.1, 0.0)}}
+    ok, why = judge(_drift_row(cur, **small), None)
+    assert not ok and "does not help the validation runs" in why
+    # ... and confirmed by the resampling ...
+    luck = {**seed85, "groups": {"position": (-0.985, 0.05), "attitude": (0.0, 0.5)}}
+    assert not judge(_drift_row(cur, **luck), None)[0]
+    # ... the windowed cost must fall too, the training fit must be significant at 1 % ...
+    assert not judge(_drift_row(cur, **{**seed85, "windowed": -0.01, "p_better": 0.2}), None)[0]
+    ok, why = judge(_drift_row(cur, **{**seed85, "wald_p": 2 * OPEN_LOOP_WALD_P}), None)
+    assert not ok and "Wald" in why
+    # ... and no group may get worse
+    worse = {**seed85, "groups": {"position": (-0.985, 0.0), "depth": (0.3, 1.0)}}
+    assert not judge(_drift_row(cur, **worse), None)[0]
+
+
 # ----------------------------------------------------------------------------- verdict
 def test_verdict_says_not_explained_and_where():
     conc = {"by_channel": [{"name": "depth", "share": 0.7}, {"name": "pitch", "share": 0.2},

@@ -23,8 +23,8 @@ import fnmatch
 from typing import Iterable, Mapping, Sequence
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
+from uvsim.blas import single_thread
 from uvsim.calibration.params import DOF_PARAMETERS, EFFECTIVE_INERTIA, check_sign
 from uvsim.errors import CalibrationError
 
@@ -102,7 +102,7 @@ def information(problems, z: np.ndarray, workers: int = 1) -> np.ndarray:
     nus = [n for p in problems for n in p.zero_nuisance()]
     ev = PoolEvaluator(problems, int(workers)) if workers > 1 and len(problems) > 1 else SerialEvaluator(problems)
     try:
-        with threadpool_limits(1, "blas"):
+        with single_thread():
             blocks = ev.linearize(np.asarray(z, float), nus)
     finally:
         ev.close()

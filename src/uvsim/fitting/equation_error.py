@@ -32,8 +32,8 @@ import numpy as np
 from scipy.ndimage import convolve1d
 from scipy.optimize import least_squares
 from scipy.signal import savgol_coeffs, savgol_filter
-from threadpoolctl import threadpool_limits
 
+from uvsim.blas import single_thread
 from uvsim.errors import CalibrationError
 from uvsim.estimation.derivatives import body_acceleration, body_velocity
 from uvsim.kinematics import euler_to_quat, unwrap_angles
@@ -229,7 +229,7 @@ class EquationError:
         groups: dict = {}
         for i, m in enumerate(self.motions):
             groups.setdefault((m.input_kind, m.U.shape[1]), []).append(i)
-        with threadpool_limits(1, "blas"), np.errstate(all="ignore"):
+        with single_thread(), np.errstate(all="ignore"):
             for (kind, _), idx in groups.items():
                 ms = [self.motions[i] for i in idx]
                 N = sum(m.sub.size for m in ms)

@@ -11,8 +11,8 @@ simulation over the whole run, not of the windowed predictions the fits use.
 from __future__ import annotations
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
+from uvsim.blas import single_thread
 from uvsim.fitting.fitter import group_by_input
 from uvsim.fitting.objective import whole_runs
 from uvsim.fitting.parameters import ParameterSpace
@@ -37,7 +37,7 @@ def open_loop(vehicle, runs, *, overrides=None, meas=None, initial_velocity: str
     for idx in group_by_input(runs):
         group = [runs[i] for i in idx]
         space = ParameterSpace([], veh.parameters(), dict(overrides or {}))
-        with threadpool_limits(1, "blas"):
+        with single_thread():
             Y, acc, _ = whole_runs(veh, group, [meas[i].sensors for i in idx], space, np.zeros(0),
                                    initial_velocity=initial_velocity,
                                    accel=any(meas[i].needs_acceleration for i in idx))

@@ -41,8 +41,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
+from uvsim.blas import single_thread
 from uvsim.errors import CalibrationError
 from uvsim.fitting.nodes import NodeModel
 from uvsim.kinematics import quat_multiply
@@ -436,7 +436,7 @@ class WindowedProblem:
             acc = np.empty((pc * W, L, 6)) if self.accel else None
             # one BLAS thread: the per-stage matrix products are small, and threaded BLAS on
             # them is several times slower on a 2-core machine (docs/performance.md)
-            with threadpool_limits(1, "blas"):
+            with single_thread():
                 Y = _rk4_loop(model, np.tile(self.lay.T, (pc, 1)), np.tile(self.lay.U, (pc, 1, 1)), y0, 1, "nan",
                               accel=acc, V=None if self.lay.V is None else np.tile(self.lay.V, (pc, 1)))
             Ys.append(Y.reshape(pc, W, L, -1))

@@ -29,8 +29,8 @@ from __future__ import annotations
 from typing import Sequence
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
+from uvsim.blas import single_thread
 from uvsim.fitting.fitter import group_by_input
 from uvsim.fitting.nodes import PRIOR_SIGMA
 from uvsim.fitting.objective import whole_runs
@@ -72,7 +72,7 @@ def initial_state_growth(vehicle, runs: Sequence, meas: Sequence, evaluations: S
                                                sensors=meas[i].sensors)[2] for r, i in zip(group, idx)])
         moved = []
         for sign in (1.0, -1.0):
-            with threadpool_limits(1, "blas"):
+            with single_thread():
                 Y, _, _ = whole_runs(vehicle, group, [meas[i].sensors for i in idx], space, np.zeros(0),
                                      initial_velocity=initial_velocity, nu0=nu0 + sign * SIGNS * PERTURBATION)
             moved.append(Y[..., 7:13])

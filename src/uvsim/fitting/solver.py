@@ -48,8 +48,8 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
+from uvsim.blas import single_thread
 from uvsim.fitting.objective import (FILL, WindowedProblem, apply_tangent, robust_residuals,
                                      tangent_difference)
 from uvsim.fitting.priors import data_weight
@@ -305,7 +305,7 @@ def _init_worker(probs):
 
 def _worker_linearize(args):
     i, z, nus, jacobian, scores = args
-    with threadpool_limits(1, "blas"):
+    with single_thread():
         return linearize(_WORKER_PROBS[i], z, nus, jacobian=jacobian, scores=scores)
 
 
@@ -400,7 +400,7 @@ def solve(prob, z0: np.ndarray, nus0: list | None = None, *, max_iter: int = 20,
     if prior is not None:
         ev = PriorEvaluator(ev, prior)
     try:
-        with threadpool_limits(1, "blas"):
+        with single_thread():
             res = _solve(probs, ev, z0, nus0, max_iter=max_iter, ftol=ftol, xtol=xtol, progress=progress,
                          state=state, on_step=on_step)
     finally:
