@@ -42,7 +42,7 @@ MIN_RELATIVE = 0.05
 #: The second way to accept an effect: the held-out runs' *free simulation* confirms it.  The
 #: windowed cost restarts every window from node states estimated on the data, so it hides
 #: what an effect does over a whole run: a current's or a tether's drift (benchmark seed 85:
-#: a 2 cm/s current removes 3.4 % of the windowed validation cost and 98.5 % of the
+#: a 1.3 cm/s current removes 3.4 % of the windowed validation cost and 98.5 % of the
 #: open-loop position error).  An effect is then accepted when, beside the guard (no logged
 #: group worse), some logged group's open-loop validation error (noise-normalized sum of
 #: squares) falls by at least OPEN_LOOP_GAIN with the fall confirmed in OPEN_LOOP_LEVEL of
