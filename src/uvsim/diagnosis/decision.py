@@ -101,7 +101,7 @@ def judge(row, val_cur) -> tuple[bool, str]:
                        "catalogue or an error of the base model is the likelier cause)")
     w = cmp.get("wald") or {}
     g = cmp.get("guard")
-    drift = open_loop_evidence(cmp, w)
+    drift = open_loop_evidence(cmp)
     if drift is not None:
         return True, drift
     if w.get("p") is not None and not w["p"] < WALD_P:
@@ -123,13 +123,14 @@ def judge(row, val_cur) -> tuple[bool, str]:
                   + (g["why"] if g is not None else "open-loop guard not run"))
 
 
-def open_loop_evidence(cmp, w) -> str | None:
+def open_loop_evidence(cmp) -> str | None:
     """The reason to accept an effect on the free simulation of the validation runs
     (:data:`OPEN_LOOP_GAIN`), or None when that evidence is missing: the guard passed,
     some group's open-loop error fell by OPEN_LOOP_GAIN in at least OPEN_LOOP_LEVEL of
     the resamples, the windowed validation cost fell (confirmed at VAL_LEVEL) and the
-    training Wald test gives p < OPEN_LOOP_WALD_P."""
-    g = cmp.get("guard")
+    training Wald test gives p < OPEN_LOOP_WALD_P.  ``cmp``: a fitted row's ``compare``
+    (windowed ``relative`` and ``p_better``, ``wald``, ``guard``)."""
+    g, w = cmp.get("guard"), cmp.get("wald") or {}
     if g is None or not g["ok"] or w.get("p") is None or not w["p"] < OPEN_LOOP_WALD_P:
         return None
     if not (cmp["relative"] > 0.0 and cmp["p_better"] >= VAL_LEVEL):
