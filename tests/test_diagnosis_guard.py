@@ -120,6 +120,98 @@ def test_a_drift_the_windows_hide_is_accepted_on_the_free_simulation():
     assert not judge(_drift_row(cur, **worse), None)[0]
 
 
+def test_a_ballast_seed_from_the_rotations_alone_is_tried_mirrored_too():
+    """Without linear velocities the equation error sees a ballast's moments w r only; the
+    mirrored start (-w, -r) has the same moments and the opposite vertical force."""
+    from uvsim.diagnosis.candidates import mirror_start
+
+    cands = {c.label: c for c in catalogue(input_kind="pwm", n_thrusters=6, dt=0.01, p_ref=np.zeros(3),
+                                           has_position=False, z_max=None, has_depth=True)}
+    seed = {"ballast_weight": 0.37, "ballast_x": 0.24, "ballast_y": 0.24, "ballast_z": 0.02}
+    for label in ("ballast:xy", "ballast:xyz"):
+        c = cands[label]
+        m = mirror_start(c, seed)
+        assert set(m) == set(c.free) and m["ballast_weight"] == -0.37
+        for ax in c.free[1:]:
+            assert m["ballast_weight"] * m[ax] == pytest.approx(seed["ballast_weight"] * seed[ax])
+    assert mirror_start(cands["tether:3d"], seed) == {}
+
+
+class _FakeSelector:
+    """What :func:`uvsim.diagnosis.decision.still_needed` asks of a selector, with the
+    windowed validation costs and open-loop blocks of the model without an effect given."""
+
+    def __init__(self, without_windows, without_blocks):
+        self.without_windows, self.without_blocks = without_windows, without_blocks
+        self.fitted = []
+
+    def current(self, accepted, values):
+        free = [n for a in accepted for n in a.free]
+        return {"vehicle": tuple(a.label for a in accepted), "values": dict(values), "free": free,
+                "bounds": {n: a.bounds[n] for a in accepted for n in a.free}}
+
+    def space(self, veh, free, bounds, start, fixed):
+        return {n: start[n] for n in free}
+
+    def fit_train(self, veh, sp, label):
+        self.fitted.append(veh)
+        return type("R", (), {"values": dict(sp), "at_bounds": []})()
+
+    def val_cost(self, veh, vals):
+        w = np.asarray(self.without_windows, float)
+        return {"windows": w, "cost": float(w.sum()), "per_entry": float(w.mean())}
+
+    def open_loop_blocks(self, veh, vals):
+        return self.without_blocks
+
+
+def _joint(cands, values, p_of):
+    """A joint fit result whose Wald test of each effect gives p ~ ``p_of[effect]``."""
+    names = [n for c in cands for n in c.free]
+    var = []
+    for c in cands:
+        # W = sum (d_i / sd_i)^2 over k parameters: sd so that W is the chi2 quantile of p
+        from scipy.stats import chi2
+
+        W = chi2.isf(p_of[c.effect], len(c.null))
+        for n in c.free:
+            d = values[n] - c.null.get(n, values[n])
+            var.append((d * d * len(c.null) / W) if n in c.null and d else 1.0)
+    return type("R", (), {"names": names, "values": dict(values), "covariance": np.diag(var), "at_bounds": []})()
+
+
+def test_an_effect_chosen_first_is_dropped_when_the_later_one_explains_it():
+    """Backward elimination: the tether chosen in step 1 is judged again on top of the
+    model with the later ballast alone; refused there (not significant, validation no
+    better), it is dropped and the model without it is the answer.  A tether that the
+    later effect does not explain (validation far worse without it) stays."""
+    from uvsim.diagnosis.decision import still_needed
+
+    cands = {c.label: c for c in catalogue(input_kind="pwm", n_thrusters=6, dt=0.01, p_ref=np.zeros(3),
+                                           has_position=True, z_max=None)}
+    teth, bal = cands["tether:horizontal"], cands["ballast:xy"]
+    values = {**{n: teth.start[n] for n in teth.free}, "tether_stiffness": 0.05,
+              "ballast_weight": -0.57, "ballast_x": -0.2, "ballast_y": -0.12}
+    rng = np.random.default_rng(3)
+    w_joint = rng.uniform(90, 110, 24)
+    blocks = _blocks(position=rng.uniform(80, 120, 20), attitude=rng.uniform(80, 120, 20))
+    val_joint = {"windows": w_joint, "cost": float(w_joint.sum()), "per_entry": 1.0, "open_loop": blocks}
+    # the later ballast explains it: without the tether the validation is the same
+    sel = _FakeSelector(w_joint * 1.001, blocks)
+    acc, vals, val, _, rows = still_needed(sel, [teth, bal], values, val_joint,
+                                           _joint([teth, bal], values, {"tether": 0.2, "ballast": 1e-30}))
+    assert [c.label for c in acc] == ["ballast:xy"] and sel.fitted == [("ballast:xy",)]
+    assert rows[0]["effect"] == "tether" and not rows[0]["kept"] and "Wald" in rows[0]["why"]
+    assert np.allclose(val["windows"], w_joint * 1.001) and vals["ballast_weight"] == -0.57
+    # it does not: the tether stays
+    worse = _blocks(position=3 * blocks["groups"]["position"], attitude=blocks["groups"]["attitude"])
+    sel = _FakeSelector(w_joint * 2.0, worse)
+    acc, _, val, _, rows = still_needed(sel, [teth, bal], values, val_joint,
+                                        _joint([teth, bal], values, {"tether": 1e-12, "ballast": 1e-30}))
+    assert [c.label for c in acc] == ["tether:horizontal", "ballast:xy"] and rows[0]["kept"]
+    assert val is val_joint
+
+
 # ----------------------------------------------------------------------------- verdict
 def test_verdict_says_not_explained_and_where():
     conc = {"by_channel": [{"name": "depth", "share": 0.7}, {"name": "pitch", "share": 0.2},

@@ -236,6 +236,16 @@ def search_bound_hits(c: Candidate, values: Mapping[str, float], at_bounds: Sequ
     return out
 
 
+def mirror_start(c: Candidate, values: Mapping[str, float]) -> dict:
+    """The start with the same moments and the opposite force: a ballast's weight and
+    position negated (``w r`` unchanged); {} for other effects.  Where the log has no linear
+    velocities the rotational equation error fixes only the moments (Selector.step)."""
+    if c.effect != "ballast":
+        return {}
+    return {n: -float(values.get(n, c.start[n])) for n in c.free
+            if n in ("ballast_weight", "ballast_x", "ballast_y", "ballast_z")}
+
+
 def inertia_start(c: Candidate, values: Mapping[str, float], g: float) -> dict:
     """Start of the inertial parameters of an ``open_loop`` variant from the winner's
     ``values``: a ballast piece of mass ``|w| / g`` (a density of rho / 2 for buoyancy

@@ -37,7 +37,8 @@ import numpy as np
 from uvsim.checkpoint import Checkpoint, fingerprint
 from uvsim.diagnosis.candidates import BASE_MODEL, EFFECTS, Candidate
 from uvsim.diagnosis.decision import (LEVEL, MIN_RELATIVE, VAL_LEVEL, WALD_P, alternative_challenger,
-                                      inertia_challenger, parsimonious, richer_challenger, simplest_sufficient)
+                                      inertia_challenger, parsimonious, richer_challenger, simplest_sufficient,
+                                      still_needed)
 from uvsim.diagnosis.residual import concentration, verdict
 from uvsim.diagnosis.selector import VARIANT_SHARE, Selector
 from uvsim.estimation.lag import attitude_lag_setting
@@ -232,6 +233,14 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         accepted_values.append(joint)
         val_cur = val_new
 
+    # backward elimination: each earlier effect must still earn its place beside the later ones
+    backward: list = []
+    if len([c for c in accepted if c.effect != BASE_MODEL]) >= 2:
+        n_before = len(accepted)
+        accepted, values, val_cur, final_fit, backward = still_needed(sel, accepted, values, val_cur,
+                                                                      accepted_values[-1])
+        if len(accepted) < n_before:
+            accepted_values.append(final_fit)
     # result ------------------------------------------------------------------------------
     veh_after = sel.vehicle_for(accepted)
     if values:
@@ -272,6 +281,10 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
             + ("The model is at the noise level." if at_noise else
                "The cost is above the noise level: an effect outside the catalogue, or base coefficients to "
                "calibrate (uvsim calibrate, or --retune)."))
+    for r in backward:
+        if not r["kept"]:
+            msg += (f" {r['effect']}:{r['variant']}, chosen first, was dropped: beside the later effect it is "
+                    f"not needed ({r['why']}).")
     verd = verdict(val_cur["per_entry"], names, concentration(sel.meas_va, ol_after, val), AT_NOISE,
                    base_model_off=base_rep is not None)
     if verd["status"] in ("partly explained", "not explained"):
@@ -286,6 +299,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         "message": msg,
         "retuned": {n: {"value": values.get(n), "before": veh.parameters()[n]} for n in sel.retune},
         "steps": steps,
+        "backward": [{k: v for k, v in r.items()} for r in backward],
         "rmse_before": pooled(ol_before),
         "rmse_after": pooled(ol_after),
         "validation_cost_per_entry": {"given": val_given["per_entry"], "baseline": steps[0]["before_cost_per_entry"]

@@ -10,6 +10,8 @@
   winning effect, a richer one replaces the winner only when significantly better on
   validation, and a simpler one when its validation cost is within MIN_RELATIVE of the
   winner's.
+* :func:`still_needed` -- backward elimination: with two effects in, the earlier one is
+  judged again on top of a model without it, and dropped when refused.
 * :func:`alternative_challenger` -- a variant that is an alternative to the winner with as
   many parameters (a thrust lag that starts at rest rather than at the command) is fitted
   too, and the lower open-loop validation cost wins (the runs' starts are what differ).
@@ -22,8 +24,10 @@ from __future__ import annotations
 import numpy as np
 from scipy.stats import chi2
 
-from uvsim.diagnosis.candidates import inertia_start, search_bound_hits
+from uvsim.diagnosis.candidates import BASE_MODEL, inertia_start, search_bound_hits
+from uvsim.errors import UvsimError
 from uvsim.fitting.compare import bootstrap_improvement
+from uvsim.fitting.guard import compare_open_loop
 
 #: One-sided confidence level of "significantly better" (block bootstrap), used to compare
 #: variants; the acceptance of an effect uses VAL_LEVEL together with the Wald test.
@@ -143,6 +147,50 @@ def open_loop_evidence(cmp) -> str | None:
     return (f"significant in the free simulation of the validation runs: open-loop error {parts} (better in "
             f">= {100 * OPEN_LOOP_LEVEL:.0f} % of resamples), windowed validation cost -{100 * cmp['relative']:.1f} % "
             f"(better in {100 * cmp['p_better']:.1f} % of resamples), Wald p = {w['p']:.1g} in training; {g['why']}")
+
+
+def still_needed(sel, accepted: list, values: dict, val_cur: dict, joint) -> tuple[list, dict, dict, object, list]:
+    """Backward elimination (the second half of stepwise selection, Efroymson 1960): once
+    later effects are in, each earlier effect must still earn its place.  For every accepted
+    effect but the last (judged already against the others), the model without it is
+    re-fitted (from the joint values) and the effect is judged (:func:`judge`, the same
+    rule as when it entered) as a candidate on top of that model; an effect refused there
+    is dropped.  Why: forward selection takes the best single explanation first, and a
+    flexible effect can stand in for the one still missing (IMU + depth scenario 30007: a
+    tether from a 3-D attachment point took up a foam piece's buoyancy in step 1, the piece
+    entered in step 2, and the tether stayed).  The base-model step is not re-judged.
+
+    ``accepted``: the chosen candidates in order; ``values``: the joint fit's values;
+    ``val_cur``: its validation costs (with ``open_loop``); ``joint``: its fit result.
+    Returns (accepted, values, val_cur, joint, report rows) after the drops."""
+    rows = []
+    for c in [a for a in accepted[:-1] if a.effect != BASE_MODEL]:
+        if len([a for a in accepted if a.effect != BASE_MODEL]) < 2:
+            break
+        reduced = [a for a in accepted if a is not c]
+        cur = sel.current(reduced, {k: v for k, v in values.items() if k not in c.free})
+        veh = cur["vehicle"]
+        sp = sel.space(veh, cur["free"], cur["bounds"], values, cur["values"])
+        try:
+            res = sel.fit_train(veh, sp, f"the model without {c.label} (is it still needed?)")
+        except (UvsimError, np.linalg.LinAlgError) as exc:
+            rows.append({"effect": c.effect, "variant": c.variant, "kept": True,
+                         "why": f"the model without it could not be fitted ({exc}); kept"})
+            continue
+        vals = {**cur["values"], **res.values}
+        vc = sel.val_cost(veh, vals)
+        vc["open_loop"] = sel.open_loop_blocks(veh, vals)
+        cmp = bootstrap_improvement(vc["windows"], val_cur["windows"], level=LEVEL)
+        cmp["wald"] = wald(joint, c)
+        cmp["guard"] = compare_open_loop(vc["open_loop"], val_cur["open_loop"])
+        row = {"candidate": c, "problem": None, "compare": cmp, "values": {n: values[n] for n in c.free},
+               "at_bounds": [n for n in joint.at_bounds if n in c.free]}
+        ok, why = judge(row, vc)
+        rows.append({"effect": c.effect, "variant": c.variant, "kept": bool(ok), "why": why, "compare": cmp,
+                     "validation_cost_per_entry_without": vc["per_entry"]})
+        if not ok:
+            accepted, values, val_cur, joint = reduced, vals, vc, res
+    return accepted, values, val_cur, joint, rows
 
 
 def clearly_better(worse_windows, better_windows) -> bool:

@@ -15,7 +15,8 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from uvsim.checkpoint import fingerprint
-from uvsim.diagnosis.candidates import Candidate, catalogue, coupled_candidate, coupling_terms, observability
+from uvsim.diagnosis.candidates import (Candidate, catalogue, coupled_candidate, coupling_terms, mirror_start,
+                                        observability)
 from uvsim.diagnosis.decision import LEVEL, judge, wald
 from uvsim.fitting.guard import block_costs, compare_open_loop, start_aligned
 from uvsim.errors import CalibrationError, UvsimError, VehicleError
@@ -331,10 +332,18 @@ class Selector:
             rows.append({"effect": c.effect, "variant": c.variant, "screening_reduction": s["reduction"] if s else None,
                          "fitted": False})
         fitted = []
+        no_velocity = not any(m.have[:3].any() for m in self.motions if m is not None)
+        if ee_info.get("available") and no_velocity:
+            # the rotational equation error sees a ballast's moments w r only: its mirror (-w, -r)
+            # has the same moments and the opposite vertical force, which only the simulator's
+            # depth can tell apart (IMU + depth scenario 30007: a foam float fitted as a weight
+            # at the mirrored point, open-loop depth 269 -> 479 mm); both starts are fitted
+            choice = [(c, ({**s, "mirror": True} if s and mirror_start(c, s.get("values") or {}) else s), red)
+                      for c, s, red in choice]
         if ee_info.get("available"):
             lead = choice[0][2] if choice else 0.0
             picked = [x for x in choice if x[2] >= max(SCREEN_SHARE * lead, SCREEN_FLOOR)][: max(top, 1)]
-            if not any(m.have[:3].any() for m in self.motions if m is not None):
+            if no_velocity:
                 # no linear velocities in the log (IMU + depth): the equation error has only the
                 # rotational DOFs and cannot rank effects that act mainly as forces, so the
                 # simplest variant of each of them that can exert a moment is fitted through the
@@ -395,6 +404,8 @@ class Selector:
             starts = [{**values_cur, **c.start, **s["values"]}]
             if s.get("multistart") and len(catalogue) > 1:
                 starts += catalogue  # a tether: anchors in four directions beside the screening start
+            if s.get("mirror"):
+                starts.append({**starts[0], **mirror_start(c, starts[0])})
         else:
             starts = catalogue
         free = list(cur["free"]) + c.free

@@ -452,7 +452,13 @@ def _solve(probs, ev, z0, nus0, *, max_iter, ftol, xtol, progress, state=None, o
         evals += 1
         rho = (cost - c_new) / pred if pred > 0 else -1.0
         if np.isfinite(c_new) and rho > 0:
-            step_small = np.linalg.norm(dz) <= xtol * (np.linalg.norm(z) + xtol)
+            # the step of the parameters; with none free (node states and biases alone, e.g. a
+            # validation cost), of the nuisance: an empty dz would end every such fit after one step
+            if z.size:
+                step_small = np.linalg.norm(dz) <= xtol * (np.linalg.norm(z) + xtol)
+            else:
+                step_small = (np.sqrt(sum(float(d @ d) for d in dnus))
+                              <= xtol * (np.sqrt(sum(float(n @ n) for n in nus)) + xtol))
             # scipy.optimize.least_squares' ftol test: the step lowered the cost by less than ftol of
             # it and the linearization predicted that well (rho > 1/4)
             stalled = cost - c_new < ftol * cost and rho > 0.25
