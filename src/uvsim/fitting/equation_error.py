@@ -85,6 +85,11 @@ class Motion:
         self.sub = np.arange(0, self.t.size, k)
         w = int(round(WINDOW_S / (k * dt))) | 1
         self.win_sub = max(w, POLYORDER + 2 + (POLYORDER + 1) % 2)
+        # the evaluation grid's pieces, taken once (every evaluation of every candidate reads them)
+        self.dt_sub = float(np.median(np.diff(self.t[self.sub])))
+        self.y_sub, self.U_sub, self.nud_sub = self.y[self.sub], self.U[self.sub], self.nud[self.sub]
+        self.V_sub = None if self.V is None else self.V[self.sub]
+        self.valid_sub = self.valid[self.sub]
 
 
 #: Model rows (parameter sets x evaluation samples) per batched equation-error evaluation.
@@ -222,7 +227,9 @@ class EquationError:
     def forces(self, Z: np.ndarray) -> list:
         """Per run, ``tau_res`` (P, n_eval, 6) in N / N m on the run's evaluation grid
         (:data:`EVAL_RATE_HZ`), NaN for DOFs the log cannot give and for the filter's end
-        segments.  Runs of one input kind share one ``rhs`` call."""
+        segments.  Runs of one input kind share one ``rhs`` call, and runs of one length,
+        window and step share each smoothing call (each run is filtered along its own time
+        axis, so the result is that of one call per run)."""
         Z = np.atleast_2d(Z)
         P = Z.shape[0]
         out: list = [None] * len(self.motions)
@@ -234,29 +241,31 @@ class EquationError:
                 ms = [self.motions[i] for i in idx]
                 N = sum(m.sub.size for m in ms)
                 model = Model(self.vehicle, self.space.overrides(Z, N), n=P * N, input_kind=kind)
-                Yp = np.tile(np.concatenate([m.y[m.sub] for m in ms]), (P, 1))
+                Yp = np.tile(np.concatenate([m.y_sub for m in ms]), (P, 1))
                 if model.n_y > 13:  # term states per run and parameter set, stacked like Yp
                     xs = self._term_states(Z, ms, kind)
                     xs = np.concatenate([x[:, m.sub] for x, m in zip(xs, ms)], axis=1)
                     Yp = np.concatenate([Yp, xs.reshape(P * N, -1)], 1)
-                Up = np.tile(np.concatenate([m.U[m.sub] for m in ms]), (P, 1))
+                Up = np.tile(np.concatenate([m.U_sub for m in ms]), (P, 1))
                 Vp = None
                 if any(m.V is not None for m in ms):
-                    Vp = np.tile(np.concatenate([m.V[m.sub] if m.V is not None else np.full(m.sub.size, np.nan)
+                    Vp = np.tile(np.concatenate([m.V_sub if m.V is not None else np.full(m.sub.size, np.nan)
                                                  for m in ms]), P)
                 acc = model.rhs(0.0, Yp, Up, Vp)[:, 7:13].reshape(P, N, 6)
-                a = 0
-                for i, m in zip(idx, ms):
-                    n = m.sub.size
-                    ac = acc[:, a:a + n]
-                    a += n
-                    dt = float(np.median(np.diff(m.t[m.sub])))
+                starts = np.cumsum([0] + [m.sub.size for m in ms])
+                buckets: dict = {}
+                for j, m in enumerate(ms):
+                    buckets.setdefault((m.sub.size, m.win_sub, m.dt_sub), []).append(j)
+                for (n, win, dt), js in buckets.items():
+                    ac = np.stack([acc[:, starts[j]:starts[j] + n] for j in js], axis=1)  # (P, k, n, 6)
                     for _ in range(2):  # the ends are not used, so no polynomial fit there ("nearest")
-                        ac = _sg(ac, m.win_sub, dt=dt, mode="nearest")
-                    res = (m.nud[m.sub][None] - ac) @ self.M0.T
-                    res[:, :, ~m.have] = np.nan
-                    res[:, ~m.valid[m.sub]] = np.nan
-                    out[i] = res
+                        ac = _sg(ac, win, dt=dt, mode="nearest")
+                    for jj, j in enumerate(js):
+                        m = ms[j]
+                        res = (m.nud_sub[None] - ac[:, jj]) @ self.M0.T
+                        res[:, :, ~m.have] = np.nan
+                        res[:, ~m.valid_sub] = np.nan
+                        out[idx[j]] = res
         return out
 
     def residuals(self, Z: np.ndarray) -> np.ndarray:
@@ -275,7 +284,7 @@ class EquationError:
     def _residuals(self, Z: np.ndarray) -> np.ndarray:
         parts = []
         for m, r in zip(self.motions, self.forces(Z)):
-            sel = m.valid[m.sub][:, None] & m.have[None, :]
+            sel = m.valid_sub[:, None] & m.have[None, :]
             parts.append((r / self.scale)[:, sel])
         v = np.concatenate(parts, axis=1)
         return np.where(np.isfinite(v), v, 30.0)
