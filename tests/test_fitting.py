@@ -289,3 +289,32 @@ def test_a_nuisance_only_fit_iterates_until_its_nodes_converge(surge_yaw_runs):
     # near the converged cost (one iteration left it 36 % above: 9.9e5 against 7.2e5)
     again = solve(prob, np.zeros(0), [n.copy() for n in res["nus"]], max_iter=60, ftol=1e-10)
     assert again["cost"] <= res["cost"] <= 1.02 * again["cost"]
+
+
+def test_node_jacobian_along_unread_position_axes_is_the_shifted_simulation(surge_yaw_runs):
+    """Where no term reads the position, a node moved along an axis moves its window's
+    trajectory by as much: the linearization takes that shift instead of a simulation and
+    gives the finite-difference Jacobian (to rounding).  A term that reads the position (a
+    tether's line, the floor's height) keeps its axes simulated."""
+    from uvsim.fitting.solver import linearize
+
+    v = uvsim.load_vehicle("bluerov2_heavy")
+    truth = v.parameters()
+    runs = surge_yaw_runs[:3]
+    space = make_space(truth, ["X_uu", "N_rr"], start={"X_uu": truth["X_uu"] * 1.2, "N_rr": truth["N_rr"] * 0.8})
+    prob = WindowedProblem(v, runs, [measurements_for(r, v) for r in runs], space, 2.0)
+    assert prob.shift_axes == (0, 1, 2)
+    rng = np.random.default_rng(0)
+    nus = [n + 1e-3 * rng.standard_normal(n.size) for n in prob.zero_nuisance()]
+    fast = linearize(prob, space.z0, nus)
+    prob.shift_axes = ()
+    full = linearize(prob, space.z0, nus)
+    for a, b in zip(fast, full):
+        for name in ("A", "B", "D", "gz", "gn"):
+            x, y = getattr(a, name), getattr(b, name)
+            assert np.max(np.abs(x - y)) <= 1e-8 * np.max(np.abs(y)), name
+    tethered = v.with_effects([{"type": "tether", "anchor_n": -5.0, "tension": 5.0}])
+    floor = v.with_effects([{"type": "bottom_effect", "floor_d": 3.0, "damping": -20.0}])
+    for veh, axes in ((tethered, ()), (floor, (0, 1))):
+        assert WindowedProblem(veh, runs[:1], [measurements_for(runs[0], veh)], make_space(veh.parameters(), []),
+                               2.0).shift_axes == axes

@@ -33,6 +33,7 @@ from uvsim.rigid_body import cross
 @register("ballast")
 class Ballast(Effect):
     """Point load ``ballast_weight`` (N, + down) at ``ballast_x/y/z`` (m, body)."""
+    position_axes = ()  # reads no position (ForceTerm.position_axes)
 
     FIELDS = (
         Field("weight", "N", -1000.0, 1000.0, None, "the extra weight (+) or buoyancy (-) of the point load"),

@@ -33,6 +33,7 @@ from uvsim.forces import register
 @register("bottom_effect")
 class BottomEffect(Effect):
     """Extra vertical drag ``Z_b exp(-h / L) |w_d| w_d`` near a floor at depth ``floor_d``."""
+    position_axes = (2,)  # the height above the floor (ForceTerm.position_axes)
 
     FIELDS = (
         Field("floor_d", "m", -1.0e4, 1.0e4, None, "the NED depth of the floor"),

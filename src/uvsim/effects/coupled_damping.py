@@ -78,6 +78,7 @@ class CoupledDampingEffect(Effect):
         effects:
           - {type: coupled_damping, K_vv: -1.2, M_u: 0.3}
     """
+    position_axes = ()  # reads no position (ForceTerm.position_axes)
 
     def __init__(self, **kwargs):
         self.values = {}

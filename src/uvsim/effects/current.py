@@ -36,6 +36,7 @@ MAX_CURRENT = 5.0
 @register("current")
 class Current(Effect):
     """Constant NED water current ``v_c = [current_n, current_e, current_d]`` (m/s)."""
+    position_axes = ()  # reads no position (ForceTerm.position_axes)
 
     FIELDS = (
         Field("n", "m/s", -MAX_CURRENT, MAX_CURRENT, 0.0, "the north component of the water current"),

@@ -33,6 +33,7 @@ _QUAD = ("X_uu", "Y_vv", "Z_ww")
 @register("drag_centre")
 class DragCentre(Effect):
     """Translational damping acting at ``drag_centre_x/y/z`` (m, body) (module docstring)."""
+    position_axes = ()  # reads no position (ForceTerm.position_axes)
 
     FIELDS = (
         Field("x", "m", -2.0, 2.0, 0.0, "the body x position of the centre of the translational drag"),

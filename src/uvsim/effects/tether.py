@@ -61,6 +61,7 @@ from uvsim.rigid_body import cross
 @register("tether")
 class Tether(Effect):
     """Umbilical pull (tension + stiffness beyond slack), cross-flow drag and lumped drag."""
+    position_axes = (0, 1, 2)  # the line from the anchor (ForceTerm.position_axes)
 
     FIELDS = (
         Field("attach_x", "m", -5.0, 5.0, 0.0, "the body x position of the tether attachment"),

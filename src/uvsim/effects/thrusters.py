@@ -64,6 +64,7 @@ from uvsim.forces import register
 
 class _ActuatorEffect(Effect):
     """An effect bound to the vehicle's actuators (see module docstring)."""
+    position_axes = ()  # reads no position (ForceTerm.position_axes)
 
     _act = None
     _index = None

@@ -298,6 +298,10 @@ class WindowedProblem:
         self.gyro_bias_sd = gyro_bias_sd(vehicle)
         self.att_bias_runs = np.array([attitude_bias and m.has_filter_attitude for m in self.meas])
         self.accel = any(m.needs_acceleration for m in self.meas)
+        #: NED position axes no term reads (ForceTerm.position_axes): a node moved along one
+        #: moves its window's trajectory by as much and changes nothing else
+        read = {a for t in vehicle.terms for a in getattr(t, "position_axes", (0, 1, 2))}
+        self.shift_axes = tuple(a for a in range(3) if a not in read)
         self.initial_velocity = initial_velocity
         z_ref = space.z0 if z_ref is None else np.asarray(z_ref, float)
         if yref is not None:  # reference trajectories simulated for these runs beforehand (whole_runs)

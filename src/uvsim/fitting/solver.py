@@ -95,6 +95,7 @@ def linearize(prob: WindowedProblem, z: np.ndarray, nus: list, *, jacobian: bool
     D0, biases = prob.assemble(nus)
     Zs = [z]
     Ds = [D0[0]]
+    shifted = {}  # parameter set -> position axis along which the model is translation invariant
     if jacobian:
         hz = FD_STEP_Z * np.maximum(1.0, np.abs(z))
         hi = prob.space.z_upper
@@ -108,11 +109,31 @@ def linearize(prob: WindowedProblem, z: np.ndarray, nus: list, *, jacobian: bool
         for c in comps:
             d = D0[0].copy()
             d[:, c] += FD_STEP_NODE
+            if c in prob.shift_axes:
+                shifted[len(Zs)] = int(c)
             Zs.append(z)
             Ds.append(d)
     Z = np.array(Zs)
     D = np.array(Ds)
-    Y, A = prob.simulate(Z, D)
+    if shifted:
+        # a node moved along an axis no term reads moves the window's whole trajectory by the
+        # same amount (position is the integral of the velocity, and nothing else sees it):
+        # the base simulation shifted, with no simulation of its own (exact, not a difference)
+        sim = [i for i in range(Z.shape[0]) if i not in shifted]
+        Ys, As = prob.simulate(Z[sim], D[sim])
+        Y = np.empty((Z.shape[0],) + Ys.shape[1:])
+        Y[sim] = Ys
+        A = None
+        if As is not None:
+            A = np.empty((Z.shape[0],) + As.shape[1:])
+            A[sim] = As
+        for i, c in shifted.items():
+            Y[i] = Y[0]
+            Y[i, ..., c] += FD_STEP_NODE
+            if A is not None:
+                A[i] = A[0]
+    else:
+        Y, A = prob.simulate(Z, D)
     blocks = []
     for r in range(len(prob.runs)):
         b = biases[r]
@@ -415,7 +436,9 @@ def _solve(probs, ev, z0, nus0, *, max_iter, ftol, xtol, progress, state=None, o
     t0 = time.perf_counter()
     space = probs[0].space
     lo, hi = space.z_lower, space.z_upper
-    n_sets = 1 + space.p + max(int(p.free.any(axis=0).sum()) for p in probs)
+    # simulated parameter sets per linearization (a node moved along a shift axis needs none)
+    n_sets = 1 + space.p + max(sum(1 for c in np.flatnonzero(p.free.any(axis=0)) if c not in p.shift_axes)
+                               for p in probs)
     if state is None:
         z = np.clip(np.asarray(z0, float), lo, hi)
         if nus0 is None:

@@ -94,6 +94,7 @@ class Actuators(ForceTerm):
     curves : list of n thrust curves (objects with ``thrust(pwm)``) or None.
     names : thruster names.
     """
+    position_axes = ()  # reads no position (ForceTerm.position_axes)
 
     def __init__(self, matrix=None, curves=None, names=None, specs=None, *, positions=None, directions=None,
                  gains=None, reverse=None, force_gain=None, force_reverse=None):

@@ -83,6 +83,12 @@ class ForceTerm:
     n_states: int = 0
     #: whether ``mass_properties`` returns non-zero changes
     changes_mass: bool = False
+    #: NED position axes (0 north, 1 east, 2 down) that the term's forces or state
+    #: derivatives read from ``ctx.pos``.  Along the others a shifted start shifts the whole
+    #: trajectory and nothing else, which the fits use for their node Jacobians
+    #: (:func:`uvsim.fitting.solver.linearize`).  A plug-in that does not say is taken to
+    #: read all three.
+    position_axes: tuple = (0, 1, 2)
 
     def parameters(self) -> dict[str, float]:
         """Named scalar parameters with their current values."""

@@ -55,6 +55,7 @@ def _coeffs(values, names, field):
 @register("diagonal")
 class DiagonalDamping(ForceTerm):
     """Diagonal linear + quadratic damping (seed 000 eq. 7-9), paper sign."""
+    position_axes = ()  # reads no position (ForceTerm.position_axes)
 
     def __init__(self, linear=None, quadratic=None):
         self.linear = _coeffs(linear or {}, LINEAR_NAMES, "linear")
@@ -92,6 +93,7 @@ class CoupledDamping(ForceTerm):
     """Full 6x6 linear and quadratic damping matrices (paper sign, row = force DOF,
     column = velocity DOF).  Named parameters ``D_L[i,j]`` / ``D_Q[i,j]`` for the
     non-zero entries, so a calibration can fit selected off-diagonal terms."""
+    position_axes = ()  # reads no position (ForceTerm.position_axes)
 
     def __init__(self, linear=None, quadratic=None):
         self.DL = self._matrix(linear, "linear")

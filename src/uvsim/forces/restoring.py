@@ -23,6 +23,7 @@ class Restoring(ForceTerm):
     """Weight and buoyancy.  Reads ``B``, ``x_b``, ``y_b``, ``z_b`` from the model
     parameters and the current weight / centre of gravity from the context (they may
     change with mass-changing actuators)."""
+    position_axes = ()  # reads no position (ForceTerm.position_axes)
 
     def prepare(self, params, n):
         if all(np.ndim(params[k]) == 0 for k in ("B", "x_b", "y_b", "z_b", "m", "x_g", "y_g", "z_g")):
