@@ -161,22 +161,25 @@ def linearize(prob: WindowedProblem, z: np.ndarray, nus: list, *, jacobian: bool
             Jn[np.arange(m_meas), w_local * k + j] = dm
         # defect rows: d_w = node_w (-) end_{w-1}
         if nw > 1:
+            # all free components at once: (k perturbed components, nw - 1 defects, k entries)
             w0 = prob.lay.first[r]
-            ends0 = prob.end_states(Y[:1], r)[0, :-1, :13]
+            sig = prob.defect_sigma[free]
+            ends = prob.end_states(Y, r)[:, :-1, :13]
+            ends0 = ends[0]
             node0 = apply_tangent(prob.x_ref[w0 + 1:w0 + nw], D0[0, w0 + 1:w0 + nw])
-            d0 = tangent_difference(node0, ends0)[:, free] / prob.defect_sigma[free]
-            for j, c in enumerate(free):
-                ci = int(np.flatnonzero(comps == c)[0])
-                ends_p = prob.end_states(Y[1 + p + ci:2 + p + ci], r)[0, :-1, :13]
-                d_end = (tangent_difference(node0, ends_p)[:, free] / prob.defect_sigma[free] - d0) / FD_STEP_NODE
-                dd = D0[0, w0 + 1:w0 + nw].copy()
-                dd[:, c] += FD_STEP_NODE
-                node_p = apply_tangent(prob.x_ref[w0 + 1:w0 + nw], dd)
-                d_node = (tangent_difference(node_p, ends0)[:, free] / prob.defect_sigma[free] - d0) / FD_STEP_NODE
-                for w in range(1, nw):
-                    rows = m_meas + (w - 1) * k + np.arange(k)
-                    Jn[rows, (w - 1) * k + j] = d_end[w - 1]
-                    Jn[rows, w * k + j] = d_node[w - 1]
+            d0 = tangent_difference(node0, ends0)[:, free] / sig
+            ends_p = ends[[1 + p + int(np.flatnonzero(comps == c)[0]) for c in free]]
+            d_end = (tangent_difference(node0[None], ends_p)[..., free] / sig - d0) / FD_STEP_NODE
+            dd = np.repeat(D0[0, w0 + 1:w0 + nw][None], k, axis=0)
+            dd[np.arange(k), :, free] += FD_STEP_NODE
+            node_p = apply_tangent(prob.x_ref[w0 + 1:w0 + nw][None], dd)
+            d_node = (tangent_difference(node_p, ends0[None])[..., free] / sig - d0) / FD_STEP_NODE
+            # defect w (1..nw-1), entry i: d/d node (w-1) comp j (the end) and d/d node w comp j
+            wv = np.arange(nw - 1)[:, None, None]
+            rows = m_meas + wv * k + np.arange(k)[None, :, None]
+            cols = wv * k + np.arange(k)[None, None, :]
+            Jn[rows, cols] = d_end.transpose(1, 2, 0)
+            Jn[rows, cols + k] = d_node.transpose(1, 2, 0)
         # prior rows (diagonal)
         w0 = prob.lay.first[r]
         sig = prob.prior_sigma[w0:w0 + nw][:, free].ravel()
