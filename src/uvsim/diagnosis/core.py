@@ -303,7 +303,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         "message": msg,
         "retuned": {n: {"value": values.get(n), "before": veh.parameters()[n]} for n in sel.retune},
         "steps": steps,
-        "backward": [{k: v for k, v in r.items()} for r in backward],
+        "backward": backward,
         "rmse_before": pooled(ol_before),
         "rmse_after": pooled(ol_after),
         "validation_cost_per_entry": {"given": val_given["per_entry"], "baseline": steps[0]["before_cost_per_entry"]

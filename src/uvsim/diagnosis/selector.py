@@ -108,8 +108,8 @@ class Selector:
         """``fit`` with the store: a fit already made (same model, free parameters, start and
         fixed values, runs, warm start) is taken from it.  The windows start at the current
         model's node states (:meth:`set_warm`): a candidate differs from the current model by
-        one effect, so its nodes are near (benchmark timing dataset: 2-3 times fewer simulated
-        parameter sets per candidate fit, docs/performance.md)."""
+        one effect, so its nodes are near (the timing dataset's thrust-scale fit: 134 -> 23
+        simulated parameter sets; fits of many parameters gain little, docs/performance.md)."""
         warm = self.warm["validation" if kind == "validation" else "train"]
         key = fingerprint({"kind": kind, "effects": [e.to_dict() for e in vehicle.effects],
                            "free": [(p.name, p.start, p.lower, p.upper) for p in space.free],

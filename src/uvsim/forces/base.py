@@ -20,7 +20,11 @@ e.g. a variable-buoyancy tank; the model then rebuilds ``M_RB`` each stage.  A t
 that adds a constant mass (a ballast piece) says so in ``fixed_mass_properties``; the
 model folds it into ``M_RB`` once.
 Terms declare the named scalar parameters they read in ``parameters()`` so that a
-calibration can vary them.
+calibration can vary them, and the NED position axes they read from ``ctx.pos`` in
+``position_axes`` (a tether's line, the floor's height; most terms read none): the fits
+take a node moved along an unread axis as the same trajectory shifted, with no
+simulation (:func:`uvsim.fitting.solver.linearize`).  A term that does not say is taken
+to read all three, which is always correct, only slower.
 """
 from __future__ import annotations
 
