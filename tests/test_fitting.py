@@ -318,31 +318,3 @@ def test_node_jacobian_along_unread_position_axes_is_the_shifted_simulation(surg
     for veh, axes in ((tethered, ()), (floor, (0, 1))):
         assert WindowedProblem(veh, runs[:1], [measurements_for(runs[0], veh)], make_space(veh.parameters(), []),
                                2.0).shift_axes == axes
-
-
-def test_a_fit_started_at_an_earlier_fits_node_states(surge_yaw_runs):
-    """``fit(warm=node_states(earlier))``: a fit of a model one parameter richer starts its
-    windows where the earlier fit left them and reaches its solution with fewer simulations;
-    nodes that absorbed a far worse model's errors are refused as a start (the reference
-    states cost less there)."""
-    from uvsim.fitting.fitter import node_states, warm_nuisance
-    from uvsim.fitting.parameters import ParameterSpace
-
-    v = uvsim.load_vehicle("bluerov2_heavy")
-    p = v.parameters()
-    meas = [measurements_for(r, v) for r in surge_yaw_runs]
-    first = fit(v, surge_yaw_runs, make_space(p, ["X_uu"], start={"X_uu": 1.2 * p["X_uu"]}), meas=meas,
-                horizons=(2.0,), ftol=1e-4)
-    space = make_space(p, ["X_uu", "N_rr"], start={"X_uu": first.values["X_uu"], "N_rr": 0.8 * p["N_rr"]})
-    cold = fit(v, surge_yaw_runs, space, meas=meas, horizons=(2.0,), ftol=1e-4)
-    warm = fit(v, surge_yaw_runs, space, meas=meas, horizons=(2.0,), ftol=1e-4, warm=node_states(first))
-    assert warm.stages[0]["simulated_parameter_sets"] < cold.stages[0]["simulated_parameter_sets"]
-    assert warm.cost <= cold.cost * (1 + 1e-3)
-    for k in ("X_uu", "N_rr"):
-        assert warm.values[k] == pytest.approx(cold.values[k], rel=1e-2)
-    # nodes of a model with half the drag are a worse start than the reference for the truth
-    bad = fit(v, surge_yaw_runs, ParameterSpace([], p, {"X_uu": 0.3 * p["X_uu"], "N_rr": 0.3 * p["N_rr"]}),
-              meas=meas, horizons=(2.0,), ftol=1e-4)
-    probs = cold.problems
-    assert warm_nuisance(probs, node_states(bad), space.z0) is None
-    assert warm_nuisance(probs, node_states(first), space.z0) is not None

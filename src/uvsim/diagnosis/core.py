@@ -174,8 +174,6 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         sp = sel.space(veh, sel.retune, sel.retune_bounds, start, {})
         base_fit = sel.fit_train(veh, sp, "the baseline (re-tuned base coefficients)")
         values = dict(base_fit.values)
-    else:
-        base_fit = sel.fit_nodes(veh, {})
     say("validation cost of the baseline")
     val_given = sel.val_cost(veh, {})
     val_given["open_loop"] = sel.open_loop_blocks(veh, {})
@@ -183,7 +181,6 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     if values:
         val_cur = sel.val_cost(veh, values)
         val_cur["open_loop"] = sel.open_loop_blocks(veh, values)
-    sel.set_warm(base_fit, val_cur)  # the fits that follow start their windows at the baseline's nodes
     accepted: list = []
     accepted_values: list = []
     steps = []
@@ -235,7 +232,6 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         steps.append(step_rep)
         accepted_values.append(joint)
         val_cur = val_new
-        sel.set_warm(joint, val_cur)
 
     # backward elimination: each earlier effect must still earn its place beside the later ones
     backward: list = []

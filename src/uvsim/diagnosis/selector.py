@@ -21,7 +21,6 @@ from uvsim.diagnosis.decision import LEVEL, judge, wald
 from uvsim.fitting.guard import block_costs, compare_open_loop, start_aligned
 from uvsim.errors import CalibrationError, UvsimError, VehicleError
 from uvsim.fitting import fit
-from uvsim.fitting.fitter import node_states
 from uvsim.fitting.compare import bootstrap_improvement
 from uvsim.fitting.equation_error import EquationError, measured_motion
 from uvsim.fitting.evaluate import open_loop
@@ -84,9 +83,6 @@ class Selector:
         self.not_observable: list = []
         self.store = {} if store is None else store
         self.on_fit = on_fit
-        #: the current model's node states on the training and the validation runs ((fit key,
-        #: fitter.node_states) or None): every fit starts its windows there (set_warm)
-        self.warm: dict = {"train": None, "validation": None}
 
     # ---------------------------------------------------------------- models
     def vehicle_for(self, accepted: Sequence[Candidate], extra: Candidate | None = None):
@@ -106,38 +102,19 @@ class Selector:
 
     def _fit(self, kind: str, vehicle, space: ParameterSpace, runs, meas, max_iter: int, label: str):
         """``fit`` with the store: a fit already made (same model, free parameters, start and
-        fixed values, runs, warm start) is taken from it.  The windows start at the current
-        model's node states (:meth:`set_warm`): a candidate differs from the current model by
-        one effect, so its nodes are near (the timing dataset's thrust-scale fit: 134 -> 23
-        simulated parameter sets; fits of many parameters gain little, docs/performance.md)."""
-        warm = self.warm["validation" if kind == "validation" else "train"]
+        fixed values, runs) is taken from it."""
         key = fingerprint({"kind": kind, "effects": [e.to_dict() for e in vehicle.effects],
                            "free": [(p.name, p.start, p.lower, p.upper) for p in space.free],
-                           "fixed": space.fixed, "runs": [r.name for r in runs], "max_iter": max_iter,
-                           "warm": None if warm is None else warm[0]})
+                           "fixed": space.fixed, "runs": [r.name for r in runs], "max_iter": max_iter})
         if key in self.store:
             self.say(f"{label}: taken from the checkpoint")
-            res = self.store[key]
-        else:
-            res = fit(vehicle, runs, space, meas=meas, horizons=(self.horizon,), max_iter=max_iter,
-                      workers=self.workers, ftol=FTOL, warm=None if warm is None else warm[1])
-            self.store[key] = res
-            if self.on_fit is not None:
-                self.on_fit(self.store)
-        res.key = key
+            return self.store[key]
+        res = fit(vehicle, runs, space, meas=meas, horizons=(self.horizon,), max_iter=max_iter,
+                  workers=self.workers, ftol=FTOL)
+        self.store[key] = res
+        if self.on_fit is not None:
+            self.on_fit(self.store)
         return res
-
-    def set_warm(self, train_fit, val: Mapping) -> None:
-        """The current model changed (a baseline, an accepted effect): its training fit and
-        its validation costs (:meth:`val_cost`) start the windows of the fits that follow."""
-        self.warm = {"train": (train_fit.key, node_states(train_fit)), "validation": val["warm"]}
-
-    def fit_nodes(self, vehicle, values: Mapping):
-        """Node states of a model with nothing free on the training runs (the start of the
-        first candidate fits when no coefficient is re-tuned)."""
-        sp = ParameterSpace([], vehicle.parameters(), dict(values))
-        return self._fit("train-nodes", vehicle, sp, self.train, self.meas_tr, self.max_iter,
-                         "node states of the given model")
 
     def fit_train(self, vehicle, space, label: str, max_iter: int | None = None):
         self.fits += 1
@@ -151,7 +128,7 @@ class Selector:
         res = self._fit("validation", vehicle, sp, self.val, self.meas_va, self.max_iter, "validation cost")
         w = np.concatenate(res.window_costs)
         return {"windows": w, "cost": float(w.sum()), "n": int(res.n_residuals),
-                "per_entry": float(w.sum() / max(res.n_residuals, 1)), "warm": (res.key, node_states(res))}
+                "per_entry": float(w.sum() / max(res.n_residuals, 1))}
 
     def open_loop_blocks(self, vehicle, values: Mapping, *, stability: bool = True) -> dict:
         """Free simulations of the validation runs from their logged starts

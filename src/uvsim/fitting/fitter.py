@@ -22,17 +22,15 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Mapping, Sequence
+from typing import Sequence
 
 import numpy as np
 
-from uvsim.blas import single_thread
 from uvsim.errors import CalibrationError
-from uvsim.fitting.objective import (WindowedProblem, apply_tangent, continuity_factors, tangent_difference,
-                                     whole_runs)
+from uvsim.fitting.objective import WindowedProblem, continuity_factors, whole_runs
 from uvsim.fitting.parameters import ParameterSpace
 from uvsim.fitting.priors import make_prior
-from uvsim.fitting.solver import covariance, linearize, solve
+from uvsim.fitting.solver import covariance, solve
 from uvsim.measurements import measurements_for
 
 #: Relative singular value below which a direction of the free parameters counts as
@@ -74,8 +72,6 @@ class FitResult:
     data_weight: float | None = None
     #: run name -> fitted [roll, pitch] offset (rad) of its attitude filter (runs that have one)
     attitude_bias: dict = field(default_factory=dict)
-    #: the caller's name for this fit (e.g. the diagnosis store's fingerprint), or None
-    key: str | None = None
 
     def summary(self) -> dict:
         return {"values": self.values, "std": self.std, "cost": self.cost, "n_residuals": self.n_residuals,
@@ -143,7 +139,7 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
         initial_velocity: str = "zero",
         z0=None, progress=None, workers: int = 1, ftol: float = 1e-6, checkpoint=None,
         on_iteration=None, prior_mean=None, prior_sd=None, loss: str = "linear",
-        continuity: Sequence = DEFAULT_CONTINUITY, warm: dict | None = None) -> FitResult:
+        continuity: Sequence = DEFAULT_CONTINUITY) -> FitResult:
     """Fit ``space``'s free parameters of ``vehicle`` to ``runs`` (module docstring).
 
     Parameters
@@ -180,9 +176,6 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
     loss : "linear" (least squares) or "huber": the measurement residuals beyond
         :data:`uvsim.fitting.objective.HUBER_SCALE` noise sigmas cost linearly (outliers,
         dropouts, bursts of model error; :func:`uvsim.fitting.objective.robust_residuals`).
-    warm : node states and sensor biases of an earlier fit on the same runs
-        (:func:`node_states`): the first stage starts its windows there instead of at the
-        reference states (runs whose windows differ start at the reference).
     """
     runs = list(runs)
     if not runs:
@@ -235,8 +228,7 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
                 on_iteration(si, it, c)
 
         st0 = saved["solver"] if saved is not None and si == first else None
-        nus0 = warm_nuisance(problems, warm, z) if warm and si == 0 and st0 is None else None
-        res = solve(problems, z, nus0, max_iter=max_iter, workers=workers, ftol=ftol, progress=on_it, state=st0,
+        res = solve(problems, z, max_iter=max_iter, workers=workers, ftol=ftol, progress=on_it, state=st0,
                     on_step=on_step, prior=prior)
         z = res["z"]
         stages.append({"horizon_s": H, "continuity": cont, "iterations": res["iterations"], "cost": float(res["cost"]),
@@ -282,55 +274,6 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
         out.prior_sd = {k: float(prior.sd_z[i] * sc[i]) for i, k in enumerate(space.names)}
         out.data_weight = float(res["data_weight"])
     return out
-
-
-def node_states(res: FitResult) -> dict:
-    """{run name: (window start rows (W_r,), absolute node states (W_r, 13), sensor-bias
-    vector or None)} of a finished fit, to start another fit's windows (``fit(warm=...)``)."""
-    out = {}
-    k = 0
-    for prob in res.problems:
-        for r, run in enumerate(prob.runs):
-            d, b = prob.split_nuisance(r, res.nus[k])
-            w0, nw = prob.lay.first[r], len(prob.lay.bounds[r])
-            starts = np.array([s for s, _ in prob.lay.bounds[r]])
-            out[run.name] = (starts, apply_tangent(prob.x_ref[w0:w0 + nw], d), None if b is None else b.copy())
-            k += 1
-    return out
-
-
-def warm_nuisance(problems, warm: Mapping, z: np.ndarray) -> list | None:
-    """Start nuisance vectors of ``problems`` (in their run order) from ``warm``
-    (:func:`node_states`): each run's node perturbations from its reference states to the
-    warm states (free components), its sensor biases as they were; a run with other
-    windows or biases starts at zero.  None (start at the reference states) when that start
-    costs more at ``z`` than the reference does: nodes that absorbed a poor model's errors
-    are a bad start for a much better one (an 18-coefficient re-tune took 11 iterations from
-    them against 4)."""
-    out = []
-    for prob in problems:
-        for r, run in enumerate(prob.runs):
-            nu = np.zeros(prob.nuisance_size(r))
-            w = warm.get(run.name)
-            w0, nw = prob.lay.first[r], len(prob.lay.bounds[r])
-            starts = np.array([s for s, _ in prob.lay.bounds[r]])
-            if w is not None and w[0].shape == starts.shape and np.array_equal(w[0], starts):
-                d = tangent_difference(w[1], prob.x_ref[w0:w0 + nw])[:, prob.free[r]]
-                nb = prob.bias_sd(r).size
-                bias = w[2] if w[2] is not None and w[2].size == nb else np.zeros(nb)
-                cand = np.concatenate([d.ravel(), bias])
-                if np.all(np.isfinite(cand)):
-                    nu = cand
-            out.append(nu)
-    cost_warm = cost_ref = 0.0
-    k = 0
-    with single_thread():
-        for prob in problems:
-            n = len(prob.runs)
-            cost_warm += sum(b.rss for b in linearize(prob, z, out[k:k + n], jacobian=False))
-            cost_ref += sum(b.rss for b in linearize(prob, z, prob.zero_nuisance(), jacobian=False))
-            k += n
-    return out if cost_warm < cost_ref else None
 
 
 def identifiability(info: np.ndarray, names: Sequence[str], cov: np.ndarray | None = None) -> dict:
