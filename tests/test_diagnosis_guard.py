@@ -210,6 +210,13 @@ def test_an_effect_chosen_first_is_dropped_when_the_later_one_explains_it():
                                         _joint([teth, bal], values, {"tether": 1e-12, "ballast": 1e-30}))
     assert [c.label for c in acc] == ["tether:horizontal", "ballast:xy"] and rows[0]["kept"]
     assert val is val_joint
+    # significant beside the later effect, refused by the open-loop guard alone: kept (the guard is
+    # the entry rule; benchmark seed 118's thruster lag beside a weak thruster)
+    better = _blocks(position=0.5 * blocks["groups"]["position"], attitude=blocks["groups"]["attitude"])
+    sel = _FakeSelector(w_joint * 2.0, better)
+    acc, _, _, _, rows = still_needed(sel, [teth, bal], values, val_joint,
+                                      _joint([teth, bal], values, {"tether": 1e-12, "ballast": 1e-30}))
+    assert len(acc) == 2 and rows[0]["kept"] and "entry rule" in rows[0]["why"]
 
 
 # ----------------------------------------------------------------------------- verdict
