@@ -190,7 +190,10 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     plan = ([0] if base_first else []) + list(range(1, max_effects + 1))
     if not base_first:
         exclude.add(BASE_MODEL)
-    for k in plan:
+
+    def forward(k) -> bool:
+        """One forward-selection step (screen, fit, judge, choose); True when an effect joined."""
+        nonlocal values, val_cur
         st = sel.step(accepted, values, val_cur, exclude=exclude, only=[BASE_MODEL] if k == 0 else only, top=top,
                       k_step=k, variants=STEP0_VARIANTS if k == 0 else None)
         table = []
@@ -213,11 +216,9 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         step_rep = {"step": k, "model": " + ".join(c.label for c in accepted) or "the given model",
                     "before_cost_per_entry": val_cur["per_entry"], "screening": st["screening"],
                     "screened": st["screened"], "candidates": table, "chosen": None}
+        steps.append(step_rep)
         if best is None:
-            steps.append(step_rep)
-            if k == 0:
-                continue
-            break
+            return False
         c = best["candidate"]
         accepted.append(c)
         exclude.add(c.effect)
@@ -225,22 +226,33 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         # coefficients: its fit is the new model
         joint = best["result"]
         values = dict(best["all_values"])
-        val_new = best["val"]
-        step_rep.update(chosen=c.label, after_cost_per_entry=val_new["per_entry"],
+        val_cur = best["val"]
+        step_rep.update(chosen=c.label, after_cost_per_entry=val_cur["per_entry"],
                         joint_fit={"values": joint.values, "std": joint.std, "cost": joint.cost,
                                    "at_bounds": joint.at_bounds})
-        steps.append(step_rep)
         accepted_values.append(joint)
-        val_cur = val_new
+        return True
 
-    # backward elimination: each earlier effect must still earn its place beside the later ones
+    for k in plan:
+        if not forward(k) and k != 0:
+            break
+    # stepwise selection: each earlier effect must still earn its place beside the later ones
+    # (backward elimination); when one is dropped, a forward step looks for what it stood in
+    # for (a dropped effect is not tried again, so this ends)
     backward: list = []
-    if len([c for c in accepted if c.effect != BASE_MODEL]) >= 2:
-        n_before = len(accepted)
-        accepted, values, val_cur, final_fit, backward = still_needed(sel, accepted, values, val_cur,
-                                                                      accepted_values[-1])
-        if len(accepted) < n_before:
-            accepted_values.append(final_fit)
+    k_next = plan[-1] + 1
+    for _ in range(max_effects):
+        if len([c for c in accepted if c.effect != BASE_MODEL]) < 2:
+            break
+        accepted, values, val_cur, final_fit, rows = still_needed(sel, accepted, values, val_cur,
+                                                                  accepted_values[-1])
+        backward += rows
+        if all(r["kept"] for r in rows):
+            break
+        accepted_values.append(final_fit)
+        if not forward(k_next):
+            break
+        k_next += 1
     # result ------------------------------------------------------------------------------
     veh_after = sel.vehicle_for(accepted)
     if values:
