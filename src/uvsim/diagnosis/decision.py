@@ -11,7 +11,8 @@
   validation, and a simpler one when its validation cost is within MIN_RELATIVE of the
   winner's.
 * :func:`still_needed` -- backward elimination: with two effects in, the earlier one is
-  judged again on top of a model without it, and dropped when refused.
+  judged again on top of a model without it, and dropped when no longer significant (the
+  diagnosis then takes another forward step).
 * :func:`alternative_challenger` -- a variant that is an alternative to the winner with as
   many parameters (a thrust lag that starts at rest rather than at the command) is fitted
   too, and the lower open-loop validation cost wins (the runs' starts are what differ).
