@@ -157,12 +157,9 @@ class _FakeSelector:
         self.fitted.append(veh)
         return type("R", (), {"values": dict(sp), "at_bounds": []})()
 
-    def val_cost(self, veh, vals):
+    def validation(self, veh, vals):
         w = np.asarray(self.without_windows, float)
-        return {"windows": w, "cost": float(w.sum()), "per_entry": float(w.mean())}
-
-    def open_loop_blocks(self, veh, vals):
-        return self.without_blocks
+        return {"windows": w, "cost": float(w.sum()), "per_entry": float(w.mean()), "open_loop": self.without_blocks}
 
 
 def _joint(cands, values, p_of):

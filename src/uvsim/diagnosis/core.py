@@ -175,12 +175,8 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         base_fit = sel.fit_train(veh, sp, "the baseline (re-tuned base coefficients)")
         values = dict(base_fit.values)
     say("validation cost of the baseline")
-    val_given = sel.val_cost(veh, {})
-    val_given["open_loop"] = sel.open_loop_blocks(veh, {})
-    val_cur = val_given
-    if values:
-        val_cur = sel.val_cost(veh, values)
-        val_cur["open_loop"] = sel.open_loop_blocks(veh, values)
+    val_given = sel.validation(veh, {})
+    val_cur = sel.validation(veh, values) if values else val_given
     accepted: list = []
     accepted_values: list = []
     steps = []

@@ -79,6 +79,19 @@ def wald(res, c) -> dict:
     return {"W": W, "k": len(idx), "p": float(chi2.sf(W, len(idx)))}
 
 
+def compare(before: dict, after: dict, fit, c) -> dict:
+    """The evidence for effect ``c`` in the model ``after`` against the model ``before``
+    (each :meth:`Selector.validation <uvsim.diagnosis.selector.Selector.validation>`):
+    the block bootstrap of their validation windows, the robust Wald test of ``c`` in
+    ``fit`` (the training fit that has it), and the open-loop guard (no logged group worse,
+    :func:`uvsim.fitting.guard.compare_open_loop`) when ``before`` has open-loop blocks."""
+    cmp = bootstrap_improvement(before["windows"], after["windows"], level=LEVEL)
+    cmp["wald"] = wald(fit, c)
+    if "open_loop" in before:
+        cmp["guard"] = compare_open_loop(before["open_loop"], after["open_loop"])
+    return cmp
+
+
 def judge(row, val_cur) -> tuple[bool, str]:
     """The acceptance rule (it marks ``row["bound_rejected"]`` / ``row["guard_blocked"]`` when
     those were the reason): physical values, no parameter on the edge of its search range, an
@@ -185,11 +198,8 @@ def still_needed(sel, accepted: list, values: dict, val_cur: dict, joint) -> tup
                          "why": f"the model without it could not be fitted ({exc}); kept"})
             continue
         vals = {**cur["values"], **res.values}
-        vc = sel.val_cost(veh, vals)
-        vc["open_loop"] = sel.open_loop_blocks(veh, vals)
-        cmp = bootstrap_improvement(vc["windows"], val_cur["windows"], level=LEVEL)
-        cmp["wald"] = wald(joint, c)
-        cmp["guard"] = compare_open_loop(vc["open_loop"], val_cur["open_loop"])
+        vc = sel.validation(veh, vals)
+        cmp = compare(vc, val_cur, joint, c)
         row = {"candidate": c, "problem": None, "compare": cmp, "values": {n: values[n] for n in c.free},
                "at_bounds": [n for n in joint.at_bounds if n in c.free]}
         ok, why = judge(row, vc)

@@ -17,11 +17,10 @@ import numpy as np
 from uvsim.checkpoint import fingerprint
 from uvsim.diagnosis.candidates import (Candidate, catalogue, coupled_candidate, coupling_terms, mirror_start,
                                         observability)
-from uvsim.diagnosis.decision import LEVEL, judge, wald
-from uvsim.fitting.guard import block_costs, compare_open_loop, start_aligned
+from uvsim.diagnosis.decision import compare, judge
+from uvsim.fitting.guard import block_costs, start_aligned
 from uvsim.errors import CalibrationError, UvsimError, VehicleError
 from uvsim.fitting import fit
-from uvsim.fitting.compare import bootstrap_improvement
 from uvsim.fitting.equation_error import EquationError, measured_motion
 from uvsim.fitting.evaluate import open_loop
 from uvsim.fitting.parameters import FreeParameter, ParameterSpace, default_bounds
@@ -129,6 +128,13 @@ class Selector:
         w = np.concatenate(res.window_costs)
         return {"windows": w, "cost": float(w.sum()), "n": int(res.n_residuals),
                 "per_entry": float(w.sum() / max(res.n_residuals, 1))}
+
+    def validation(self, vehicle, values: Mapping) -> dict:
+        """A model's validation costs (:meth:`val_cost`) with its open-loop blocks
+        (:meth:`open_loop_blocks`) under ``open_loop``: what :func:`compare` reads."""
+        vc = self.val_cost(vehicle, values)
+        vc["open_loop"] = self.open_loop_blocks(vehicle, values)
+        return vc
 
     def open_loop_blocks(self, vehicle, values: Mapping, *, stability: bool = True) -> dict:
         """Free simulations of the validation runs from their logged starts
@@ -431,13 +437,8 @@ class Selector:
                 make_term(c.spec).with_parameters({k: v for k, v in best.values.items() if k in c.free})
             except VehicleError as exc:
                 problem = f"fitted values are not physical: {exc}"
-        vc = self.val_cost(veh, vals)
-        cmp = bootstrap_improvement(val_cur["windows"], vc["windows"], level=LEVEL)
-        cmp["wald"] = wald(best, c)
-        # the open-loop guard (uvsim.fitting.guard): no logged group may get worse
-        vc["open_loop"] = self.open_loop_blocks(veh, vals)
-        if "open_loop" in val_cur:
-            cmp["guard"] = compare_open_loop(val_cur["open_loop"], vc["open_loop"])
+        vc = self.validation(veh, vals)
+        cmp = compare(val_cur, vc, best, c)
         row.update(result=best, values={k: best.values[k] for k in c.free}, std={k: best.std.get(k) for k in c.free},
                    train_cost=best.cost, val=vc, compare=cmp, problem=problem,
                    open_loop_cost=vc["open_loop"]["total"],
