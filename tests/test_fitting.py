@@ -318,3 +318,30 @@ def test_node_jacobian_along_unread_position_axes_is_the_shifted_simulation(surg
     for veh, axes in ((tethered, ()), (floor, (0, 1))):
         assert WindowedProblem(veh, runs[:1], [measurements_for(runs[0], veh)], make_space(veh.parameters(), []),
                                2.0).shift_axes == axes
+
+
+def test_linearizing_the_trial_point_at_once_changes_no_result(surge_yaw_runs, monkeypatch):
+    """After an accepted step the solver linearizes the next trial point at once
+    (``solver.SPECULATE``) instead of simulating it alone first: the same iterations, the
+    same accepted steps and the same solution (to the last bits of the trial cost, which is
+    then the base row of a batched simulation), and fewer simulations in time when most
+    steps are accepted; a rejected trial costs a whole linearization."""
+    import uvsim.fitting.solver as solver
+
+    v = uvsim.load_vehicle("bluerov2_heavy")
+    truth = v.parameters()
+    space = make_space(truth, ["X_uu", "N_rr"], start={"X_uu": truth["X_uu"] * 1.3, "N_rr": truth["N_rr"] * 0.7})
+    prob = WindowedProblem(v, surge_yaw_runs, [measurements_for(r, v) for r in surge_yaw_runs], space, 2.0)
+    out = {}
+    for flag in (False, True):
+        monkeypatch.setattr(solver, "SPECULATE", flag)
+        out[flag] = solve(prob, space.z0, max_iter=20, ftol=1e-8)
+    a, b = out[False], out[True]
+    assert a["iterations"] == b["iterations"] and a["message"] == b["message"]
+    assert len(a["history"]) == len(b["history"]) > 2
+    np.testing.assert_allclose(b["history"], a["history"], rtol=1e-12)
+    np.testing.assert_allclose(b["z"], a["z"], rtol=1e-10, atol=1e-12)
+    for x, y in zip(a["blocks"], b["blocks"]):
+        np.testing.assert_allclose(y.A, x.A, rtol=1e-9)
+        np.testing.assert_allclose(y.gz, x.gz, rtol=1e-9, atol=1e-9 * np.max(np.abs(x.gz)))
+

@@ -28,6 +28,10 @@ sd in the last 16, docs/performance.md).  Bounds on ``z``: a step that would lea
 back into it, and a variable at a bound whose step points outward is held for that
 step (a simple active set).
 
+After an accepted step the next trial point is linearized at once (:data:`SPECULATE`): its
+base row is the trial, and the linearization is the next iteration's when the step is
+accepted, as most are; after a rejection the next trial is simulated alone.
+
 Jacobians are forward differences: one batched simulation of all windows for the base
 point, one per global parameter and one per free node component (every window's
 component perturbed at once: windows are independent rows, so each window's residuals
@@ -58,6 +62,14 @@ from uvsim.fitting.priors import data_weight
 FD_STEP_Z = 1e-5
 FD_STEP_NODE = 1e-5
 FD_STEP_BIAS = 1e-6
+#: After an accepted step, the next trial point is linearized at once (Jacobian included)
+#: instead of simulated alone and linearized when accepted: a trial simulates one parameter
+#: set per window, and on tank-size problems (20 windows of 150 steps) its cost is the numpy
+#: overhead of 600 model evaluations, 30-45 % of a whole linearization's; most trial steps
+#: are accepted.  A rejected one wastes a linearization, so after a rejection the next trial
+#: is simulated alone.  The trial's cost is then the base row of a batched simulation, equal
+#: to the single simulation's to the last bit or two (docs/performance.md).
+SPECULATE = True
 
 
 @dataclass
@@ -462,6 +474,10 @@ def _solve(probs, ev, z0, nus0, *, max_iter, ftol, xtol, progress, state=None, o
             cost = _cost(blocks)
     message = "maximum number of iterations reached"
     it = it0
+    # speculative linearization at the trial point (SPECULATE): not where the evaluator
+    # re-weighs or keeps the data's own blocks (PriorEvaluator), whose trial cost must use
+    # the weight of the current point
+    speculate = SPECULATE and not isinstance(ev, PriorEvaluator)
     at_z = True  # ``blocks`` is the linearization (with window scores) at ``z``
     for it in range(it0 + 1, max_iter + 1):
         if nu_f == 2.0 and _newton_decrement(blocks, z, lo, hi) <= ftol * cost:
@@ -474,8 +490,21 @@ def _solve(probs, ev, z0, nus0, *, max_iter, ftol, xtol, progress, state=None, o
         pred = _predicted_decrease(blocks, dz, dnus)
         z_new = z + dz
         nus_new = [a + b for a, b in zip(nus, dnus)]
-        c_new = _cost(ev.linearize(z_new, nus_new, jacobian=False))
-        evals += 1
+        ahead = None
+        if speculate and nu_f == 2.0:
+            # the last step was accepted, so this one likely is too: linearize at the trial
+            # point at once (its base row is the trial); a rejection wastes one linearization
+            try:
+                with np.errstate(all="ignore"):  # a trial that ran away is rejected, as below
+                    ahead = ev.linearize(z_new, nus_new, scores=True)
+            except np.linalg.LinAlgError:  # its Jacobian broke (a run-away trial): simulate it alone
+                ahead = None
+            evals += n_sets
+        if ahead is not None:
+            c_new = _cost(ahead)
+        else:
+            c_new = _cost(ev.linearize(z_new, nus_new, jacobian=False))
+            evals += 1
         rho = (cost - c_new) / pred if pred > 0 else -1.0
         if np.isfinite(c_new) and rho > 0:
             # the step of the parameters; with none free (node states and biases alone, e.g. a
@@ -495,11 +524,16 @@ def _solve(probs, ev, z0, nus0, *, max_iter, ftol, xtol, progress, state=None, o
             if progress is not None:
                 progress(it, cost)
             if step_small or stalled:
-                at_z = False
+                at_z = ahead is not None
+                if at_z:
+                    blocks = ahead
                 message = "converged: step below xtol" if step_small else "converged: relative cost decrease below ftol"
                 break
-            blocks = ev.linearize(z, nus, scores=True)
-            evals += n_sets
+            if ahead is not None:
+                blocks = ahead
+            else:
+                blocks = ev.linearize(z, nus, scores=True)
+                evals += n_sets
             if getattr(ev, "reweighs", False):  # the data weight was re-estimated: the cost at it
                 cost = _cost(blocks)
                 history[-1] = cost
