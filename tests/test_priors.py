@@ -58,7 +58,10 @@ def test_the_vehicle_files_uncertainty_sets_the_prior_width(surge_only):
 def test_prior_widths_and_their_errors():
     assert default_prior_sd("X_uu", -35.0) == pytest.approx(17.5)
     assert default_prior_sd("z_b", -0.024) == pytest.approx(0.05)       # positions: not relative
-    assert default_prior_sd("thruster_gain_1", 1.0) == pytest.approx(0.725)
+    # gains: the T200's thrust per volt of supply (priors.THRUSTER_GAIN_SD), not half the 0.05-1.5 range
+    assert default_prior_sd("thruster_gain_1", 1.0) == pytest.approx(0.1)
+    assert default_prior_sd("thruster_gain_8", 0.6) == pytest.approx(0.1)
+    assert default_prior_sd("thruster_reverse_1", 1.0) == pytest.approx(0.7)   # still half its range
     with pytest.raises(CalibrationError, match="X_u is 0"):
         default_prior_sd("X_u", 0.0)
     P = uvsim.load_vehicle("bluerov2_heavy").parameters()

@@ -25,8 +25,9 @@ calibration starts from in structure, not only in values:
   perturbation, effects and curve are what they were before they were added.
 
 Each dataset is calibrated with the command docs/calibration.md gives for real logs
-(``uvsim calibrate --data DIR --free z_b``: :class:`uvsim.calibration.Calibrator` with
-``free="z_b"``), once with the priors (default) and, with ``--compare-no-prior``, once
+(``uvsim calibrate --data DIR --free "z_b,thruster_gain_*"``: :class:`uvsim.calibration.Calibrator`
+with ``free=`` :data:`REAL_LOG_FREE`; ``--free z_b`` gives the command of the releases before,
+which fitted no actuator parameter), once with the priors (default) and, with ``--compare-no-prior``, once
 without; ``--loss huber`` calibrates with the Huber loss instead of least squares.  Judged on
 the dataset's validation runs, per logged channel, by the open-loop Fit % of the fitted
 model against the start model's, pooled over the validation runs as the
@@ -67,6 +68,11 @@ from uvsim.errors import UvsimError
 WORSE_POINTS = 1.0
 #: Relative growth of a state channel's RMS error against the truth that counts as farther.
 TRUTH_TOLERANCE = 0.02
+#: What the real-log command of docs/calibration.md frees beside the default set: the CB height
+#: and every thruster's gain (prior sd :data:`uvsim.fitting.priors.THRUSTER_GAIN_SD`), so that a
+#: thrust curve, unit or battery that differs from the file's is carried by the thrust model
+#: rather than by the hydrodynamic coefficients (issue 22's "thrust model first").
+REAL_LOG_FREE = "z_b,thruster_gain_*"
 #: Scenario size: a few runs of 15-25 s at 100 Hz (a real session's order) and two validation runs.
 SIZE = dict(n_runs=3, n_validation=2, duration=[15, 25], rate_hz=100.0)
 
@@ -185,10 +191,10 @@ def dataset_vehicle_on_family(dataset_dir):
 
 
 def run_one(seed: int, *, prior: bool = True, loss: str = "linear", supply: bool = False, workers: int = 1,
-            tmp: Path | None = None) -> dict:
-    """Generate and calibrate one scenario; returns its record.  ``supply``: the start
-    model's thrusters on the T200 voltage family and ``supply_voltage`` freed beside ``z_b``
-    (:func:`on_voltage_family`)."""
+            free: str = REAL_LOG_FREE, tmp: Path | None = None) -> dict:
+    """Generate and calibrate one scenario; returns its record.  ``free``: the calibration's
+    ``--free``; ``supply``: the start model's thrusters on the T200 voltage family and
+    ``supply_voltage`` freed beside ``free`` (:func:`on_voltage_family`)."""
     from uvsim.calibration import Calibrator
     from uvsim.errors import CalibrationError
     from uvsim.scenarios import generate, load_truth, sample_scenario
@@ -201,8 +207,8 @@ def run_one(seed: int, *, prior: bool = True, loss: str = "linear", supply: bool
         t0 = time.perf_counter()
         try:
             start = dataset_vehicle_on_family(out) if supply else None
-            free = "z_b,supply_voltage" if supply else "z_b"
-            cal = Calibrator(free=free, workers=workers, prior=prior, loss=loss).fit(out, start)
+            names = f"{free},supply_voltage" if supply else free
+            cal = Calibrator(free=names, workers=workers, prior=prior, loss=loss).fit(out, start)
             rec = judge(cal.report_)
             rec["supply_voltage"] = cal.params_.get("supply_voltage")  # fitted (V), None when not freed
             err = truth_errors(spec, {"start": cal.initial_vehicle_, "fitted": cal.vehicle_})
@@ -215,16 +221,16 @@ def run_one(seed: int, *, prior: bool = True, loss: str = "linear", supply: bool
                           "not_compared": [], "at_bounds": [],
                           "data_weight": None, "farther_from_truth": []}, str(exc)
         seconds = time.perf_counter() - t0
-    return {"seed": seed, "prior": prior, "loss": loss, "supply": supply, **over,
+    return {"seed": seed, "prior": prior, "loss": loss, "supply": supply, "free": free, **over,
             "effects": [e["type"] for e in truth["effects"]],
             "curve": spec.vehicle.get("truth_curve"), **rec, "error": error, "seconds": seconds}
 
 
 def summarize(records: list[dict]) -> dict:
     out = {}
-    modes = sorted({_mode(r) for r in records}, key=lambda m: (not m[0], m[1], m[2]))
-    for prior, loss, supply in modes:
-        mine = [r for r in records if _mode(r) == (prior, loss, supply)]
+    modes = sorted({_mode(r) for r in records}, key=lambda m: (not m[0], m[1], m[2], m[3]))
+    for prior, loss, supply, free in modes:
+        mine = [r for r in records if _mode(r) == (prior, loss, supply, free)]
         rs = [r for r in mine if r["error"] is None]
         if not rs:
             continue
@@ -232,7 +238,7 @@ def summarize(records: list[dict]) -> dict:
         farther = [r for r in rs if r.get("farther_from_truth")]
         chans = sorted({c for r in rs for c in r["gain"]})
         out[("prior" if prior else "no_prior") + ("" if loss == "linear" else f"+{loss}")
-            + ("+supply_voltage" if supply else "")] = {
+            + ("+supply_voltage" if supply else "") + f" (--free {free})"] = {
             "n": len(rs), "errors": sum(1 for r in mine if r["error"] is not None),
             "no_worse": len(rs) - len(worse), "no_worse_rate": (len(rs) - len(worse)) / len(rs),
             "worse": len(worse), "worse_reported_not_ok": sum(not r["check_ok"] for r in worse),
@@ -250,13 +256,16 @@ def summarize(records: list[dict]) -> dict:
 
 
 def _mode(rec: dict) -> tuple:
-    """How a record was calibrated: (prior, loss, supply voltage freed)."""
-    return rec["prior"], rec.get("loss", "linear"), rec.get("supply", False)
+    """How a record was calibrated: (prior, loss, supply voltage freed, ``--free``; records of the
+    releases before :data:`REAL_LOG_FREE` freed ``z_b``)."""
+    return rec["prior"], rec.get("loss", "linear"), rec.get("supply", False), rec.get("free", "z_b")
 
 
 def run_benchmark(n: int, seed: int, *, compare_no_prior: bool = False, loss: str = "linear", supply: bool = False,
-                  workers: int = 1, results: str | Path | None = None, progress=None) -> dict:
-    """``n`` seeds from ``seed`` (resumed from ``results``, JSON lines)."""
+                  free: str = REAL_LOG_FREE, workers: int = 1, results: str | Path | None = None,
+                  progress=None) -> dict:
+    """``n`` seeds from ``seed`` (resumed from ``results``, JSON lines), calibrated with
+    ``--free free`` (:func:`run_one`)."""
     if n < 1:
         raise UvsimError(f"--scenarios {n}: need at least one scenario")
     say = progress or (lambda m: None)
@@ -265,14 +274,14 @@ def run_benchmark(n: int, seed: int, *, compare_no_prior: bool = False, loss: st
     todo = [(s, p) for s in range(seed, seed + n) for p in ((True, False) if compare_no_prior else (True,))]
     records = []
     for i, (s, p) in enumerate(todo, 1):
-        if (s, p, loss, supply) in done:
-            records.append(done[(s, p, loss, supply)])
+        if (s, p, loss, supply, free) in done:
+            records.append(done[(s, p, loss, supply, free)])
             continue
-        rec = run_one(s, prior=p, loss=loss, supply=supply, workers=workers)
+        rec = run_one(s, prior=p, loss=loss, supply=supply, free=free, workers=workers)
         records.append(rec)
         append_record(path, rec)
         mode = ("prior" if p else "no prior") + ("" if loss == "linear" else f", {loss}") \
-            + (", supply_voltage" if supply else "")
+            + (", supply_voltage" if supply else "") + f", --free {free}"
         say(f"[{i}/{len(todo)}] seed {s} {mode}: effects {rec['effects'] or 'none'}, "
             f"curve {rec['curve'] or '16 V'}, off {rec['perturbation']:.0%}: "
             + (f"ERROR {rec['error']}" if rec["error"] else

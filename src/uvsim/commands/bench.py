@@ -1,6 +1,6 @@
 """``uvsim bench [--json] [--quick] [--only AREA,...]``: speed figures (docs/performance.md).
 
-``uvsim bench calibrate-structural --scenarios N [--compare-no-prior]``: calibration on data that
+``uvsim bench calibrate-structural --scenarios N [--free LIST] [--compare-no-prior]``: calibration on data that
 differ from the model in structure (:mod:`uvsim.benchmarks.calibration_structural`, docs/calibration.md).
 
 ``uvsim bench diagnose --scenarios N --seed S [--two-effects M] [--results FILE]``: the
@@ -14,6 +14,7 @@ import platform
 
 
 def register(sub) -> None:
+    from uvsim.benchmarks.calibration_structural import REAL_LOG_FREE
     from uvsim.fitting.objective import LOSSES
 
     p = sub.add_parser("bench", help="measure simulator / calibration speed; 'bench diagnose': scenario benchmark")
@@ -26,8 +27,11 @@ def register(sub) -> None:
                    help="(calibrate-structural) the calibration's --loss")
     p.add_argument("--supply-voltage", action="store_true",
                    help="(calibrate-structural, diagnose-structural) start model on the T200 voltage family at "
-                        "its file's 16 V: calibration frees supply_voltage beside z_b (--free z_b,supply_voltage), "
+                        "its file's 16 V: calibration frees supply_voltage beside --free's parameters, "
                         "diagnosis has it as a base-model candidate")
+    p.add_argument("--free", default=REAL_LOG_FREE,
+                   help=f"(calibrate-structural) the calibration's --free (default {REAL_LOG_FREE!r}, the real-log "
+                        "command of docs/calibration.md; 'z_b': the releases before, no actuator parameter)")
     p.add_argument("--compare-no-prior", action="store_true",
                    help="(calibrate-structural) calibrate each dataset also without the priors (--no-prior)")
     p.add_argument("--scenarios", type=int, default=20, help="(diagnose) single-effect or clean scenarios")
@@ -150,8 +154,8 @@ def _calibrate_structural(args) -> int:
     from uvsim.benchmarks.calibration_structural import WORSE_POINTS, run_benchmark
 
     out = _suite(args, lambda say: run_benchmark(args.scenarios, args.seed, compare_no_prior=args.compare_no_prior,
-                                                 loss=args.loss, supply=args.supply_voltage, workers=args.workers,
-                                                 results=args.results,
+                                                 loss=args.loss, supply=args.supply_voltage, free=args.free,
+                                                 workers=args.workers, results=args.results,
                                                  progress=say))
     if out is None:
         return 0

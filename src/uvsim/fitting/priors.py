@@ -23,8 +23,10 @@ re-estimated at every fresh linearization, like the weights of iteratively rewei
 least squares.
 
 Default prior width (:func:`default_prior_sd`): :data:`DEFAULT_RELATIVE_SD` of the value
-(a start model 20-40 % off lies within one sigma), or for parameters whose natural range
-is not relative (positions, gains, current) the half-width of their default search range
+(a start model 20-40 % off lies within one sigma); thruster gains :data:`THRUSTER_GAIN_SD`
+and the supply voltage :data:`SUPPLY_VOLTAGE_SD` (from the T200's measured voltage family);
+for the other parameters whose natural range is not relative (positions, reverse ratios,
+current) the half-width of their default search range
 (:func:`uvsim.fitting.parameters.default_bounds` at margin :data:`DEFAULT_RELATIVE_SD`).
 A parameter that is 0 in the file gets a quarter of its search range. A vehicle file may
 state its own per-coefficient uncertainty (``uncertainty:`` section, docs/calibration.md),
@@ -51,11 +53,23 @@ DEFAULT_RELATIVE_SD = 0.5
 #: nominal 4S pack).
 SUPPLY_VOLTAGE_SD = 2.0
 
+#: Prior standard deviation of a fitted ``thruster_gain_i`` (-), about the file's value: the
+#: 16 V T200 sheet's full-command thrust changes by about 7 % per volt of supply (4.53 kgf at
+#: 14 V, 5.25 at 16 V, 6.02 at 18 V: Blue Robotics' T200 measurements,
+#: ``uvsim/data/thrusters/t200_voltage``), so one sd covers a battery within about 1.4 V of
+#: the voltage the vehicle's curve was measured at, or a unit, propeller or ESC delivering
+#: 10 % less or more than the sheet.  (The parameter's search range, 0.05-1.5, is a
+#: physical limit, not a belief: half of it, 0.725, let a common factor on every gain trade
+#: freely against the masses and damping.)
+THRUSTER_GAIN_SD = 0.1
+
 
 def default_prior_sd(name: str, value: float) -> float:
     """Prior standard deviation of parameter ``name`` at ``value`` (module docstring)."""
     if name == "supply_voltage":
         return SUPPLY_VOLTAGE_SD
+    if name.startswith("thruster_gain_"):
+        return THRUSTER_GAIN_SD
     try:
         lo, hi = default_bounds(name, float(value), DEFAULT_RELATIVE_SD)
     except CalibrationError:  # a coefficient that is 0 in the file has no relative width
