@@ -121,6 +121,10 @@ def test_records_of_another_free_set_are_not_resumed_as_this_one(tmp_path, monke
     out = cs.run_benchmark(1, 0, results=p, free="z_b")                 # the old record resumes as z_b
     assert calls == [] and list(out["summary"]) == ["prior (--free z_b)"]
     assert cs.REAL_LOG_FREE == "z_b,thruster_gain_*"
+    calls.clear()
+    with pytest.raises(Exception, match="--free: unknown parameter 'thruster_gian_1'"):
+        cs.run_benchmark(1, 0, results=p, free="z_b,thruster_gian_1")
+    assert calls == []                                                  # before any dataset is made
 
 
 @pytest.mark.slow
