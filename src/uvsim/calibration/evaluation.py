@@ -283,12 +283,20 @@ class ProcessMap(SerialMap):
     def terminate(self):
         """Kill the workers now and reap them (no process is left behind)."""
         procs = list((getattr(self._pool, "_processes", None) or {}).values())
+        manager = getattr(self._pool, "_executor_manager_thread", None)
         for p in procs:
             if p.is_alive():
                 p.kill()
         self._pool.shutdown(wait=False, cancel_futures=True)
         for p in procs:
             p.join(timeout=5)
+        # The pool's manager thread sees the dead workers and closes its wake-up pipe.
+        # Wait for it: otherwise the interpreter's exit hook (concurrent.futures.process
+        # ._python_exit) may write to that pipe while it is being closed, and print
+        # "OSError: Bad file descriptor" after a Ctrl-C (the unlocked wakeup in _python_exit,
+        # CPython gh-84176; _ThreadWakeup got its own lock in gh-125451, 3.12.8 / 3.13.1).
+        if manager is not None:
+            manager.join(timeout=10)
 
 
 def _dask_block(evaluator, block):
