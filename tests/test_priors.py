@@ -61,7 +61,9 @@ def test_prior_widths_and_their_errors():
     # gains: the T200's thrust per volt of supply (priors.THRUSTER_GAIN_SD), not half the 0.05-1.5 range
     assert default_prior_sd("thruster_gain_1", 1.0) == pytest.approx(0.1)
     assert default_prior_sd("thruster_gain_8", 0.6) == pytest.approx(0.1)
-    assert default_prior_sd("thruster_reverse_1", 1.0) == pytest.approx(0.7)   # still half its range
+    # reverse ratios: the T200 sheets' reverse/forward ratio over 10-20 V (priors.THRUSTER_REVERSE_SD)
+    assert default_prior_sd("thruster_reverse_1", 1.0) == pytest.approx(0.1)
+    assert default_prior_sd("force_reverse_1", 1.0) == pytest.approx(0.7)     # not a T200: half its range
     with pytest.raises(CalibrationError, match="X_u is 0"):
         default_prior_sd("X_u", 0.0)
     P = uvsim.load_vehicle("bluerov2_heavy").parameters()

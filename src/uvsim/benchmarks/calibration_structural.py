@@ -25,7 +25,7 @@ calibration starts from in structure, not only in values:
   perturbation, effects and curve are what they were before they were added.
 
 Each dataset is calibrated with the command docs/calibration.md gives for real logs
-(``uvsim calibrate --data DIR --free "z_b,thruster_gain_*"``: :class:`uvsim.calibration.Calibrator`
+(``uvsim calibrate --data DIR --free "z_b,thruster_gain_*,thruster_reverse_*"``: :class:`uvsim.calibration.Calibrator`
 with ``free=`` :data:`REAL_LOG_FREE`; ``--free z_b`` gives the command of the releases before,
 which fitted no actuator parameter), once with the priors (default) and, with ``--compare-no-prior``, once
 without; ``--loss huber`` calibrates with the Huber loss instead of least squares.  Judged on
@@ -68,11 +68,12 @@ from uvsim.errors import UvsimError
 WORSE_POINTS = 1.0
 #: Relative growth of a state channel's RMS error against the truth that counts as farther.
 TRUTH_TOLERANCE = 0.02
-#: What the real-log command of docs/calibration.md frees beside the default set: the CB height
-#: and every thruster's gain (prior sd :data:`uvsim.fitting.priors.THRUSTER_GAIN_SD`), so that a
-#: thrust curve, unit or battery that differs from the file's is carried by the thrust model
-#: rather than by the hydrodynamic coefficients (issue 22's "thrust model first").
-REAL_LOG_FREE = "z_b,thruster_gain_*"
+#: What the real-log command of docs/calibration.md frees beside the default set: the CB height,
+#: every thruster's gain and reverse ratio (prior sd :data:`uvsim.fitting.priors.THRUSTER_GAIN_SD`,
+#: :data:`~uvsim.fitting.priors.THRUSTER_REVERSE_SD`), so that a thrust curve, unit, propeller or
+#: battery that differs from the file's is carried by the thrust model rather than by the
+#: hydrodynamic coefficients (issue 22's "thrust model first").
+REAL_LOG_FREE = "z_b,thruster_gain_*,thruster_reverse_*"
 #: Scenario size: a few runs of 15-25 s at 100 Hz (a real session's order) and two validation runs.
 SIZE = dict(n_runs=3, n_validation=2, duration=[15, 25], rate_hz=100.0)
 

@@ -23,10 +23,10 @@ re-estimated at every fresh linearization, like the weights of iteratively rewei
 least squares.
 
 Default prior width (:func:`default_prior_sd`): :data:`DEFAULT_RELATIVE_SD` of the value
-(a start model 20-40 % off lies within one sigma); thruster gains :data:`THRUSTER_GAIN_SD`
-and the supply voltage :data:`SUPPLY_VOLTAGE_SD` (from the T200's measured voltage family);
-for the other parameters whose natural range is not relative (positions, reverse ratios,
-current) the half-width of their default search range
+(a start model 20-40 % off lies within one sigma); thruster gains :data:`THRUSTER_GAIN_SD`,
+reverse ratios :data:`THRUSTER_REVERSE_SD` and the supply voltage :data:`SUPPLY_VOLTAGE_SD`
+(from the T200's measured voltage family); for the other parameters whose natural range is not
+relative (positions, current) the half-width of their default search range
 (:func:`uvsim.fitting.parameters.default_bounds` at margin :data:`DEFAULT_RELATIVE_SD`).
 A parameter that is 0 in the file gets a quarter of its search range. A vehicle file may
 state its own per-coefficient uncertainty (``uncertainty:`` section, docs/calibration.md),
@@ -63,6 +63,16 @@ SUPPLY_VOLTAGE_SD = 2.0
 #: freely against the masses and damping.)
 THRUSTER_GAIN_SD = 0.1
 
+#: Prior standard deviation of a fitted ``thruster_reverse_i`` (-), the factor on a unit's
+#: reverse thrust beyond its curve's, about the file's value: the T200 sheets' reverse to
+#: forward thrust ratio moves with the supply (full command 0.789, 0.785, 0.777, 0.776, 0.763,
+#: 0.749 at 10, 12, 14, 16, 18, 20 V; at 1300 / 1700 us 0.822, 0.798, 0.798, 0.789, 0.816, 0.825:
+#: Blue Robotics' T200 measurements, ``uvsim/data/thrusters/t200_voltage``), a few per cent about
+#: the 16 V curve, and a propeller mounted or pitched otherwise, or fouled, changes it more; one
+#: sd of 0.1 covers both.  (Half the parameter's 0.1-1.5 search range, 0.7, let a reverse ratio
+#: trade freely against the damping.)
+THRUSTER_REVERSE_SD = 0.1
+
 
 def default_prior_sd(name: str, value: float) -> float:
     """Prior standard deviation of parameter ``name`` at ``value`` (module docstring)."""
@@ -70,6 +80,8 @@ def default_prior_sd(name: str, value: float) -> float:
         return SUPPLY_VOLTAGE_SD
     if name.startswith("thruster_gain_"):
         return THRUSTER_GAIN_SD
+    if name.startswith("thruster_reverse_"):
+        return THRUSTER_REVERSE_SD
     try:
         lo, hi = default_bounds(name, float(value), DEFAULT_RELATIVE_SD)
     except CalibrationError:  # a coefficient that is 0 in the file has no relative width
