@@ -38,8 +38,9 @@ def register(sub) -> None:
                                                     "NAME.yaml beside the manifest (default: the manifest's vehicle)")
     p.add_argument("--dof", default=None, help="comma-separated DOFs to fit (default: all)")
     p.add_argument("--free", default=None, metavar="NAME,...",
-                   help="also fit these parameters or families in the joint stage, e.g. z_b,thruster_gain_* (the "
-                        "real-log command of docs/calibration.md: the CB height and every thruster's gain)")
+                   help="also fit these parameters or families in the joint stage, e.g. "
+                        "z_b,thruster_gain_*,thruster_reverse_* (the real-log command of docs/calibration.md: the "
+                        "CB height and every thruster's gain and reverse ratio)")
     p.add_argument("--fix", default=None, metavar="NAME,...", help="never fit these parameters or families")
     p.add_argument("--bounds", default=None, metavar="NAME=LO:HI,...",
                    help="search bounds (every stage), e.g. z_b=-0.05:0,thruster_gain_3=0.2:1.2")
