@@ -270,11 +270,12 @@ def run_benchmark(n: int, seed: int, *, compare_no_prior: bool = False, loss: st
     if n < 1:
         raise UvsimError(f"--scenarios {n}: need at least one scenario")
     from uvsim.calibration.selection import expand_names
+    from uvsim.scenarios.vehicle_data import DEFAULT_VEHICLE_FILE
     from uvsim.vehicle import load_vehicle
 
     # a name no parameter of the generator's start model has is an error now, not one per seed
     # (run_one records a calibration that raises as "refused before a result")
-    expand_names(free, list(load_vehicle("bluerov2_heavy").parameters()), "--free")
+    expand_names(free, list(load_vehicle(DEFAULT_VEHICLE_FILE).parameters()), "--free")
     say = progress or (lambda m: None)
     path = Path(results) if results else None
     done = load_records(path, lambda rec: (rec["seed"], *_mode(rec)), say, "calibration")
