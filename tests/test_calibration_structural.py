@@ -101,9 +101,10 @@ def test_records_of_another_free_set_are_not_resumed_as_this_one(tmp_path, monke
     import uvsim.benchmarks.calibration_structural as cs
     from uvsim.benchmarks.records import append_record
 
-    def fake(seed, *, prior, loss, supply, free, workers):
-        calls.append((seed, free))
-        return {"seed": seed, "prior": prior, "loss": loss, "supply": supply, "free": free, "worse": [],
+    def fake(seed, *, prior, loss, supply, free, latency, workers):
+        calls.append((seed, free, latency))
+        return {"seed": seed, "prior": prior, "loss": loss, "supply": supply, "free": free, "latency": latency,
+                "worse": [],
                 "gain": {"depth": 1.0}, "check_ok": True, "farther_from_truth": [], "at_bounds": [],
                 "not_compared": [], "error": None, "seconds": 1.0, "effects": [], "curve": None,
                 "perturbation": 0.3}
@@ -111,19 +112,22 @@ def test_records_of_another_free_set_are_not_resumed_as_this_one(tmp_path, monke
     calls = []
     monkeypatch.setattr(cs, "run_one", fake)
     p = tmp_path / "r.jsonl"
-    old = fake(0, prior=True, loss="linear", supply=False, free="z_b", workers=1)
-    del old["free"]
+    old = fake(0, prior=True, loss="linear", supply=False, free="z_b", latency=None, workers=1)
+    del old["free"], old["latency"]
     append_record(p, old)
     calls.clear()
     out = cs.run_benchmark(1, 0, results=p)
-    assert calls == [(0, cs.REAL_LOG_FREE)]
-    assert list(out["summary"]) == [f"prior (--free {cs.REAL_LOG_FREE})"]
+    assert calls == [(0, cs.REAL_LOG_FREE, cs.REAL_LOG_LATENCY)]
+    assert list(out["summary"]) == [f"prior (--free {cs.REAL_LOG_FREE} --latency {cs.REAL_LOG_LATENCY})"]
     calls.clear()
-    out = cs.run_benchmark(1, 0, results=p, free="z_b")                 # the old record resumes as z_b
+    out = cs.run_benchmark(1, 0, results=p, free="z_b", latency=None)   # the old record resumes as z_b
     assert calls == [] and list(out["summary"]) == ["prior (--free z_b)"]
+    out = cs.run_benchmark(1, 0, results=p, free=cs.REAL_LOG_FREE, latency=None)  # no --latency: another mode
+    assert calls == [(0, cs.REAL_LOG_FREE, None)] and list(out["summary"]) == [f"prior (--free {cs.REAL_LOG_FREE})"]
     # the benchmark calibrates with the command docs/calibration.md gives for real logs
     docs = (Path(__file__).resolve().parents[1] / "docs" / "calibration.md").read_text()
-    assert f'uvsim calibrate --data mylogs/ --free "{cs.REAL_LOG_FREE}"' in docs
+    assert (f'uvsim calibrate --data mylogs/ --free "{cs.REAL_LOG_FREE}" --latency {cs.REAL_LOG_LATENCY}'
+            in docs)
     calls.clear()
     with pytest.raises(Exception, match="--free: unknown parameter 'thruster_gian_1'"):
         cs.run_benchmark(1, 0, results=p, free="z_b,thruster_gian_1")

@@ -304,6 +304,10 @@ class Run:
     #: What the reader changed in the data beyond the float64 conversion (e.g. quaternions
     #: renormalized by more than :data:`QUAT_NOTE_TOL`); commands print these.
     notes: list[str] = field(init=False, default_factory=list)
+    #: How much later than their time stamps the inputs act in this copy of the run, s
+    #: (:func:`uvsim.latency.delay_inputs`; 0: as logged), and the run as logged.
+    input_delay: float = field(init=False, default=0.0)
+    as_logged: "Run | None" = field(init=False, repr=False, default=None)
     _kind: str = field(init=False, repr=False, default="")
     _input_columns: list[str] = field(init=False, repr=False, default_factory=list)
 

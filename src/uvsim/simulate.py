@@ -426,14 +426,17 @@ def simulate_run(vehicle, run, *, current=None, overrides=None, method: str = "r
                  on_blowup: str = "raise", initial_window_s: float = 0.0) -> SimulationResult:
     """Simulate a logged :class:`uvsim.logs.Run`: start from its first measured state
     (velocities zero where not logged) and apply its inputs (and its battery voltage,
-    :attr:`uvsim.logs.Run.voltage`, when it logged one).  Input columns that do not
+    :attr:`uvsim.logs.Run.voltage`, when it logged one), as late as the vehicle's sensors
+    read (``sensors.latency``, :mod:`uvsim.latency`).  Input columns that do not
     fit the vehicle, and PWM outside its thrust curves, raise
     :class:`uvsim.errors.PlausibilityError` naming the run's file, column and row."""
+    from uvsim.latency import delay_inputs
     from uvsim.plausibility import require_inputs_match
     from uvsim.vehicle import load_vehicle
 
     vehicle = load_vehicle(vehicle)
     require_inputs_match(run, vehicle)
+    run = delay_inputs(run, vehicle.sensor_latency)  # the vehicle's sensors.latency (uvsim.latency)
     pos0, q0, nu0, _ = initial_state_from_run(run, window_s=initial_window_s)
     return simulate(vehicle, run.t, run.inputs, input_kind=run.input_kind, pos0=pos0, q0=q0, nu0=nu0,
                     overrides=overrides, current=current, method=method, substeps=substeps, on_blowup=on_blowup,

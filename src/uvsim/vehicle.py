@@ -97,6 +97,10 @@ class Vehicle:
     #: the IMU gyro's in-run bias, 1-sigma per axis, rad/s (``sensors.imu.gyro_bias_sd``): the prior
     #: of the gyro bias a fit estimates per run; None: :data:`uvsim.fitting.objective.GYRO_BIAS_SIGMA`
     gyro_bias_sd: float | None = None
+    #: how late every logged sensor reads relative to the logged inputs, s (``sensors.latency``;
+    #: docs/model.md, "Sensor latency"): a prediction applies each input this much later than its
+    #: time stamp (:mod:`uvsim.latency`)
+    sensor_latency: float = 0.0
     description: str = ""
     source: str = "<memory>"
     raw: dict = field(default_factory=dict, repr=False)
@@ -191,6 +195,13 @@ class Vehicle:
             d["name"] = name
         return vehicle_from_dict(d, source=self.source, actuators=actuators)
 
+    def with_latency(self, latency: float) -> "Vehicle":
+        """A copy whose sensors read ``latency`` s late (``sensors.latency``, :mod:`uvsim.latency`)."""
+        new = copy.copy(self)
+        new.sensor_latency = check_latency(latency, f"{self.source}: sensors.latency")
+        new.raw = {**self.raw, "sensors": {**(self.raw.get("sensors") or {}), "latency": new.sensor_latency}}
+        return new
+
     def with_effects(self, effects: list) -> "Vehicle":
         """A copy with extra force terms appended (dicts or ``ForceTerm`` objects)."""
         new = copy.copy(self)
@@ -219,6 +230,8 @@ class Vehicle:
             d["sensors"] = {k: {"position": [float(x) for x in p]} for k, p in self.sensors.items()}
         if self.gyro_bias_sd is not None:
             d.setdefault("sensors", {}).setdefault("imu", {})["gyro_bias_sd"] = float(self.gyro_bias_sd)
+        if self.sensor_latency:
+            d.setdefault("sensors", {})["latency"] = float(self.sensor_latency)
         if self.uncertainty:
             d["uncertainty"] = {k: float(x) for k, x in self.uncertainty.items()}
         if self.raw.get("thrusters") is not None:
@@ -244,6 +257,7 @@ class Vehicle:
             "quadratic_damping": DQ,
             "n_thrusters": self.n_thrusters,
             "effects": [e.kind for e in self.effects],
+            "sensor_latency_s": float(self.sensor_latency),
         }
 
 
@@ -367,17 +381,37 @@ SENSOR_NAMES = ("imu", "pressure", "dvl")
 MAX_SENSOR_OFFSET = 10.0
 
 
-def _sensors(spec, f: str) -> tuple[dict, float | None]:
+#: Largest ``sensors.latency`` accepted, s: an autopilot's sensor and telemetry path is tens of
+#: milliseconds (ArduSub logs); half a second is a clock error, not a latency.
+MAX_LATENCY = 0.5
+
+
+def check_latency(value, where: str) -> float:
+    """A sensor latency in s, validated (0 <= latency <= :data:`MAX_LATENCY`)."""
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise VehicleError(f"{where}: expected a latency in s (a number), got {value!r}") from None
+    if not (np.isfinite(x) and 0.0 <= x <= MAX_LATENCY):
+        raise VehicleError(f"{where} = {value!r}: expected 0 <= latency <= {MAX_LATENCY:g} s "
+                           "(how late the sensors read relative to the logged inputs)")
+    return x
+
+
+def _sensors(spec, f: str) -> tuple[dict, float | None, float]:
     """``sensors:`` section -> ({name: position (3,)}, the imu's ``gyro_bias_sd`` (rad/s) or
-    None); validated."""
+    None, ``latency`` (s, 0 when not given)); validated."""
     if spec is None:
-        return {}, None
+        return {}, None, 0.0
     if not isinstance(spec, dict):
         raise VehicleError(f"{f}: sensors: expected a mapping such as {{pressure: {{position: [x, y, z]}}}}")
     out, bias_sd = {}, None
+    latency = check_latency(spec["latency"], f"{f}: sensors.latency") if "latency" in spec else 0.0
     for name, val in spec.items():
+        if name == "latency":
+            continue
         if name not in SENSOR_NAMES:
-            raise VehicleError(unknown_key_message(f"{f}: sensors", name, SENSOR_NAMES, noun="sensor"))
+            raise VehicleError(unknown_key_message(f"{f}: sensors", name, SENSOR_NAMES + ("latency",), noun="sensor"))
         if not isinstance(val, dict):
             raise VehicleError(f"{f}: sensors.{name}: expected a mapping {{position: [x, y, z]}} "
                                "(m, body frame; optional source)")
@@ -398,7 +432,7 @@ def _sensors(spec, f: str) -> tuple[dict, float | None]:
             raise VehicleError(f"{f}: sensors.{name}.position {pos.tolist()} is more than {MAX_SENSOR_OFFSET:g} m "
                                "from the body origin (expected metres, body frame)")
         out[name] = pos
-    return out, bias_sd
+    return out, bias_sd, latency
 
 
 def vehicle_from_dict(d: dict, *, source: str = "<dict>", actuators: Actuators | None = None) -> Vehicle:
@@ -464,7 +498,7 @@ def vehicle_from_dict(d: dict, *, source: str = "<dict>", actuators: Actuators |
             f"{w}: diagonal added mass must be given as positive magnitudes (M_A = -diag(X_udot, ...) in SNAME sign)"
         )
 
-    sensors, bias_sd = _sensors(d.get("sensors"), f)
+    sensors, bias_sd, latency = _sensors(d.get("sensors"), f)
     damping = make_term(d["damping"], context=f"{f}: damping")
     effects_spec = d.get("effects") or []
     if not isinstance(effects_spec, list):
@@ -489,6 +523,7 @@ def vehicle_from_dict(d: dict, *, source: str = "<dict>", actuators: Actuators |
         current_ned=current,
         sensors=sensors,
         gyro_bias_sd=bias_sd,
+        sensor_latency=latency,
         description=str(d.get("description", "")),
         source=source,
         raw=d,

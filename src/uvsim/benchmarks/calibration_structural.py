@@ -74,6 +74,9 @@ TRUTH_TOLERANCE = 0.02
 #: battery that differs from the file's is carried by the thrust model rather than by the
 #: hydrodynamic coefficients (issue 22's "thrust model first").
 REAL_LOG_FREE = "z_b,thruster_gain_*,thruster_reverse_*"
+#: The real-log command's ``--latency`` (docs/calibration.md, "Sensor latency"): estimated after the
+#: joint fit, fitted again with it when it lowers the windowed cost by 2 % or more.
+REAL_LOG_LATENCY = "auto"
 #: Scenario size: a few runs of 15-25 s at 100 Hz (a real session's order) and two validation runs.
 SIZE = dict(n_runs=3, n_validation=2, duration=[15, 25], rate_hz=100.0)
 
@@ -192,9 +195,10 @@ def dataset_vehicle_on_family(dataset_dir):
 
 
 def run_one(seed: int, *, prior: bool = True, loss: str = "linear", supply: bool = False, workers: int = 1,
-            free: str = REAL_LOG_FREE, tmp: Path | None = None) -> dict:
+            free: str = REAL_LOG_FREE, latency=REAL_LOG_LATENCY, tmp: Path | None = None) -> dict:
     """Generate and calibrate one scenario; returns its record.  ``free``: the calibration's
-    ``--free``; ``supply``: the start model's thrusters on the T200 voltage family and
+    ``--free``; ``latency``: its ``--latency`` (None: the vehicle file's, i.e. none);
+    ``supply``: the start model's thrusters on the T200 voltage family and
     ``supply_voltage`` freed beside ``free`` (:func:`on_voltage_family`)."""
     from uvsim.calibration import Calibrator
     from uvsim.errors import CalibrationError
@@ -209,8 +213,9 @@ def run_one(seed: int, *, prior: bool = True, loss: str = "linear", supply: bool
         try:
             start = dataset_vehicle_on_family(out) if supply else None
             names = f"{free},supply_voltage" if supply else free
-            cal = Calibrator(free=names, workers=workers, prior=prior, loss=loss).fit(out, start)
+            cal = Calibrator(free=names, workers=workers, prior=prior, loss=loss, latency=latency).fit(out, start)
             rec = judge(cal.report_)
+            rec["latency_fitted"] = cal.latency_["value"]  # s, what the fitted vehicle states
             rec["supply_voltage"] = cal.params_.get("supply_voltage")  # fitted (V), None when not freed
             err = truth_errors(spec, {"start": cal.initial_vehicle_, "fitted": cal.vehicle_})
             rec["truth_rmse_start"], rec["truth_rmse_fitted"] = err["start"], err["fitted"]
@@ -222,24 +227,23 @@ def run_one(seed: int, *, prior: bool = True, loss: str = "linear", supply: bool
                           "not_compared": [], "at_bounds": [],
                           "data_weight": None, "farther_from_truth": []}, str(exc)
         seconds = time.perf_counter() - t0
-    return {"seed": seed, "prior": prior, "loss": loss, "supply": supply, "free": free, **over,
+    return {"seed": seed, "prior": prior, "loss": loss, "supply": supply, "free": free, "latency": latency, **over,
             "effects": [e["type"] for e in truth["effects"]],
             "curve": spec.vehicle.get("truth_curve"), **rec, "error": error, "seconds": seconds}
 
 
 def summarize(records: list[dict]) -> dict:
     out = {}
-    modes = sorted({_mode(r) for r in records}, key=lambda m: (not m[0], m[1], m[2], m[3]))
-    for prior, loss, supply, free in modes:
-        mine = [r for r in records if _mode(r) == (prior, loss, supply, free)]
+    modes = sorted({_mode(r) for r in records}, key=lambda m: (not m[0], m[1], m[2], m[3], str(m[4])))
+    for mode in modes:
+        mine = [r for r in records if _mode(r) == mode]
         rs = [r for r in mine if r["error"] is None]
         if not rs:
             continue
         worse = [r for r in rs if r["worse"]]
         farther = [r for r in rs if r.get("farther_from_truth")]
         chans = sorted({c for r in rs for c in r["gain"]})
-        out[("prior" if prior else "no_prior") + ("" if loss == "linear" else f"+{loss}")
-            + ("+supply_voltage" if supply else "") + f" (--free {free})"] = {
+        out[_label(mode)] = {
             "n": len(rs), "errors": sum(1 for r in mine if r["error"] is not None),
             "no_worse": len(rs) - len(worse), "no_worse_rate": (len(rs) - len(worse)) / len(rs),
             "worse": len(worse), "worse_reported_not_ok": sum(not r["check_ok"] for r in worse),
@@ -257,16 +261,26 @@ def summarize(records: list[dict]) -> dict:
 
 
 def _mode(rec: dict) -> tuple:
-    """How a record was calibrated: (prior, loss, supply voltage freed, ``--free``; records of the
-    releases before :data:`REAL_LOG_FREE` freed ``z_b``)."""
-    return rec["prior"], rec.get("loss", "linear"), rec.get("supply", False), rec.get("free", "z_b")
+    """How a record was calibrated: (prior, loss, supply voltage freed, ``--free``, ``--latency``;
+    records of the releases before :data:`REAL_LOG_FREE` freed ``z_b``, before
+    :data:`REAL_LOG_LATENCY` had no latency setting: None)."""
+    return (rec["prior"], rec.get("loss", "linear"), rec.get("supply", False), rec.get("free", "z_b"),
+            rec.get("latency"))
+
+
+def _label(mode: tuple) -> str:
+    """The summary's key and the progress line's name of a mode (:func:`_mode`)."""
+    prior, loss, supply, free, latency = mode
+    return (("prior" if prior else "no_prior") + ("" if loss == "linear" else f"+{loss}")
+            + ("+supply_voltage" if supply else "") + f" (--free {free}"
+            + ("" if latency is None else f" --latency {latency}") + ")")
 
 
 def run_benchmark(n: int, seed: int, *, compare_no_prior: bool = False, loss: str = "linear", supply: bool = False,
-                  free: str = REAL_LOG_FREE, workers: int = 1, results: str | Path | None = None,
-                  progress=None) -> dict:
+                  free: str = REAL_LOG_FREE, latency=REAL_LOG_LATENCY, workers: int = 1,
+                  results: str | Path | None = None, progress=None) -> dict:
     """``n`` seeds from ``seed`` (resumed from ``results``, JSON lines), calibrated with
-    ``--free free`` (:func:`run_one`)."""
+    ``--free free --latency latency`` (:func:`run_one`; latency None: no ``--latency``)."""
     if n < 1:
         raise UvsimError(f"--scenarios {n}: need at least one scenario")
     from uvsim.calibration.selection import expand_names
@@ -282,15 +296,14 @@ def run_benchmark(n: int, seed: int, *, compare_no_prior: bool = False, loss: st
     todo = [(s, p) for s in range(seed, seed + n) for p in ((True, False) if compare_no_prior else (True,))]
     records = []
     for i, (s, p) in enumerate(todo, 1):
-        if (s, p, loss, supply, free) in done:
-            records.append(done[(s, p, loss, supply, free)])
+        key = (s, p, loss, supply, free, latency)
+        if key in done:
+            records.append(done[key])
             continue
-        rec = run_one(s, prior=p, loss=loss, supply=supply, free=free, workers=workers)
+        rec = run_one(s, prior=p, loss=loss, supply=supply, free=free, latency=latency, workers=workers)
         records.append(rec)
         append_record(path, rec)
-        mode = ("prior" if p else "no prior") + ("" if loss == "linear" else f", {loss}") \
-            + (", supply_voltage" if supply else "") + f", --free {free}"
-        say(f"[{i}/{len(todo)}] seed {s} {mode}: effects {rec['effects'] or 'none'}, "
+        say(f"[{i}/{len(todo)}] seed {s} {_label(key[1:])}: effects {rec['effects'] or 'none'}, "
             f"curve {rec['curve'] or '16 V'}, off {rec['perturbation']:.0%}: "
             + (f"ERROR {rec['error']}" if rec["error"] else
                f"worse in {rec['worse'] or 'no channel'}, check {'ok' if rec['check_ok'] else 'NOT OK'}")

@@ -35,6 +35,7 @@ from uvsim.calibration.evaluation import DEFAULT_BATCH_ROWS, BatchEvaluator, Das
 from uvsim.calibration.fitness import used_channels
 from uvsim.calibration.ga import GASettings, fingerprint, run_ga
 from uvsim.calibration.joint import JointCheckpoint, joint_checkpoint_path, run_joint
+from uvsim.calibration.latency_estimate import scan_latency
 from uvsim.calibration.params import DOF_PARAMETERS, default_channel_weights, parse_dofs
 from uvsim.calibration.report import build_report, evaluate_runs, identifiability_report
 from uvsim.calibration.selection import check_bounds, effective_inertia_start, expand_names, joint_candidates
@@ -42,10 +43,11 @@ from uvsim.errors import CalibrationError
 from uvsim.estimation.lag import attitude_lag_setting
 from uvsim.fitting.objective import check_loss, continuity_factors
 from uvsim.fitting.parameters import default_bounds, physical_bounds
+from uvsim.latency import runs_for
 from uvsim.logs import MANIFEST, Dataset, read_dataset
 from uvsim.measurements import CHANNEL_GROUP, channel_weight, check_sample_weighting, measurements_for
 from uvsim.plausibility import check_runs, parse_allow
-from uvsim.vehicle import load_vehicle
+from uvsim.vehicle import check_latency, load_vehicle
 
 log = logging.getLogger("uvsim")
 DEFAULT_HORIZONS = (2.0,)
@@ -161,6 +163,13 @@ class Calibrator:
         (a first-order lag in their measurement model, :mod:`uvsim.estimation.lag`), or
         "auto" (default): estimated from the training runs' gyro and angles, used when
         longer than 1.5 sample intervals; 0: none.
+    latency : how late the logged sensors read relative to the logged inputs, s
+        (:mod:`uvsim.latency`): None (default) the vehicle file's ``sensors.latency`` (0 when
+        it states none); a number: that latency, for the start model too; "auto": the file's
+        latency for the start, then estimated after the joint fit with the fitted model
+        (:mod:`uvsim.calibration.latency_estimate`) and, when it lowers the windowed cost by
+        at least 2 %, the joint fit is run again from its result with it.  The fitted vehicle
+        file states the latency it was fitted with.
     initial_velocity : "zero" | "differentiate" for the GA's and the open-loop
         evaluation's unknown initial velocities (the joint stage estimates them).
     prior : the joint stage fits maximum a posteriori with the starting vehicle as the prior
@@ -202,7 +211,7 @@ class Calibrator:
                  sample_weighting: str = DEFAULT_SAMPLE_WEIGHTING, low_speed_exponent: float = 0.0, refine: bool = True, horizons=DEFAULT_HORIZONS,
                  continuity=DEFAULT_CONTINUITY,
                  max_iter: int = 80, gyro_bias: bool = True, attitude_bias: bool = True, screen: bool = True,
-                 attitude_lag="auto",
+                 attitude_lag="auto", latency=None,
                  initial_velocity: str = "zero", prior: bool = True, loss: str = "linear",
                  workers: int = 1, dask: str | None = None, batch_rows: int = DEFAULT_BATCH_ROWS, checkpoint=None,
                  resume=None, progress: bool = False, effects=None, allow=()):
@@ -218,6 +227,7 @@ class Calibrator:
         self.horizons, self.max_iter, self.gyro_bias, self.screen = horizons, max_iter, gyro_bias, screen
         self.continuity = continuity
         self.attitude_lag = attitude_lag
+        self.latency = latency
         self.attitude_bias = attitude_bias
         self.initial_velocity = initial_velocity
         self.prior = prior
@@ -287,6 +297,8 @@ class Calibrator:
         check_runs(ds.runs, veh, parse_allow(self.allow, "allow"))  # units, sampling, PWM range
         if self.effects:
             veh = veh.with_effects(list(self.effects))
+        if self.latency is not None and self.latency != "auto":
+            veh = veh.with_latency(_latency_value(self.latency))
         self.initial_vehicle_ = veh
         check_loss(self.loss)
         check_sample_weighting(self.sample_weighting)
@@ -297,7 +309,8 @@ class Calibrator:
         horizons = self._horizons()
         self._continuity()  # a bad value is an error before the GA, not after it
         base = veh.parameters()
-        train = [r for r in ds.runs if r.split == "train"]
+        # the training runs as the vehicle predicts them (sensors.latency; uvsim.latency)
+        train = runs_for(veh, [r for r in ds.runs if r.split == "train"])
         present = [d for d in DOF_PARAMETERS if any(r.dof == d for r in train)]
         if self.dofs is None:
             dofs, ga_dofs = list(DOF_PARAMETERS), present
@@ -315,6 +328,10 @@ class Calibrator:
                 and not joint_checkpoint_path(self.resume).is_file():
             raise CalibrationError(f"checkpoint {self.resume} does not exist")
         self.lag_ = self._lag(runs)
+        if self.latency == "auto" and not self.refine:
+            raise CalibrationError("latency='auto' (--latency auto) is estimated after the joint fit; "
+                                   "it needs refine=True (no --no-refine)")
+        self.latency_ = self._latency_record(veh, None)
         bounds = check_bounds(self.bounds, base)
         fixed = expand_names(self.fix, list(base), "fix")
         extra = expand_names(self.free, list(base), "free")
@@ -358,6 +375,9 @@ class Calibrator:
             start_veh = veh.with_parameters(params) if params else veh
             fit_res, screen = self._run_joint(ds, start_veh, runs, meas, dofs, ga_dofs, fixed, extra, joint_bounds,
                                               horizons)
+            if self.latency == "auto" and fit_res is not None:
+                fit_res, start_veh = self._auto_latency(ds, start_veh, fit_res, runs, meas, dofs, ga_dofs, fixed,
+                                                        extra, joint_bounds, horizons)
         t_ref = time.perf_counter()
         unc: dict = {k: None for k in params}
         if fit_res is not None:
@@ -370,7 +390,8 @@ class Calibrator:
         self.screen_ = screen
         self.logbook_ = ga["logbooks"]
         self.evaluations_ = ga["evaluations"]
-        self.vehicle_ = veh.with_parameters(params, name=f"{veh.name}_calibrated")
+        self.vehicle_ = veh.with_parameters(params, name=f"{veh.name}_calibrated").with_latency(
+            self.latency_["value"])
         self.dofs_ = ga_dofs
         self._train_runs = runs
         self.identifiability_ = identifiability_report(self)
@@ -430,7 +451,29 @@ class Calibrator:
             values.update(dict(zip(p.names, map(float, p.decode(ga["best"][d])))))
         return ga, values, problems
 
-    def _run_joint(self, ds, start_veh, runs, meas, dofs, ga_dofs, fixed, extra, bounds_of, horizons):
+    def _latency_record(self, veh, scan) -> dict:
+        how = "auto" if self.latency == "auto" else ("file" if self.latency is None else "given")
+        return {"value": float(veh.sensor_latency), "how": how, "scan": scan}
+
+    def _auto_latency(self, ds, start_veh, fit_res, runs, meas, dofs, ga_dofs, fixed, extra, bounds_of, horizons):
+        """``latency="auto"``: the scan with the fitted model, and the joint fit again from its
+        result with the latency found when it is worth it (class docstring).  Returns the fit
+        to keep and its start vehicle."""
+        fitted = start_veh.with_parameters(fit_res.values)
+        scan = scan_latency(fitted, runs, meas, attitude_bias=bool(self.attitude_bias))
+        if not scan["use"]:
+            self.latency_ = self._latency_record(start_veh, scan)
+            return fit_res, start_veh
+        log.info("sensor latency %.1f ms lowers the windowed cost by %.1f %%: fitting again with it",
+                 scan["best"] * 1000, 100 * scan["gain"])
+        again = fitted.with_latency(scan["best"])
+        res, _ = self._run_joint(ds, again, runs, meas, dofs, ga_dofs, fixed, extra, bounds_of, horizons,
+                                 tag=".latency")
+        self.latency_ = self._latency_record(again, scan)
+        self.latency_["first_fit"] = {"cost": float(fit_res.cost), "stages": fit_res.stages}
+        return (res if res is not None else fit_res), again
+
+    def _run_joint(self, ds, start_veh, runs, meas, dofs, ga_dofs, fixed, extra, bounds_of, horizons, tag=""):
         params = start_veh.parameters()
         keep = list(dict.fromkeys([k for k in joint_candidates(ga_dofs) if k not in fixed] + list(extra)))
         mixed = any(r.dof not in ga_dofs for r in runs)
@@ -452,9 +495,9 @@ class Calibrator:
             "attitude_bias": bool(self.attitude_bias)})
         ck_path = self.checkpoint if self.checkpoint is not None else self.resume
         ck = None
-        if ck_path is not None or self.resume is not None:
-            ck = JointCheckpoint(None if ck_path is None else joint_checkpoint_path(ck_path), key,
-                                 resume=None if self.resume is None else joint_checkpoint_path(self.resume))
+        if ck_path is not None or self.resume is not None:  # (tag: the refit with an estimated latency)
+            ck = JointCheckpoint(None if ck_path is None else joint_checkpoint_path(f"{ck_path}{tag}"), key,
+                                 resume=None if self.resume is None else joint_checkpoint_path(f"{self.resume}{tag}"))
         return run_joint(start_veh, runs, meas, params, keep=keep, screen=screen,
                          bounds={k: bounds_of(k) for k in names}, horizons=horizons,
                          continuity=continuity, ftol=JOINT_FTOL, max_iter=int(self.max_iter),
@@ -478,3 +521,16 @@ class Calibrator:
     def _check_fitted(self):
         if not hasattr(self, "vehicle_"):
             raise CalibrationError("this Calibrator is not fitted yet; call fit(dataset, vehicle) first")
+
+
+def _latency_value(value) -> float:
+    """``Calibrator(latency=...)`` as a number of seconds (None and "auto" are handled by the caller)."""
+    if isinstance(value, str):
+        try:
+            value = float(value)
+        except ValueError:
+            raise CalibrationError(f"latency {value!r}: expected 'auto' or a latency in s (e.g. 0.03)") from None
+    try:
+        return check_latency(value, "latency")
+    except Exception as e:  # VehicleError: the same message as a calibration setting
+        raise CalibrationError(str(e)) from None

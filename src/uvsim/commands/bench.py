@@ -1,6 +1,6 @@
 """``uvsim bench [--json] [--quick] [--only AREA,...]``: speed figures (docs/performance.md).
 
-``uvsim bench calibrate-structural --scenarios N [--free LIST] [--compare-no-prior]``: calibration on data that
+``uvsim bench calibrate-structural --scenarios N [--free LIST] [--latency auto|S|none] [--compare-no-prior]``: calibration on data that
 differ from the model in structure (:mod:`uvsim.benchmarks.calibration_structural`, docs/calibration.md).
 
 ``uvsim bench diagnose --scenarios N --seed S [--two-effects M] [--results FILE]``: the
@@ -14,7 +14,7 @@ import platform
 
 
 def register(sub) -> None:
-    from uvsim.benchmarks.calibration_structural import REAL_LOG_FREE
+    from uvsim.benchmarks.calibration_structural import REAL_LOG_FREE, REAL_LOG_LATENCY
     from uvsim.fitting.objective import LOSSES
 
     p = sub.add_parser("bench", help="measure simulator / calibration speed; 'bench diagnose': scenario benchmark")
@@ -32,6 +32,9 @@ def register(sub) -> None:
     p.add_argument("--free", default=REAL_LOG_FREE,
                    help=f"(calibrate-structural) the calibration's --free (default {REAL_LOG_FREE!r}, the real-log "
                         "command of docs/calibration.md; 'z_b': the releases before, no actuator parameter)")
+    p.add_argument("--latency", default=REAL_LOG_LATENCY, metavar="auto|SECONDS|none",
+                   help=f"(calibrate-structural) the calibration's --latency (default {REAL_LOG_LATENCY!r}, the "
+                        "real-log command; 'none': no --latency, the releases before)")
     p.add_argument("--compare-no-prior", action="store_true",
                    help="(calibrate-structural) calibrate each dataset also without the priors (--no-prior)")
     p.add_argument("--scenarios", type=int, default=20, help="(diagnose) single-effect or clean scenarios")
@@ -155,6 +158,7 @@ def _calibrate_structural(args) -> int:
 
     out = _suite(args, lambda say: run_benchmark(args.scenarios, args.seed, compare_no_prior=args.compare_no_prior,
                                                  loss=args.loss, supply=args.supply_voltage, free=args.free,
+                                                 latency=None if args.latency == "none" else args.latency,
                                                  workers=args.workers, results=args.results,
                                                  progress=say))
     if out is None:

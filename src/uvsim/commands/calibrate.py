@@ -76,6 +76,10 @@ def register(sub) -> None:
     p.add_argument("--attitude-lag", default="auto", metavar="auto|SECONDS",
                    help="time constant of the attitude filter's lag on logged Euler angles: 'auto' (default, "
                         "estimated from the gyro), a number, or 0 for none")
+    p.add_argument("--latency", default=None, metavar="auto|SECONDS",
+                   help="how late the logged sensors read relative to the logged inputs: 'auto' (estimated after the "
+                        "joint fit, and fitted again with it when it helps; docs/calibration.md 'Sensor latency'), a "
+                        "number of seconds, or omitted: the vehicle file's sensors.latency (0 when it states none)")
     p.add_argument("--no-screen", action="store_true",
                    help="free every DOF's parameters for mixed runs, also those the data do not excite")
     p.add_argument("--ga-channels", choices=("own", "all"), default="own",
@@ -308,6 +312,15 @@ def print_summary(cal, out=None) -> None:
     lag = rep["attitude_lag"]
     if lag["tau"]:
         say(f"attitude filter lag {lag['tau']:.3f} s ({lag['source']})")
+    lat = rep.get("sensor_latency") or {}
+    scan = lat.get("scan")
+    if scan:
+        verdict = (f"fitted again with {scan['best'] * 1000:.1f} ms" if scan["use"] else
+                   f"kept {scan['current'] * 1000:.1f} ms (needs a {100 * scan['min_gain']:.0f} % lower cost)")
+        say(f"sensor latency scan (fitted model, {scan['horizon_s']:g} s windows): lowest cost at "
+            f"{scan['best'] * 1000:.1f} ms, {100 * scan['gain']:.1f} % below {scan['current'] * 1000:.1f} ms: {verdict}")
+    elif lat.get("value"):
+        say(f"sensor latency {lat['value'] * 1000:.1f} ms ({'the vehicle file' if lat['how'] == 'file' else 'given'})")
     for text, runs in _grouped_notes(rep["notes"]).items():
         say(f"note: {text} ({len(runs)} run{'s' if len(runs) > 1 else ''}: {', '.join(runs[:3])}"
             f"{', ...' if len(runs) > 3 else ''})")
@@ -353,7 +366,7 @@ def _run(args) -> int:
                      sample_weighting=args.sample_weighting,
                      screen=not args.no_screen,
                      ga_channels=args.ga_channels,
-                     attitude_lag=lag, low_speed_exponent=args.low_speed_exponent, progress=want_progress(args),
+                     attitude_lag=lag, latency=args.latency, low_speed_exponent=args.low_speed_exponent, progress=want_progress(args),
                      allow=parse_allow(args.allow))
     logger = logging.getLogger("uvsim")
     handler = None
@@ -424,4 +437,7 @@ def _say_resume(ckpt) -> None:
     joint = joint_checkpoint_path(ckpt)
     if Path(joint).is_file():
         held += f" and {joint} the joint fit's progress"
+    again = joint_checkpoint_path(f"{ckpt}.latency")
+    if Path(again).is_file():
+        held += f" and {again} the refit with the estimated sensor latency"
     say("calibrate", f"interrupted; {held}; continue with --resume {ckpt}")

@@ -62,6 +62,7 @@ def _vehicle_for(args):
 
 
 def _run(args) -> int:
+    from uvsim.latency import delay_inputs
     from uvsim.logs import read_run, write_run
     from uvsim.simulate import simulate_run
     from uvsim.vehicle import load_vehicle
@@ -75,6 +76,9 @@ def _run(args) -> int:
     check_runs_at_door("simulate", [run], veh, args.allow)
     res = simulate_run(veh, run, current=current, method=args.method, substeps=args.substeps,
                        initial_window_s=args.initial_window)
+    run = delay_inputs(run, veh.sensor_latency)  # as simulate_run applied them (--compare's forces)
+    if veh.sensor_latency:
+        print(f"inputs applied {veh.sensor_latency * 1000:.1f} ms late (the vehicle's sensors.latency)")
     if args.out:
         df = res.to_pandas()
         cols = ["t", "x", "y", "z", "qw", "qx", "qy", "qz", "roll", "pitch", "yaw", "u", "v", "w", "p", "q", "r"]

@@ -45,6 +45,7 @@ from uvsim.estimation.lag import attitude_lag_setting
 from uvsim.errors import CalibrationError, UvsimError
 from uvsim.fitting.evaluate import open_loop, pooled
 from uvsim.forces import make_term
+from uvsim.latency import runs_for
 from uvsim.logs import Dataset, read_dataset
 from uvsim.plausibility import check_runs, parse_allow
 from uvsim.vehicle import load_vehicle
@@ -154,6 +155,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     if not (horizon is None or (np.isfinite(horizon) and horizon > 0)):
         raise CalibrationError(f"horizon must be a positive number of seconds, got {horizon!r}")
     train, val, split_note = _split(dataset)
+    train, val = runs_for(veh, train), runs_for(veh, val)  # the vehicle's sensors.latency (uvsim.latency)
     lag = attitude_lag_setting(train, attitude_lag)
     kinds = {(r.input_kind, len(r.input_columns)) for r in train + val}
     if len(kinds) > 1:

@@ -46,6 +46,7 @@ from uvsim.blas import single_thread
 from uvsim.errors import CalibrationError
 from uvsim.fitting.nodes import NodeModel
 from uvsim.kinematics import quat_multiply
+from uvsim.latency import runs_for
 from uvsim.measurements import rotation_vector_error
 from uvsim.model import Model
 from uvsim.simulate import INITIAL_WINDOW_S, _rk4_loop, initial_state_from_run
@@ -236,7 +237,9 @@ def whole_runs(vehicle, runs, sensors, space, z, *, initial_velocity: str = "zer
     """Whole-run simulations of ``runs`` (one input kind) with the parameters ``z`` of
     ``space``, from the runs' estimated initial states (``sensors``: per run, what its
     measurement model reads); all runs in one batch.  Returns (states (R, n_max, n_y),
-    accelerations (R, n_max, 6) or None, the model)."""
+    accelerations (R, n_max, 6) or None, the model).  The inputs act as late as the vehicle's
+    sensors read (``sensor_latency``, :mod:`uvsim.latency`)."""
+    runs = runs_for(vehicle, runs)
     R = len(runs)
     T, U, V = padded_runs(runs)
     P0, Q0, N0 = [], [], []
@@ -285,7 +288,8 @@ class WindowedProblem:
         kinds = {(r.input_kind, len(r.input_columns)) for r in runs}
         if len(kinds) != 1:
             raise CalibrationError(f"runs mix input kinds/counts: {sorted(kinds)}; fit them in separate groups")
-        self.vehicle, self.runs, self.space = vehicle, list(runs), space
+        # inputs as late as the vehicle's sensors read (sensor_latency, uvsim.latency)
+        self.vehicle, self.runs, self.space = vehicle, runs_for(vehicle, runs), space
         self.input_kind = runs[0].input_kind
         self.horizon = horizon
         self.lay = layout(self.runs, horizon)
