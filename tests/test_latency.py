@@ -129,5 +129,6 @@ def test_auto_latency_turns_a_late_log_s_worse_fit_no_worse(tmp_path, capsys):
     assert judge(report)["worse"] == []
     lat = report["sensor_latency"]
     assert lat["how"] == "auto" and lat["scan"]["use"] and lat["value"] == pytest.approx(0.035, abs=0.01)
+    assert report["free_parameters"] == lat["first_fit"]["free_parameters"]   # refitted, not re-screened
     assert yaml.safe_load(fitted.read_text())["sensors"]["latency"] == lat["value"]
     assert load_vehicle(fitted).sensor_latency == lat["value"]

@@ -39,7 +39,7 @@ from uvsim.calibration.latency_estimate import scan_latency
 from uvsim.calibration.params import DOF_PARAMETERS, default_channel_weights, parse_dofs
 from uvsim.calibration.report import build_report, evaluate_runs, identifiability_report
 from uvsim.calibration.selection import check_bounds, effective_inertia_start, expand_names, joint_candidates
-from uvsim.errors import CalibrationError
+from uvsim.errors import CalibrationError, VehicleError
 from uvsim.estimation.lag import attitude_lag_setting
 from uvsim.fitting.objective import check_loss, continuity_factors
 from uvsim.fitting.parameters import default_bounds, physical_bounds
@@ -467,19 +467,26 @@ class Calibrator:
         log.info("sensor latency %.1f ms lowers the windowed cost by %.1f %%: fitting again with it",
                  scan["best"] * 1000, 100 * scan["gain"])
         again = fitted.with_latency(scan["best"])
+        # the same free parameters as the first fit (no second screen), from its values
         res, _ = self._run_joint(ds, again, runs, meas, dofs, ga_dofs, fixed, extra, bounds_of, horizons,
-                                 tag=".latency")
+                                 tag=".latency", names=list(fit_res.names))
         self.latency_ = self._latency_record(again, scan)
-        self.latency_["first_fit"] = {"cost": float(fit_res.cost), "stages": fit_res.stages}
+        self.latency_["first_fit"] = {"cost": float(fit_res.cost), "stages": fit_res.stages,
+                                      "free_parameters": list(fit_res.names)}
         return (res if res is not None else fit_res), again
 
-    def _run_joint(self, ds, start_veh, runs, meas, dofs, ga_dofs, fixed, extra, bounds_of, horizons, tag=""):
+    def _run_joint(self, ds, start_veh, runs, meas, dofs, ga_dofs, fixed, extra, bounds_of, horizons, tag="",
+                   names=None):
+        """The joint stage (:func:`uvsim.calibration.joint.run_joint`); ``names``: free exactly these
+        (no screen); ``tag``: suffix of its checkpoint file."""
         params = start_veh.parameters()
         keep = list(dict.fromkeys([k for k in joint_candidates(ga_dofs) if k not in fixed] + list(extra)))
         mixed = any(r.dof not in ga_dofs for r in runs)
         screen = [k for k in joint_candidates(dofs) if k not in fixed and k not in keep] if mixed else []
         if not self.screen:
             keep, screen = keep + screen, []
+        if names is not None:
+            keep, screen = list(names), []
         names = keep + screen
         continuity = self._continuity()
         key = fingerprint({
@@ -532,5 +539,5 @@ def _latency_value(value) -> float:
             raise CalibrationError(f"latency {value!r}: expected 'auto' or a latency in s (e.g. 0.03)") from None
     try:
         return check_latency(value, "latency")
-    except Exception as e:  # VehicleError: the same message as a calibration setting
+    except VehicleError as e:  # the same message, as a calibration setting's error
         raise CalibrationError(str(e)) from None
