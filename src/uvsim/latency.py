@@ -11,7 +11,7 @@ where the delayed inputs hold the first logged value).
 A vehicle file states it as ``sensors.latency`` (s; docs/model.md, "Sensor latency"); every
 prediction of a log (open-loop validation, the windowed fits, diagnosis) then uses
 :func:`delay_inputs`.  The calibration can estimate it (``latency="auto"``,
-:func:`uvsim.calibration.latency_scan`).
+:func:`uvsim.calibration.latency_estimate.scan_latency`).
 
 The inputs are held over each sample interval (zero-order hold, as the simulator applies
 them).  The input held over ``[t_i, t_(i+1)]`` after a delay ``d`` is the logged input at
