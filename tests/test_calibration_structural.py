@@ -131,6 +131,8 @@ def test_records_of_another_free_set_are_not_resumed_as_this_one(tmp_path, monke
     calls.clear()
     with pytest.raises(Exception, match="--free: unknown parameter 'thruster_gian_1'"):
         cs.run_benchmark(1, 0, results=p, free="z_b,thruster_gian_1")
+    with pytest.raises(Exception, match="latency 'soon'"):
+        cs.run_benchmark(1, 0, results=p, latency="soon")
     assert calls == []                                                  # before any dataset is made
 
 

@@ -199,7 +199,6 @@ class Vehicle:
         """A copy whose sensors read ``latency`` s late (``sensors.latency``, :mod:`uvsim.latency`)."""
         new = copy.copy(self)
         new.sensor_latency = check_latency(latency, f"{self.source}: sensors.latency")
-        new.raw = {**self.raw, "sensors": {**(self.raw.get("sensors") or {}), "latency": new.sensor_latency}}
         return new
 
     def with_effects(self, effects: list) -> "Vehicle":

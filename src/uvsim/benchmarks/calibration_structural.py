@@ -283,6 +283,7 @@ def run_benchmark(n: int, seed: int, *, compare_no_prior: bool = False, loss: st
     ``--free free --latency latency`` (:func:`run_one`; latency None: no ``--latency``)."""
     if n < 1:
         raise UvsimError(f"--scenarios {n}: need at least one scenario")
+    from uvsim.calibration.calibrator import latency_setting
     from uvsim.calibration.selection import expand_names
     from uvsim.scenarios.vehicle_data import DEFAULT_VEHICLE_FILE
     from uvsim.vehicle import load_vehicle
@@ -290,6 +291,7 @@ def run_benchmark(n: int, seed: int, *, compare_no_prior: bool = False, loss: st
     # a name no parameter of the generator's start model has is an error now, not one per seed
     # (run_one records a calibration that raises as "refused before a result")
     expand_names(free, list(load_vehicle(DEFAULT_VEHICLE_FILE).parameters()), "--free")
+    latency_setting(latency)  # likewise a bad --latency
     say = progress or (lambda m: None)
     path = Path(results) if results else None
     done = load_records(path, lambda rec: (rec["seed"], *_mode(rec)), say, "calibration")

@@ -298,7 +298,7 @@ class Calibrator:
         if self.effects:
             veh = veh.with_effects(list(self.effects))
         if self.latency is not None and self.latency != "auto":
-            veh = veh.with_latency(_latency_value(self.latency))
+            veh = veh.with_latency(latency_setting(self.latency))
         self.initial_vehicle_ = veh
         check_loss(self.loss)
         check_sample_weighting(self.sample_weighting)
@@ -530,8 +530,11 @@ class Calibrator:
             raise CalibrationError("this Calibrator is not fitted yet; call fit(dataset, vehicle) first")
 
 
-def _latency_value(value) -> float:
-    """``Calibrator(latency=...)`` as a number of seconds (None and "auto" are handled by the caller)."""
+def latency_setting(value):
+    """``Calibrator(latency=...)`` checked: None, "auto", or a number of seconds (a numeric string
+    too) returned as a float; anything else a CalibrationError."""
+    if value is None or value == "auto":
+        return value
     if isinstance(value, str):
         try:
             value = float(value)

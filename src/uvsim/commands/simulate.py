@@ -74,9 +74,9 @@ def _run(args) -> int:
     veh = load_vehicle(_vehicle_for(args))
     run = read_run(args.run)
     check_runs_at_door("simulate", [run], veh, args.allow)
+    run = delay_inputs(run, veh.sensor_latency)  # as simulate_run applies them (and --compare's forces)
     res = simulate_run(veh, run, current=current, method=args.method, substeps=args.substeps,
                        initial_window_s=args.initial_window)
-    run = delay_inputs(run, veh.sensor_latency)  # as simulate_run applied them (--compare's forces)
     if veh.sensor_latency:
         print(f"inputs applied {veh.sensor_latency * 1000:.1f} ms late (the vehicle's sensors.latency)")
     if args.out:
