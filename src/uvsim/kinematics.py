@@ -37,6 +37,40 @@ def quat_to_rotation(q: np.ndarray) -> np.ndarray:
     return R
 
 
+def quat_down_axis(q: np.ndarray) -> np.ndarray:
+    """The NED down axis in body coordinates, ``k = R(q)^T e_3``: the third row of
+    :func:`quat_to_rotation` (same formulas, so the same values to the last bit), without
+    the other six entries.  Depth sensors and accelerometers need only this row.
+
+    Parameters
+    ----------
+    q : (..., 4) unit quaternions (scalar first, body -> NED).
+
+    Returns
+    -------
+    (..., 3) array ``[R_20, R_21, R_22]``.
+    """
+    q = np.asarray(q, dtype=float)
+    return np.stack(down_axis_components(q[..., 0], q[..., 1], q[..., 2], q[..., 3]), axis=-1)
+
+
+def down_axis_components(w, x, y, z) -> tuple:
+    """:func:`quat_down_axis` from the quaternion's components, each an array of one shape
+    ``S`` (e.g. rows of a component-major copy, which hot loops read faster than the
+    strided components of a state array).  Returns ``(k_0, k_1, k_2)``, each shape ``S``."""
+    return 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
+
+
+def cross_components(a, b) -> tuple:
+    """Cross product ``a x b`` of vectors given as component sequences ``(a_0, a_1, a_2)``
+    and ``(b_0, b_1, b_2)`` (arrays or scalars broadcasting to one shape ``S``), written out:
+    the same values as :func:`numpy.cross`, with no interleaved (..., 3) arrays.
+    Returns ``(c_0, c_1, c_2)``, each shape ``S``."""
+    a0, a1, a2 = a
+    b0, b1, b2 = b
+    return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
+
+
 def euler_to_quat(euler: np.ndarray) -> np.ndarray:
     """Unit quaternion from ZYX Euler angles ``[roll, pitch, yaw]`` (rad),
     shape ``(..., 3)`` -> ``(..., 4)`` (Fossen 2021 eq. 2.84)."""

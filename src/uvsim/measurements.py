@@ -52,7 +52,8 @@ import numpy as np
 from uvsim.errors import CalibrationError
 from uvsim.estimation.lag import first_order_lag, lag_time_constant
 from uvsim.estimation.noise import SampleKind, noise_sigma, sample_kind
-from uvsim.kinematics import euler_to_quat, quat_conjugate, quat_multiply, quat_to_euler, quat_to_rotation, unwrap_angles
+from uvsim.kinematics import (cross_components, down_axis_components, euler_to_quat, quat_conjugate, quat_multiply,
+                              quat_to_euler, unwrap_angles)
 from uvsim.logs import ACCEL_COLUMNS, DEPTH_COLUMN, EULER_COLUMNS, POSITION_COLUMNS, RATE_COLUMNS, VELOCITY_COLUMNS
 
 #: Signal groups and their channels, in a fixed order.
@@ -251,13 +252,22 @@ class RunMeasurements:
         out: dict[str, np.ndarray] = {}
         q = y[..., 3:7]
         nu = y[..., 7:13]
-        R = None
+        comps = k = None
 
-        def rot():
-            nonlocal R
-            if R is None:
-                R = quat_to_rotation(q)
-            return R
+        def qnu():
+            # q and nu component-major, (10, ..., n): one pass over the strided states, after
+            # which every formula below reads contiguous memory
+            nonlocal comps
+            if comps is None:
+                comps = _components(y[..., 3:13])
+            return comps
+
+        def down():
+            # k = R^T e_3 (3 arrays (..., n)), the only part of R any group needs; computed once
+            nonlocal k
+            if k is None:
+                k = down_axis_components(*qnu()[:4])
+            return k
 
         for g, grp in self.groups.items():
             if g == "position":
@@ -266,7 +276,7 @@ class RunMeasurements:
                 r = self.sensors.get("pressure")
                 z = y[..., 2]
                 if r is not None and np.any(r):
-                    z = z + np.einsum("...j,j->...", rot()[..., 2, :], r)
+                    z = z + np.einsum("...j,j->...", np.stack(down(), axis=-1), r)  # (R r)_z = (R^T e_3) . r
                 out[g] = z[..., None]
             elif g == "attitude":
                 off = None
@@ -284,7 +294,9 @@ class RunMeasurements:
                 v = nu[..., :3]
                 r = self.sensors.get("dvl")
                 if r is not None and np.any(r):
-                    v = v + np.cross(nu[..., 3:], np.broadcast_to(r, v.shape))
+                    c = qnu()
+                    wr = cross_components(c[7:10], np.asarray(r, float))
+                    v = np.stack([c[4 + i] + wr[i] for i in range(3)], axis=-1)  # v + omega x r_d
                 out[g] = v
             elif g == "rates":
                 w = nu[..., 3:]
@@ -292,7 +304,8 @@ class RunMeasurements:
             elif g == "acceleration":
                 if nu_dot is None:
                     raise CalibrationError(f"run {self.name}: the accelerometer model needs the simulated accelerations")
-                out[g] = specific_force(y, nu_dot, self.sensors.get("imu"), self.g)
+                f = _specific_force(qnu()[4:10], _components(nu_dot), down(), self.sensors.get("imu"), self.g)
+                out[g] = np.stack(f, axis=-1)
         return out
 
     # ------------------------------------------------------------------ residuals
@@ -362,15 +375,41 @@ class RunMeasurements:
 
 def specific_force(y: np.ndarray, nu_dot: np.ndarray, r_imu: np.ndarray | None, g: float) -> np.ndarray:
     """Accelerometer specific force (..., n, 3) at body point ``r_imu`` (module
-    docstring): ``v_dot + omega x v + omega_dot x r + omega x (omega x r) - g R^T e_3``."""
-    nu = y[..., 7:13]
-    v, w = nu[..., :3], nu[..., 3:]
-    vd, wd = nu_dot[..., :3], nu_dot[..., 3:]
-    R = quat_to_rotation(y[..., 3:7])
-    f = vd + np.cross(w, v) - g * R[..., 2, :]
+    docstring): ``v_dot + omega x v + omega_dot x r + omega x (omega x r) - g R^T e_3``.
+
+    Parameters
+    ----------
+    y : (..., n, n_y) states (``y[..., 3:7]`` the quaternion, ``y[..., 7:13]`` nu).
+    nu_dot : (..., n, 6) accelerations.
+    r_imu : (3,) IMU position on the body, or None (the body origin).
+    g : gravity, m/s^2.
+    """
+    c = _components(np.asarray(y, float)[..., 3:13])
+    f = _specific_force(c[4:10], _components(nu_dot), down_axis_components(*c[:4]), r_imu, g)
+    return np.stack(f, axis=-1)
+
+
+def _components(a: np.ndarray) -> np.ndarray:
+    """``a`` (..., k) as a component-major copy (k, ...): each component contiguous."""
+    return np.moveaxis(np.asarray(a, float), -1, 0).copy()
+
+
+def _specific_force(nu, nu_dot, k, r_imu: np.ndarray | None, g: float) -> tuple:
+    """:func:`specific_force` component by component: ``nu`` and ``nu_dot`` are sequences
+    of 6 arrays of one shape ``S`` (e.g. (..., n); :func:`_components`), ``k`` the 3
+    components of the down axis ``R^T e_3`` (:func:`uvsim.kinematics.down_axis_components`).
+    The same operations in the same order as the (..., 3)-array formula, so the same values
+    to the last bit, with cross products written out (:func:`uvsim.kinematics.cross_components`).
+    Returns the 3 components of the specific force, each shape ``S``."""
+    v, w = nu[0:3], nu[3:6]
+    vd, wd = nu_dot[0:3], nu_dot[3:6]
+    wv = cross_components(w, v)
+    f = [vd[i] + wv[i] - g * k[i] for i in range(3)]
     if r_imu is not None and np.any(r_imu):
-        r = np.broadcast_to(np.asarray(r_imu, float), v.shape)
-        f = f + np.cross(wd, r) + np.cross(w, np.cross(w, r))
+        r = np.asarray(r_imu, float)
+        tangential = cross_components(wd, r)
+        centripetal = cross_components(w, cross_components(w, r))
+        f = [f[i] + tangential[i] + centripetal[i] for i in range(3)]
     return f
 
 

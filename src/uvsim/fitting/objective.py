@@ -454,9 +454,17 @@ class WindowedProblem:
 
     # ------------------------------------------------------------------ residuals
     def run_prediction(self, Y, A, r: int):
-        """States (P, n_r, n_y) and accelerations of run r's samples, from their windows."""
-        ow, op = self.lay.own_win[r], self.lay.own_pos[r]
-        return Y[:, ow, op], (None if A is None else A[:, ow, op])
+        """States (P, n_r, n_y) and accelerations (P, n_r, 6) or None of run r's samples, from
+        their windows: ``Y[:, own_win, own_pos]`` for ``Y`` (P, W, L, n_y) and ``A``
+        (P, W, L, 6), gathered as one index into the flattened (window, position) axis
+        (the same values, several times faster than two fancy indices)."""
+        L = Y.shape[2]
+        flat = self.lay.own_win[r] * L + self.lay.own_pos[r]
+
+        def gather(X):
+            return np.take(X.reshape(X.shape[0], -1, X.shape[-1]), flat, axis=1)
+
+        return gather(Y), (None if A is None else gather(A))
 
     def predict_run(self, r: int, y, a, bias):
         """Run r's predicted measurements from states ``y``, accelerations ``a`` and its

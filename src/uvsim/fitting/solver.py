@@ -215,13 +215,33 @@ def linearize(prob: WindowedProblem, z: np.ndarray, nus: list, *, jacobian: bool
 
 
 def _normal_pieces(r, Jz, Jn, cluster, nw, scores) -> RunNormal:
-    sse = np.zeros(nw)
-    np.add.at(sse, cluster, r * r)
+    """One run's :class:`RunNormal` from its residuals and Jacobians.
+
+    Parameters
+    ----------
+    r : (m,) residuals.
+    Jz : (m, p) Jacobian w.r.t. the global parameters.
+    Jn : (m, q) Jacobian w.r.t. the run's nuisance.
+    cluster : (m,) int, the window (0 .. nw - 1) each residual entry belongs to.
+    nw : number of windows.
+    scores : also compute the projected window scores (nw, p).
+
+    The per-window sums are :func:`numpy.bincount` with weights (one per column for the
+    scores): the same additions in the same order as ``np.add.at``, so the same values to the
+    last bit, many times faster.  The matrix products are left dense on purpose: summing
+    them block by block over the nonzeros of ``Jn`` is several times faster still but
+    changes their round-off, and the fit's path amplifies that (the fitted parameters of
+    a real-sensor benchmark moved by up to 7e-6 relative).
+    """
+    p = Jz.shape[1]
+    sse = np.bincount(cluster, weights=r * r, minlength=nw)
     out = RunNormal(float(r @ r), r.size, Jz.T @ Jz, Jz.T @ r, Jn.T @ Jn, Jn.T @ Jz, Jn.T @ r, sse)
     if scores:
         Jt = Jz - Jn @ np.linalg.solve(out.D, out.B) if Jn.shape[1] else Jz  # D > 0: every nuisance has a prior
-        sc = np.zeros((nw, Jz.shape[1]))
-        np.add.at(sc, cluster, Jt * r[:, None])
+        contrib = Jt * r[:, None]
+        sc = np.empty((nw, p))
+        for j in range(p):
+            sc[:, j] = np.bincount(cluster, weights=contrib[:, j], minlength=nw)
         out.scores = sc
     return out
 
