@@ -183,3 +183,53 @@ def test_thrust_model_first_a_reverse_thrust_loss_the_gains_could_not_carry(tmp_
     reverse = [cal.params_[f"thruster_reverse_{i}"] for i in range(1, 9)]
     assert np.mean(reverse) == pytest.approx(asym["ratio"], abs=0.03)
     assert max(abs(cal.params_[f"thruster_gain_{i}"] - 1.0) for i in range(1, 9)) < 0.1
+
+
+def test_the_truth_reference_states_the_generator_s_truth_and_is_judged_like_a_fit(tmp_path):
+    # the references of reference_checks: uvsim's statement of the truth (another supply voltage's
+    # curve, misplaced thrusters, a weak thruster, a latency) must follow the generator's noise-free
+    # truth, which is written apart from uvsim's simulator; the start model with the truth's
+    # coefficients keeps the start's thrusters and so does not
+    from uvsim.benchmarks.calibration_structural import (REFERENCE_TOLERANCE, reference_checks, reference_models,
+                                                         truth_errors)
+    from uvsim.calibration import Calibrator
+    from uvsim.scenarios import generate, load_truth, sample_scenario
+
+    over = {"n_runs": 1, "n_validation": 1, "duration": 8.0, "rate_hz": 100.0, "perturbation": 0.3,
+            "n_effects": 1, "curve_voltage": 20, "thruster_position_error": 0.02, "sensor_latency": 0.02}
+    seed = next(s for s in range(40) if [e["type"] for e in sample_scenario(s, profile="realsensor", **over).effects]
+                == ["weak_thruster"])
+    spec = sample_scenario(seed, profile="realsensor", **over)
+    out = generate(spec, tmp_path / "ds")
+    assert load_truth(out)["vehicle"]["thrusters"]["curve"] == "t200_16v"     # truth.yaml alone would not say it
+    cal = Calibrator(max_iter=2, horizons=[1.0], free="z_b").fit(out)
+    refs = reference_models(out, cal.initial_vehicle_, over)
+    assert set(refs) == {"truth", "truth_coefficients"} and refs["truth"].sensor_latency == 0.02
+    err = truth_errors(spec, {"start": cal.initial_vehicle_, **refs})
+    assert max(err["truth"].values()) <= REFERENCE_TOLERANCE
+    assert max(err["truth_coefficients"].values()) > 100 * REFERENCE_TOLERANCE   # the start's thrust model
+    assert max(err["start"].values()) > 100 * REFERENCE_TOLERANCE
+    checks = reference_checks(cal, out, refs)
+    for name in refs:
+        c = checks[name]
+        assert isinstance(c["ok"], bool) and set(c["gain"]) and c["worse"] == sorted(
+            k for k, g in c["gain"].items() if g < -1.0)
+
+
+def test_the_summary_counts_the_references_where_records_have_them():
+    from uvsim.benchmarks.calibration_structural import summarize
+
+    def rec(seed, worse, ref):
+        return {"seed": seed, "prior": True, "free": "z_b", "latency": None, "worse": worse, "gain": {"depth": 1.0},
+                "check_ok": not worse, "farther_from_truth": [], "at_bounds": [], "not_compared": [], "error": None,
+                "seconds": 1.0, **({"reference": ref} if ref is not None else {})}
+
+    bad, good = {"ok": False, "worse": ["depth"]}, {"ok": True, "worse": []}
+    s = summarize([rec(0, ["depth"], {"truth": bad, "truth_coefficients": bad}),
+                   rec(1, ["depth"], {"truth_coefficients": good}),          # truth not stated by uvsim
+                   rec(2, [], {"truth": good, "truth_coefficients": bad}),
+                   rec(3, [], None)])                                       # a record of the releases before
+    d = s["prior (--free z_b)"]
+    assert (d["truth_n"], d["truth_no_worse"], d["truth_refused"], d["worse_fits_whose_truth_is_worse_too"]) == (2, 1, 1, 1)
+    assert (d["truth_coefficients_n"], d["truth_coefficients_no_worse"], d["truth_coefficients_refused"],
+            d["worse_fits_whose_truth_coefficients_is_worse_too"]) == (3, 1, 2, 1)

@@ -176,6 +176,12 @@ def _calibrate_structural(args) -> int:
               f"{d['closer_to_truth_everywhere']}/{d['n']}; farther in some channel {d['farther_from_truth']}, of which "
               f"reported not ok {d['farther_reported_not_ok']}; refused though closer everywhere "
               f"{d['refused_though_closer_to_truth']}")
+        for name, what in (("truth", "the truth as a vehicle file states it"),
+                           ("truth_coefficients", "the start model with the truth's coefficients")):
+            if d[f"{name}_n"]:
+                print(f"  judged like a fit, {what} ({d[f'{name}_n']} seeds): no worse than the start "
+                      f"{d[f'{name}_no_worse']}, refused by the check {d[f'{name}_refused']}; worse fits where it is "
+                      f"worse too {d[f'worse_fits_whose_{name}_is_worse_too']}")
         print("  median validation Fit % gain per channel (points): "
               + ", ".join(f"{c} {g:+.1f}" for c, g in d["median_gain_points"].items()))
     return 0
