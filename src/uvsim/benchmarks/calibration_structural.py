@@ -284,6 +284,7 @@ def run_one(seed: int, *, prior: bool = True, loss: str = "linear", supply: bool
             start = dataset_vehicle_on_family(out) if supply else None
             names = f"{free},supply_voltage" if supply else free
             cal = Calibrator(free=names, workers=workers, prior=prior, loss=loss, latency=latency).fit(out, start)
+            seconds = time.perf_counter() - t0  # the calibration's, not the verdicts' and references' below
             rec = judge(cal.report_)
             rec["latency_fitted"] = cal.latency_["value"]  # s, what the fitted vehicle states
             rec["supply_voltage"] = cal.params_.get("supply_voltage")  # fitted (V), None when not freed
@@ -302,7 +303,8 @@ def run_one(seed: int, *, prior: bool = True, loss: str = "linear", supply: bool
             rec, error = {"gain": {}, "worse": [], "worse_run_mean": [], "check_ok": False, "unfinished": False,
                           "not_compared": [], "at_bounds": [],
                           "data_weight": None, "farther_from_truth": []}, str(exc)
-        seconds = time.perf_counter() - t0
+        if error is not None:
+            seconds = time.perf_counter() - t0
     return {"seed": seed, "prior": prior, "loss": loss, "supply": supply, "free": free, "latency": latency, **over,
             "effects": [e["type"] for e in truth["effects"]],
             "curve": spec.vehicle.get("truth_curve"), **rec, "error": error, "seconds": seconds}
