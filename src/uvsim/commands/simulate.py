@@ -95,20 +95,17 @@ def _run(args) -> int:
 def _specific_force(veh, run, y, current) -> np.ndarray:
     """Accelerometer specific force at the IMU, body axes (m/s^2), along the simulation:
     ``f = v_dot + w x v + w_dot x r + w x (w x r) - g R^T e_3`` with ``nu_dot`` from the
-    model's equations of motion at each sample (log format: level at rest reads (0, 0, -g))."""
-    from uvsim.kinematics import quat_to_rotation
+    model's equations of motion at each sample (log format: level at rest reads (0, 0, -g));
+    the accelerometer model of the fits (:func:`uvsim.measurements.specific_force`)."""
+    from uvsim.measurements import specific_force
     from uvsim.model import Model
-    from uvsim.rigid_body import cross
 
     n = len(run.t)
     ov = {} if current is None else dict(zip(("current_n", "current_e", "current_d"), current))
     model = Model(veh, ov, n=n, input_kind=run.input_kind)
     with np.errstate(all="ignore"):
         nud = model.rhs(float(run.t[0]), y, run.inputs, run.voltage)[:, 7:13]
-    v, w = y[:, 7:10], y[:, 10:13]
-    r = np.broadcast_to(np.asarray(veh.sensors.get("imu", np.zeros(3)), float), v.shape)
-    a = nud[:, :3] + cross(w, v) + cross(nud[:, 3:], r) + cross(w, cross(w, r))
-    return a - veh.g * quat_to_rotation(y[:, 3:7])[:, 2, :]
+    return specific_force(y, nud, veh.sensors.get("imu"), veh.g)
 
 
 def compare_channels(veh, run, res, current=None) -> list[dict]:
