@@ -282,6 +282,84 @@ def test_horizontal_tether_pulls_only_horizontally():
     np.testing.assert_allclose(f[:3], [-6.0, 0.0, 0.0], atol=1e-12)  # k * 3 m towards the anchor, no vertical part
 
 
+def test_slack_starts_move_the_anchor_out_along_the_line_keeping_the_pull():
+    """A slack variant's extra starts (uvsim.diagnosis.starts.slack_starts): the anchor of a fit without
+    slack moved out along its line from the reference position, the slack chosen so that
+    the uvsim tether pulls the vehicle there exactly as the start did."""
+    from uvsim.diagnosis.starts import SLACK_START_DISTANCE, slack_starts
+    from uvsim.forces import make_term
+
+    p_ref = np.array([0.3, -0.2, 1.2])
+    cands = {c.variant: c for c in catalogue(input_kind="force", n_thrusters=8, dt=0.01, p_ref=p_ref,
+                                             has_position=True, z_max=2.0)
+             if c.effect == "tether"}
+    def pull(c, st):
+        """The tether's force (body axes) on the vehicle at rest, level, at p_ref."""
+        spec = {**c.spec, **{k.removeprefix("tether_"): v for k, v in st.items() if k in c.free}}
+        v = uvsim.load_vehicle("bluerov2_heavy").with_effects([make_term(spec)])
+        m = uvsim.Model(v)
+        y = m.initial_state()
+        y[:, :3] = p_ref
+        return v.effects[0].forces(_ctx(m, y), v.effects[0].prepare(m.params, 1))[0][:3]
+
+    for variant, horizontal in (("horizontal_slack", True), ("slack_attach", False)):
+        c = cands[variant]
+        st = {**c.start, "tether_stiffness": 0.4, "tether_anchor_n": 1.1, "tether_anchor_e": 0.4,
+              "tether_anchor_d": 1.5}
+        out = slack_starts(c, st)
+        assert len(out) == 1
+        v0 = np.array([1.1, 0.4, 1.5]) - p_ref
+        if horizontal:
+            v0[2] = 0.0
+        for D, o in zip([SLACK_START_DISTANCE], out):
+            a = np.array([o["tether_anchor_n"], o["tether_anchor_e"], o["tether_anchor_d"]]) - p_ref
+            if horizontal:
+                assert o["tether_anchor_d"] == st["tether_anchor_d"]  # not free, not moved
+                a[2] = 0.0
+            assert np.linalg.norm(a) == pytest.approx(D)
+            np.testing.assert_allclose(np.cross(a, v0), 0.0, atol=1e-12)  # on the start's line
+            assert a @ v0 > 0  # on the start's side
+            assert o["tether_slack_length"] == pytest.approx(D - np.linalg.norm(v0))
+            np.testing.assert_allclose(pull(c, o), pull(c, st), atol=1e-12)
+    # nothing to add for a variant without slack or a start that already has one
+    assert slack_starts(cands["3d_attach"], cands["3d_attach"].start) == []
+    assert slack_starts(cands["slack_attach"], {**cands["slack_attach"].start, "tether_slack_length": 1.0}) == []
+
+
+def test_screening_finds_a_cable_taut_from_a_distant_anchor(tmp_path):
+    """An elastic cable taut from an anchor 3.6 m away (3.1 m slack) pulls along one
+    direction and barely across it.  The screening's slack variant, started from the fit
+    without slack (anchor next to the vehicle) and moved out along its line, finds the
+    attachment point and the direction to the anchor of the independent truth model; from
+    the start without slack alone it stayed near the vehicle (attachment 15 cm off).
+    Generator seed 1 is the first whose tether is elastic (its law is drawn)."""
+    from uvsim.diagnosis.core import _split
+    from uvsim.diagnosis.selector import Selector
+    from uvsim.logs import read_dataset
+
+    out, truth = _scenario(tmp_path, 1, rate_hz=100.0,
+                           effects=[{"type": "tether", "variant": "horizontal", "magnitude": 0.5}])
+    tt = truth["effects"][0]
+    assert tt["law"] == "elastic" and tt["slack_length"] > 3.0
+    ds = read_dataset(out)
+    veh = uvsim.load_vehicle(ds.vehicle_file or ds.vehicle)
+    train, val, _ = _split(ds)
+    sel = Selector(veh, train, val, retune=list(BASE_RETUNE), noise=None, weights=None, horizon=3.0, max_iter=12,
+                   workers=1, say=lambda m: None)
+    cur = sel.current([], sel.seed_retune(veh))
+    p_ref = np.nanmean([r.position[0] for r in train], axis=0)
+    cands = [c for c in catalogue(input_kind=train[0].input_kind, n_thrusters=veh.n_thrusters, dt=0.01, p_ref=p_ref,
+                                  has_position=True, z_max=2.0, only=["tether"])
+             if c.variant in ("horizontal", "slack_attach")]
+    got = {c.variant: s for c, s in sel.screen(cur, cands, coupled=False)[0]}["slack_attach"]["values"]
+    attach = [got[f"tether_attach_{k}"] for k in "xyz"]
+    np.testing.assert_allclose(attach, tt["attach_body"], atol=0.02)
+    d_fit = np.array([got["tether_anchor_n"], got["tether_anchor_e"]]) - p_ref[:2]
+    d_true = np.array(tt["anchor_ned"][:2]) - p_ref[:2]
+    cos = d_fit @ d_true / np.linalg.norm(d_fit) / np.linalg.norm(d_true)
+    assert np.degrees(np.arccos(min(cos, 1.0))) < 10.0
+
+
 # ----------------------------------------------------------------------------- the benchmark
 @pytest.mark.slow
 def test_benchmark_100_single_and_30_two_effect_scenarios(tmp_path):
@@ -367,6 +445,51 @@ def test_a_simpler_variant_must_be_within_five_percent_of_the_winner(simple_cost
     assert sel.fitted == [simple.label]
     assert (out is None) == keeps_rich
     assert st["fitted"][0]["accepted"] == (not keeps_rich)
+
+
+def test_a_variant_on_a_search_bound_is_followed_once_by_the_best_screened_variant_without_it():
+    """Pair 110: the screening's tether variant ran its slack length to the 50 m search
+    bound; the effect's best-screened variant without a slack length, not fitted yet, gets
+    its fit (judged like any), once per effect; a refusal for another reason fits nothing
+    more."""
+    from uvsim.diagnosis.selector import Selector
+
+    t = {c.variant: c for c in catalogue(input_kind="thrust", n_thrusters=8, dt=0.01, p_ref=np.zeros(3),
+                                         has_position=True, z_max=None, only=["tether"])}
+    cur = catalogue(input_kind="thrust", n_thrusters=8, dt=0.01, p_ref=np.zeros(3), has_position=True,
+                    z_max=None, only=["current"])[0]
+    screened = [(t["horizontal_full"], {"reduction": 0.41}), (t["full"], {"reduction": 0.39}),
+                (t["drag_attach"], {"reduction": 0.36}), (t["lumped_attach"], {"reduction": 0.30}),
+                (t["3d"], {"reduction": 0.0}), (cur, {"reduction": 0.5})]
+
+    def on_bound(c, n="tether_slack_length"):
+        return {**_row(c, 100.0), "values": {**c.start, n: c.bounds[n][1]}, "at_bounds": [n]}
+
+    def good(c):
+        return {**_row(c, 90.0), "values": dict(c.start), "at_bounds": []}
+
+    # slack on its bound: `full` has a slack length too, so `drag_attach` follows; accepted, it says what it replaces
+    sel, fitted = _StubSelector({"tether:horizontal_full": on_bound(t["horizontal_full"]),
+                                 "tether:drag_attach": good(t["drag_attach"])}), []
+    assert Selector.fit_judged(sel, t["horizontal_full"], {}, {}, None, fitted, screened, set())
+    assert sel.fitted == ["tether:horizontal_full", "tether:drag_attach"]
+    assert fitted[0]["bound_rejected"] and not fitted[0]["accepted"]
+    assert fitted[1]["accepted"] and fitted[1]["replaces"] == "tether:horizontal_full"
+    # an anchor coordinate on its bound: every tether variant has one, so nothing follows
+    sel = _StubSelector({"tether:horizontal_full": on_bound(t["horizontal_full"], "tether_anchor_n")})
+    assert not Selector.fit_judged(sel, t["horizontal_full"], {}, {}, None, [], screened, set())
+    assert sel.fitted == ["tether:horizontal_full"]
+    # once per effect: a second bound-refused variant fits nothing more
+    sel, replaced = _StubSelector({"tether:horizontal_full": on_bound(t["horizontal_full"]),
+                                   "tether:drag_attach": on_bound(t["drag_attach"], "tether_anchor_d")}), set()
+    assert not Selector.fit_judged(sel, t["horizontal_full"], {}, {}, None, [], screened, replaced)
+    assert not Selector.fit_judged(sel, t["drag_attach"], {}, {}, None, [], screened, replaced)
+    assert sel.fitted == ["tether:horizontal_full", "tether:drag_attach", "tether:drag_attach"]
+    # refused for another reason (not significant): nothing more
+    sel = _StubSelector({"tether:horizontal_full": {**good(t["horizontal_full"]),
+                                                     **_row(t["horizontal_full"], 100.0, p=0.5)}})
+    assert not Selector.fit_judged(sel, t["horizontal_full"], {}, {}, None, [], screened, set())
+    assert sel.fitted == ["tether:horizontal_full"]
 
 
 def test_a_ballast_piece_mass_is_fitted_from_the_winner_and_kept_on_a_lower_open_loop_cost():

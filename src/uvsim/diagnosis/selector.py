@@ -16,8 +16,9 @@ import numpy as np
 
 from uvsim.checkpoint import fingerprint
 from uvsim.diagnosis.candidates import (Candidate, catalogue, coupled_candidate, coupling_terms, mirror_start,
-                                        observability)
+                                        observability, search_bound_hits)
 from uvsim.diagnosis.decision import compare, judge
+from uvsim.diagnosis.starts import SLACK_GN_ITERATIONS, candidate_starts, slack_starts
 from uvsim.fitting.guard import block_costs, start_aligned
 from uvsim.errors import CalibrationError, UvsimError, VehicleError
 from uvsim.fitting import fit
@@ -234,11 +235,13 @@ class Selector:
             best = None
             if c.effect == "tether" and tether_best[1]:
                 starts = [{**c.start, **{k: v for k, v in tether_best[1].items() if k in c.free}}]
+                starts += slack_starts(c, starts[0])
             else:
-                starts = _starts(c)
+                starts = candidate_starts(c)
+            its = SLACK_GN_ITERATIONS if "tether_slack_length" in c.free else 2
             for st in starts:
                 try:
-                    r = self._joint_gn(veh, motions, c, cur, vals0, st, J_base, scale)
+                    r = self._joint_gn(veh, motions, c, cur, vals0, st, J_base, scale, iterations=its)
                 except (UvsimError, np.linalg.LinAlgError, ValueError) as exc:
                     r = {"rss": np.inf, "values": {}, "error": str(exc)}
                 if best is None or r["rss"] < best["rss"]:
@@ -369,14 +372,16 @@ class Selector:
             picked = choice
         # through the simulator in screening order; stop at the first accepted candidate unless
         # the next one screened nearly as well (then the validation decides between them)
+        replaced: set = set()
+
+        def fit_judged(c, s) -> bool:
+            return self.fit_judged(c, s, cur, val_cur, fitted, screened, replaced)
+
         lead_ok = None
         for c, s, red in picked:
             if lead_ok is not None and red < CLOSE_SHARE * lead_ok:
                 break
-            row = self.fit_candidate(c, s, cur, val_cur)
-            row["accepted"], row["why"] = judge(row, val_cur)
-            fitted.append(row)
-            if row["accepted"] and lead_ok is None:
+            if fit_judged(c, s) and lead_ok is None:
                 lead_ok = red
         if lead_ok is None and ee_info.get("available"):
             # nothing accepted: the equation error is blunt for small effects in slow logs (10 Hz), so
@@ -390,13 +395,38 @@ class Selector:
                     break
                 if id(c) in done:
                     continue
-                row = self.fit_candidate(c, s, cur, val_cur)
-                row["accepted"], row["why"] = judge(row, val_cur)
-                fitted.append(row)
-                if row["accepted"]:
+                if fit_judged(c, s):
                     break
         return {"screening": ee_info, "screened": rows, "fitted": fitted, "all_screened": screened, "cur": cur,
                 "held": held}
+
+    def fit_judged(self, c: Candidate, s, cur, val_cur, fitted: list, screened, replaced: set) -> bool:
+        """Fit and judge ``c`` (its row appended to ``fitted``); a variant refused for a
+        parameter on the edge of its search range is followed, once per effect (``replaced``),
+        by the effect's best-screened variant in ``screened`` that does not have that parameter
+        and was not fitted yet.  Why: a parameter the data drive to a search bound is one they
+        do not pin, and the same effect without it may describe what was logged (pair 110: a
+        cable with drag, taut beyond 2.7 m of slack, fitted as ``horizontal_full`` with the
+        slack length on its 50 m bound, which switches the elastic pull off and leaves tension
+        and drag).  True when a fit was accepted."""
+        row = self.fit_candidate(c, s, cur, val_cur)
+        row["accepted"], row["why"] = judge(row, val_cur)
+        fitted.append(row)
+        if row["accepted"] or not row.get("bound_rejected") or c.effect in replaced:
+            return bool(row["accepted"])
+        replaced.add(c.effect)
+        hits = set(search_bound_hits(c, row.get("values") or {}, row.get("at_bounds") or []))
+        done = {id(r["candidate"]) for r in fitted}
+        alt = [(cc, ss) for cc, ss in screened if cc.effect == c.effect and id(cc) not in done
+               and not hits & set(cc.free) and ss and ss.get("reduction", 0.0) > 0.0]
+        if not alt:
+            return False
+        cc, ss = max(alt, key=lambda x: x[1]["reduction"])
+        row = self.fit_candidate(cc, ss, cur, val_cur)
+        row["accepted"], row["why"] = judge(row, val_cur)
+        row["replaces"] = c.label
+        fitted.append(row)
+        return bool(row["accepted"])
 
     def fit_candidate(self, c: Candidate, s, cur, val_cur) -> dict:
         """Output-error fit of ``c`` together with the current model's free parameters,
@@ -405,7 +435,7 @@ class Selector:
         veh = vehicle_cur.with_effects([c.spec]) if c.spec is not None else vehicle_cur
         # start from the screening estimate (the best of its multi-start); without one, from
         # the catalogue's starts
-        catalogue = [{**values_cur, **st} for st in _starts(c)]
+        catalogue = [{**values_cur, **st} for st in candidate_starts(c)]
         if s and s.get("values"):
             starts = [{**values_cur, **c.start, **s["values"]}]
             if s.get("multistart") and len(catalogue) > 1:
@@ -478,15 +508,3 @@ def _stepwise(J: np.ndarray, r: np.ndarray, names: Sequence[str], k: int = 2, ba
             break
         chosen.append(best)
     return [names[j] for j in chosen]
-
-
-def _starts(c: Candidate) -> list[dict]:
-    """Start values of a candidate's multi-start: the catalogue start, plus for a tether
-    anchors in four directions (the pull direction is what the data decide)."""
-    if c.effect != "tether":
-        return [dict(c.start)]
-    out = []
-    n0, e0 = c.start["tether_anchor_n"] + 5.0, c.start["tether_anchor_e"]  # the reference position
-    for dn, de in ((-5.0, 0.0), (5.0, 0.0), (0.0, -5.0), (0.0, 5.0)):
-        out.append({**c.start, "tether_anchor_n": n0 + dn, "tether_anchor_e": e0 + de})
-    return out
