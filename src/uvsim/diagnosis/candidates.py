@@ -84,6 +84,9 @@ BALLAST_W, BALLAST_R, ATTACH_R = 20.0, 0.5, 0.4
 LUMPED_DRAG_MAX = 0.5 * 1000.0 * 1.2 * 0.0076 * ANCHOR_RANGE
 #: a ballast piece's own mass: up to 2 kg (20 N of lead is 2.3 kg)
 BALLAST_M = 2.0
+#: a tether's catalogue start has its anchor this far south (m) of the reference position
+#: (uvsim.diagnosis.starts recovers the reference position from it)
+ANCHOR_START_SOUTH = 5.0
 LAG_MAX = 2.0
 
 
@@ -154,11 +157,12 @@ def _tether(p_ref):
          "tether_attach_x": (-ATTACH_R, ATTACH_R), "tether_attach_y": (-ATTACH_R, ATTACH_R),
          "tether_attach_z": (-ATTACH_R, ATTACH_R), "tether_length": (0.0, 2 * ANCHOR_RANGE),
          "tether_slack_length": (0.0, ANCHOR_RANGE), "tether_lumped_drag": (0.0, LUMPED_DRAG_MAX)}
-    s = {"tether_stiffness": 0.5, "tether_tension": 1.0, "tether_anchor_n": pn - 5.0, "tether_anchor_e": pe,
+    s = {"tether_stiffness": 0.5, "tether_tension": 1.0, "tether_anchor_n": pn - ANCHOR_START_SOUTH,
+         "tether_anchor_e": pe,
          "tether_anchor_d": pd, "tether_attach_x": 0.0, "tether_attach_y": 0.0, "tether_attach_z": 0.0,
          "tether_length": 10.0, "tether_slack_length": 0.0, "tether_lumped_drag": 1.0}
     base = {"type": "tether", "tension": 0.0, "stiffness": 0.5, "slack_length": 0.0, "length": 0.0,
-            "anchor_n": pn - 5.0, "anchor_e": pe, "anchor_d": pd}
+            "anchor_n": pn - ANCHOR_START_SOUTH, "anchor_e": pe, "anchor_d": pd}
     tens = {**base, "stiffness": 0.0, "tension": 1.0}
     a3 = ["tether_anchor_n", "tether_anchor_e", "tether_anchor_d"]
     at = ["tether_attach_x", "tether_attach_y", "tether_attach_z"]

@@ -368,7 +368,7 @@ def _row_report(row, best) -> dict:
                    at_bounds=row["at_bounds"])
     if "open_loop_cost" in row:
         out["open_loop_cost"] = row["open_loop_cost"]
-    if "replaces" in row:  # fitted because that variant ran to a search bound (Selector.step)
+    if "replaces" in row:  # fitted because that variant ran to a search bound (Selector.fit_judged)
         out["replaces"] = row["replaces"]
     return out
 

@@ -10,7 +10,7 @@ from typing import Mapping
 
 import numpy as np
 
-from uvsim.diagnosis.candidates import Candidate
+from uvsim.diagnosis.candidates import ANCHOR_START_SOUTH, Candidate
 
 #: Distance (m) from the reference position to which a slack variant's extra start moves
 #: the anchor of the best simpler tether (:func:`slack_starts`): a few times a tank run's
@@ -34,9 +34,9 @@ def slack_starts(c: Candidate, start: Mapping[str, float]) -> list[dict]:
     without slack cannot describe, so the simpler fit puts its anchor next to the vehicle and
     a slack length started at 0 stays there (benchmark pair 101: a horizontal cable with
     2.7 m of slack; from that start the slack variants removed 0-15 % of the equation error,
-    from this one `horizontal_full` removes 43 %).  Empty
-    when the variant has no slack, ``start`` has one already, or its anchor is at the
-    reference position or beyond the distance."""
+    from this one `horizontal_full` removes 43 %).  Empty when the variant has no slack,
+    ``start`` has one already, or its anchor is at the reference position or beyond the
+    distance."""
     if "tether_slack_length" not in c.free or float(start.get("tether_slack_length", 0.0)) > 0.0:
         return []
     names = ("tether_anchor_n", "tether_anchor_e", "tether_anchor_d")
@@ -64,6 +64,7 @@ def candidate_starts(c: Candidate) -> list[dict]:
 
 
 def reference_position(c: Candidate) -> np.ndarray:
-    """The reference position (m, NED) of a tether candidate: its catalogue start has the
-    anchor 5 m south of it (north coordinate - 5 m, uvsim.diagnosis.candidates._tether)."""
-    return np.array([c.start["tether_anchor_n"] + 5.0, c.start["tether_anchor_e"], c.start["tether_anchor_d"]])
+    """The reference position (m, NED) of a tether candidate (the training runs' mean start):
+    its catalogue start has the anchor ANCHOR_START_SOUTH south of it (uvsim.diagnosis.candidates)."""
+    return np.array([c.start["tether_anchor_n"] + ANCHOR_START_SOUTH, c.start["tether_anchor_e"],
+                     c.start["tether_anchor_d"]])
