@@ -429,6 +429,41 @@ def test_lag_start_alternative_is_fitted_and_the_lower_open_loop_cost_wins():
     assert sel.fitted == []
 
 
+def test_an_alternative_of_a_variant_the_guard_refused_can_win_but_never_the_refused_variant():
+    """Benchmark pair 118: a lag from rest fitted as ``steady`` removes most of the windowed
+    validation cost and makes the free simulation worse (the runs' start is wrong), so the
+    guard refuses it; the alternative start is fitted and wins only when it is accepted
+    itself, and an alternative fitted before in the step is not fitted again."""
+    from uvsim.diagnosis.decision import alternative_challenger
+
+    steady, rest = catalogue(input_kind="thrust", n_thrusters=8, dt=0.02, p_ref=np.zeros(3), has_position=True,
+                             z_max=None, only=["thruster_lag"])
+    screened = [(steady, {"reduction": 0.9}), (rest, {"reduction": 0.9})]
+
+    def with_ol(row, ol, **extra):
+        return {**row, "vehicle": ol, "all_values": {}, "why": "significant", **extra}
+
+    # the refused variant has the lower open-loop cost here: it must not come back
+    blocked = with_ol(_row(steady, 100.0), 1.0, accepted=False, guard_blocked=True)
+    good = with_ol(_row(rest, 100.0), 5.0)
+    st = {"all_screened": screened, "cur": {}, "fitted": [blocked]}
+    sel = _StubSelector({"thruster_lag:from_rest": good})
+    new = alternative_challenger(sel, blocked, st, None, blocked=True)
+    assert sel.fitted == ["thruster_lag:from_rest"] and new["candidate"] is rest
+    assert "guard refused" in new["why"] and new["open_loop_cost"] == 5.0
+    # an alternative that is refused itself (here by its guard) does not win
+    refused = with_ol(_row(rest, 100.0), 5.0)
+    refused["compare"] = {**refused["compare"], "guard": {"ok": False, "why": "position +50 %"}}
+    st = {"all_screened": screened, "cur": {}, "fitted": [blocked]}
+    assert alternative_challenger(_StubSelector({"thruster_lag:from_rest": refused}), blocked, st, None,
+                                  blocked=True) is None
+    # fitted earlier in the step: not fitted again; accepted there, it competes
+    st = {"all_screened": screened, "cur": {}, "fitted": [blocked, {**good, "accepted": True}]}
+    sel = _StubSelector({})
+    new = alternative_challenger(sel, blocked, st, None, blocked=True)
+    assert sel.fitted == [] and new["candidate"] is rest and len(st["fitted"]) == 2
+
+
 @pytest.mark.parametrize("simple_cost, keeps_rich", [(104.0, False), (126.0, True)])
 def test_a_simpler_variant_must_be_within_five_percent_of_the_winner(simple_cost, keeps_rich):
     """Benchmark seed 91: the pull-only tether, 26 % worse on validation than the cable-drag

@@ -106,6 +106,30 @@ def test_ballast_piece_mass_reproduces_the_independent_truth(tmp_path):
     assert rmse["massless"] > 0.1, rmse
 
 
+@pytest.mark.parametrize("input_kind", ["thrust", "pwm"])
+def test_a_weak_thruster_s_lag_lags_its_weak_thrust_as_in_the_independent_truth(tmp_path, input_kind):
+    """Benchmark pair 118 (``uvsim.scenarios``, written apart from the effects): a weak
+    horizontal thruster and a lag from rest.  uvsim stating both (``thruster_gain_4`` and a
+    ``thruster_lag`` with ``start: zero``) follows the generator's noise-free truth to 1e-6
+    in every state channel; with the lag acting on the curve's thrust instead of the weak
+    unit's (the effects before 2026-11-27) depth was 10 mm and r 0.033 rad/s off."""
+    import dataclasses
+
+    from uvsim.benchmarks.calibration_structural import truth_errors
+    from uvsim.scenarios import generate, load_truth, sample_scenario
+    from uvsim.vehicle import vehicle_from_dict
+
+    spec = sample_scenario(118, profile="diagnose", n_effects=2)
+    spec = dataclasses.replace(spec, input_kind=input_kind, runs=[r for r in spec.runs if r["split"] == "validation"])
+    truth = load_truth(generate(spec, tmp_path / "ds"))
+    weak, lag = truth["effects"]
+    assert weak["type"] == "weak_thruster" and lag["type"] == "thruster_lag" and lag["variant"] == "rest"
+    veh = vehicle_from_dict(truth["vehicle"], source="truth.yaml").with_effects(
+        [{"type": "thruster_lag", "time_constant": lag["time_constant"], "start": "zero"}])
+    err = truth_errors(spec, {"both": veh.with_parameters({f"thruster_gain_{weak['thruster']}": weak["gain"]})})
+    assert max(err["both"].values()) < 1e-6, err
+
+
 def test_tether_pull_and_moment_by_hand():
     eff = {"type": "tether", "anchor_n": -3.0, "anchor_d": 1.0, "stiffness": 2.0, "slack_length": 1.0,
            "attach_z": -0.1, "length": 0.0}

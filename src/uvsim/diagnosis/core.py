@@ -199,9 +199,11 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         best = parsimonious(winners)
         if best is None:
             # a candidate that passed everything but the open-loop guard: its richer variants (a
-            # ballast piece's own mass, a richer tether) get their chance, judged with the guard too
+            # ballast piece's own mass, a richer tether) and its alternatives (a lag from rest) get
+            # their chance, judged with the guard too
             for row in sorted([r for r in st["fitted"] if r.get("guard_blocked")], key=lambda r: r["val"]["cost"]):
-                best = inertia_challenger(sel, row, st, val_cur) or richer_challenger(sel, row, st, val_cur)
+                best = (inertia_challenger(sel, row, st, val_cur) or richer_challenger(sel, row, st, val_cur)
+                        or alternative_challenger(sel, row, st, val_cur, blocked=True))
                 if best is not None:
                     break
         if best is not None:

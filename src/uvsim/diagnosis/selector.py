@@ -16,7 +16,7 @@ import numpy as np
 
 from uvsim.checkpoint import fingerprint
 from uvsim.diagnosis.candidates import (Candidate, catalogue, coupled_candidate, coupling_terms, mirror_start,
-                                        observability, search_bound_hits)
+                                        observability)
 from uvsim.diagnosis.decision import compare, judge
 from uvsim.diagnosis.starts import SLACK_GN_ITERATIONS, candidate_starts, slack_starts
 from uvsim.fitting.guard import block_costs, start_aligned
@@ -415,7 +415,7 @@ class Selector:
         if row["accepted"] or not row.get("bound_rejected") or c.effect in replaced:
             return bool(row["accepted"])
         replaced.add(c.effect)
-        hits = set(search_bound_hits(c, row.get("values") or {}, row.get("at_bounds") or []))
+        hits = set(row["bound_hits"])
         done = {id(r["candidate"]) for r in fitted}
         alt = [(cc, ss) for cc, ss in screened if cc.effect == c.effect and id(cc) not in done
                and not hits & set(cc.free) and ss and ss.get("reduction", 0.0) > 0.0]

@@ -2,12 +2,21 @@
 ``thrust_asymmetry`` (reverse thrust weaker than forward) and ``thrust_scale`` (the
 whole thrust curve scaled).
 
-Both act on what the actuators deliver, so they are bound to the vehicle's
+All three act on what the actuators deliver, so they are bound to the vehicle's
 thruster allocation ``B`` (6 x n, :mod:`uvsim.forces.actuators`) when a
 :class:`uvsim.model.Model` is built (``bind``).  With per-thruster inputs
-(``thrust`` or ``pwm``, mapped by the thruster curves to the commanded thrust
-``f_c``) they act on each thruster; with generalized-force inputs (``force``)
-they act on each component of ``tau_c``.
+(``thrust`` or ``pwm``) ``f_c`` is each unit's thrust as the actuators deliver it:
+the curve at the input (and the supply voltage), times the unit's gain and reverse
+ratio (``thruster_gain_i``, ``thruster_reverse_i``;
+:meth:`uvsim.forces.actuators.Actuators.delivered`), through the allocation with the
+units' positions (``thruster_x_i`` ...); with generalized-force inputs (``force``)
+they act on each component of ``tau_c`` after the same factors.  So a weak unit's lag
+lags its weak thrust, as on the vehicle (gain, then lag); before 2026-11-27 the
+effects took the curve's thrust without the unit factors, and a weak thruster with
+a lag was off by ``(gain - 1) B (f_c - f)`` during every transient (benchmark pair
+118: 10 mm depth and 0.033 rad/s yaw rate RMS against the independent generator's
+truth, now 1e-8; tests/test_effects.py).  The effects themselves add up: a lag does
+not lag what ``thrust_asymmetry`` or ``thrust_scale`` add.
 
 ``thruster_lag`` (seed 002 sec. 6: "the difference in the response is due to the
 thrusters dynamics that are not included in the simulation"; seed 000 sec. 6:
@@ -78,25 +87,26 @@ class _ActuatorEffect(Effect):
     def _command_prep(self, params, n):
         if self._act is None:
             raise SimulationError(f"effects ({self.kind}): not bound to a vehicle; use it inside a uvsim Model")
-        groups = self._act.prepare(params, n)["groups"] if self._act.matrix is not None else []
-        return {"groups": groups, "u": None, "fc": None}
+        # the actuators' own preparation: curves, each unit's gain, reverse ratio and position,
+        # the fitted supply voltage (what Actuators.delivered applies)
+        return {"act": self._act.prepare(params, n), "u": None, "fc": None}
 
     def commanded(self, ctx, cache):
-        """Commanded thrusts ``f_c`` (n, n_thr) or forces ``tau_c`` (n, 6); cached per input array."""
+        """Thrusts ``f_c`` (n, n_thr) the units deliver, or forces ``tau_c`` (n, 6), before this
+        effect (:meth:`uvsim.forces.actuators.Actuators.delivered`); cached per input array."""
         if cache["u"] is ctx.u and cache.get("v") is ctx.voltage:
             return cache["fc"]
-        if ctx.input_kind == "force":
-            fc = ctx.u
-        else:
-            fc = self._act.thrusts(ctx.u, ctx.input_kind, cache["groups"], ctx.voltage)
+        fc = self._act.delivered(ctx.u, ctx.input_kind, cache["act"], ctx.voltage)
         cache["u"], cache["v"], cache["fc"] = ctx.u, ctx.voltage, fc
         return fc
 
-    def to_tau(self, ctx, f):
-        """Generalized force of per-thruster forces ``f`` (or ``f`` itself for force inputs)."""
+    def to_tau(self, ctx, f, prep):
+        """Generalized force of per-thruster forces ``f`` (or ``f`` itself for force inputs),
+        through the allocation with the units' (possibly fitted) positions."""
         if ctx.input_kind == "force":
             return f
-        return f @ self._act.matrix.T
+        B = prep["act"]["B"]
+        return f @ B.T if B.ndim == 2 else np.einsum("nij,nj->ni", B, f)
 
 
 @register("thruster_lag")
@@ -133,7 +143,7 @@ class ThrusterLag(_ActuatorEffect):
     def forces(self, ctx, prep):
         fc = self.commanded(ctx, prep)
         f = ctx.states[self._index][:, : fc.shape[1]]
-        return self.to_tau(ctx, f - fc)
+        return self.to_tau(ctx, f - fc, prep)
 
     def state_derivative(self, ctx, prep, x):
         fc = self.commanded(ctx, prep)
@@ -147,11 +157,8 @@ class ThrusterLag(_ActuatorEffect):
         with ``a = exp(-(t_{i+1} - t_i) / T)`` (the lag depends on the inputs only)."""
         n, L = T.shape
         k = U.shape[2]
-        if input_kind == "force":
-            fc = U
-        else:
-            flat_v = None if V is None else V.reshape(-1)
-            fc = self._act.thrusts(U.reshape(n * L, k), input_kind, prep["groups"], flat_v).reshape(n, L, -1)
+        flat_v = None if V is None or input_kind == "force" else V.reshape(-1)
+        fc = self._act.delivered(U.reshape(n * L, k), input_kind, prep["act"], flat_v, repeat=L).reshape(n, L, -1)
         width = fc.shape[2]
         out = np.zeros((n, L, self.n_states))
         x = np.array(x0[:, :width], float, copy=True)
@@ -166,7 +173,7 @@ class ThrusterLag(_ActuatorEffect):
         x = np.zeros((n, self.n_states))
         if self.options["start"] == "steady" and u0 is not None and np.shape(u0)[-1]:
             u0 = np.broadcast_to(np.asarray(u0, float), (n, np.shape(u0)[-1]))
-            fc = u0 if input_kind == "force" else self._act.thrusts(u0, input_kind, prep["groups"])
+            fc = self._act.delivered(u0, input_kind, prep["act"])
             x[:, : fc.shape[1]] = fc
         return x
 
@@ -186,7 +193,7 @@ class ThrustAsymmetry(_ActuatorEffect):
 
     def forces(self, ctx, prep):
         fc = self.commanded(ctx, prep)
-        return self.to_tau(ctx, (prep["ratio"] - 1.0) * np.minimum(fc, 0.0))
+        return self.to_tau(ctx, (prep["ratio"] - 1.0) * np.minimum(fc, 0.0), prep)
 
 
 @register("thrust_scale")
@@ -204,4 +211,4 @@ class ThrustScale(_ActuatorEffect):
 
     def forces(self, ctx, prep):
         fc = self.commanded(ctx, prep)
-        return self.to_tau(ctx, (prep["scale"] - 1.0) * fc)
+        return self.to_tau(ctx, (prep["scale"] - 1.0) * fc, prep)

@@ -266,39 +266,49 @@ class Actuators(ForceTerm):
                 "batch); commands are never clipped. For a logged run, uvsim.plausibility.check_run names its file "
                 "and row")
 
-    def forces(self, ctx, prep):
-        kind = ctx.input_kind
-        u = ctx.u
+    def delivered(self, u, kind, prep, voltage=None, repeat: int = 1):
+        """What the units deliver for inputs ``u`` (m, k): per-thruster inputs give the thrusts
+        (m, k) of the curves (at ``voltage``, or the fitted ``supply_voltage`` where the run
+        logged none) times each unit's gain and reverse ratio; generalized-force inputs give the
+        generalized force (m, 6) after the same per-unit factors through the pseudo-inverse
+        allocation (Fossen 2021 sec. 11.2.3) and the per-DOF factors.  The thruster effects
+        (:mod:`uvsim.effects.thrusters`: lag, asymmetry, scale) act on this, so that a weak
+        unit's lag lags its weak thrust.  ``prep``: :meth:`prepare`'s for n rows; each row stands
+        for ``repeat`` consecutive rows of ``u`` (m = n * repeat)."""
+        gain, rev = _rows(prep["gain"], repeat, 1), _rows(prep["rev"], repeat, 1)
+        fg, fr = _rows(prep["fgain"], repeat, 1), _rows(prep["frev"], repeat, 1)
+        B = _rows(prep["B"], repeat, 2)
         if kind == "force":
             tau = u
-            if self.matrix is not None and (prep["gain"] is not None or prep["rev"] is not None):
+            if self.matrix is not None and (gain is not None or rev is not None):
                 # thrusters that deliver less than commanded: the commanded generalized force is
-                # allocated by the pseudo-inverse (Fossen 2021 sec. 11.2.3, unconstrained
-                # allocation), scaled per thruster and summed back
-                if prep["u"] is u:
-                    tau = prep["f"]
-                else:
-                    B = prep["B"]
-                    Bp = np.linalg.pinv(B)
-                    f = tau @ np.swapaxes(Bp, -1, -2) if Bp.ndim == 2 else np.einsum("nij,nj->ni", Bp, tau)
-                    f = _scaled(f, prep["gain"], prep["rev"])
-                    tau = f @ B.T if B.ndim == 2 else np.einsum("nij,nj->ni", B, f)
-                    prep["u"], prep["f"] = u, tau
-            if prep["fgain"] is None and prep["frev"] is None:
-                return tau
-            return _scaled(tau, prep["fgain"], prep["frev"])
+                # allocated by the pseudo-inverse (unconstrained allocation), scaled per thruster
+                # and summed back
+                Bp = np.linalg.pinv(B)
+                f = tau @ np.swapaxes(Bp, -1, -2) if Bp.ndim == 2 else np.einsum("nij,nj->ni", Bp, tau)
+                f = _scaled(f, gain, rev)
+                tau = f @ B.T if B.ndim == 2 else np.einsum("nij,nj->ni", B, f)
+            return tau if fg is None and fr is None else _scaled(tau, fg, fr)
         if self.matrix is None:
             raise SimulationError(f"inputs are per-thruster {kind} but the vehicle defines no thrusters")
-        if prep["u"] is u and prep["v"] is ctx.voltage:
-            return prep["f"]
-        volt = ctx.voltage
-        if prep["supply"] is not None:  # the fitted supply where the run logged no voltage
-            sv = prep["supply"]
+        volt = voltage
+        sv = _rows(prep["supply"], repeat, -1)
+        if sv is not None:  # the fitted supply where the run logged no voltage
             volt = (np.broadcast_to(sv, (u.shape[0],)) if volt is None
                     else np.where(np.isnan(np.asarray(volt, float)), sv, volt))
-        f = _scaled(self.thrusts(u, kind, prep["groups"], volt), prep["gain"], prep["rev"])
-        B = prep["B"]
-        tau = f @ B.T if B.ndim == 2 else np.einsum("nij,nj->ni", B, f)
+        return _scaled(self.thrusts(u, kind, prep["groups"], volt), gain, rev)
+
+    def forces(self, ctx, prep):
+        u = ctx.u
+        # inputs are held over a sample interval: the four RK4 stages share the array object
+        if prep["u"] is u and prep["v"] is ctx.voltage:
+            return prep["f"]
+        d = self.delivered(u, ctx.input_kind, prep, ctx.voltage)
+        if ctx.input_kind == "force":
+            tau = d
+        else:
+            B = prep["B"]
+            tau = d @ B.T if B.ndim == 2 else np.einsum("nij,nj->ni", B, d)
         prep["u"], prep["v"], prep["f"] = u, ctx.voltage, tau
         return tau
 
@@ -316,6 +326,14 @@ class Actuators(ForceTerm):
 
     def to_dict(self):
         return {"type": "actuators"}
+
+
+def _rows(a, repeat: int, shared_ndim: int):
+    """``a`` with each per-row entry (leading axis n) repeated ``repeat`` times; None, or an
+    array of ``shared_ndim`` dimensions (one value for every row), as it is."""
+    if a is None or repeat == 1 or np.ndim(a) == shared_ndim:
+        return a
+    return np.repeat(a, repeat, axis=0)
 
 
 def _scaled(f, gain, rev):
