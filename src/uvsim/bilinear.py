@@ -11,6 +11,13 @@ from __future__ import annotations
 import numpy as np
 
 
+def matvec(M: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``M x`` per row for a shared ``M`` (i, j) or per-row ``M`` (n, i, j); ``x`` (n, j)."""
+    if M.ndim == 2:
+        return x @ M.T
+    return np.einsum("nij,nj->ni", M, x)
+
+
 def bilinear(a: np.ndarray, b: np.ndarray, E: np.ndarray) -> np.ndarray:
     n = a.shape[0]
     return (a[:, :, None] * b[:, None, :]).reshape(n, -1) @ E

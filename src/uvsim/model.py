@@ -30,19 +30,12 @@ import numpy as np
 
 from uvsim.errors import SimulationError, VehicleError
 from uvsim.forces.base import Context
-from uvsim.bilinear import CORIOLIS, CROSS, ROT_QRATE, WRITTEN_OUT_ROWS, bilinear, rot_qrate
+from uvsim.bilinear import CORIOLIS, CROSS, ROT_QRATE, WRITTEN_OUT_ROWS, bilinear, matvec, rot_qrate
 from uvsim.rigid_body import rigid_body_mass_matrix
 from uvsim.vehicle import ADDED_MASS_NAMES, INERTIA_NAMES, check_parameter_values, inertia_tensor, load_vehicle
 
 POS, QUAT, NU = slice(0, 3), slice(3, 7), slice(7, 13)
 STATE_NAMES = ["x", "y", "z", "qw", "qx", "qy", "qz", "u", "v", "w", "p", "q", "r"]
-
-
-def _matvec(M: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """``M x`` for a shared ``M`` (6, 6) or per-row ``M`` (n, 6, 6); ``x`` (n, 6)."""
-    if M.ndim == 2:
-        return x @ M.T
-    return np.einsum("nij,nj->ni", M, x)
 
 
 class _MatVec:
@@ -278,7 +271,7 @@ class Model:
         if self.changes_mass:
             mass, r_g, M_RB, Minv = self._mass_update(t, y, pos, R, nu, nu_r, u)
             weight = mass * self.g
-            MRB_mv, Minv_mv = (lambda x: _matvec(M_RB, x)), (lambda x: _matvec(Minv, x))
+            MRB_mv, Minv_mv = (lambda x: matvec(M_RB, x)), (lambda x: matvec(Minv, x))
         states = {i: y[:, s] for i, s in self.state_slices.items()} if self.state_slices else {}
         ctx = Context(t, pos, q, R, nu, nu_r, u, self.input_kind, weight, mass, r_g, states, self.params,
                       self.changes_mass, voltage)

@@ -291,18 +291,13 @@ def alternative_challenger(sel, best, st, val_cur, *, blocked: bool = False):
             if cc is not c and cc.effect == c.effect and cc.tags.get("alternatives") == group
             and cc.complexity == c.complexity]
     done = {id(r["candidate"]): r for r in st["fitted"] if r.get("candidate") is not None}
-    rows = _fitted_with_open_loop(sel, None if blocked else best, st, val_cur,
-                                  [(cc, s) for cc, s in alts if id(cc) not in done])
-    earlier = [done[id(cc)] for cc, _ in alts if id(cc) in done and done[id(cc)].get("accepted")]
-    for row in earlier:
-        if "open_loop_cost" not in row:
-            row["open_loop_cost"] = sel.open_loop_cost(row["vehicle"], row["all_values"])
-    rows += earlier
+    rows = _fitted_with_open_loop(sel, None, st, val_cur, [(cc, s) for cc, s in alts if id(cc) not in done])
+    rows += [done[id(cc)] for cc, _ in alts if id(cc) in done and done[id(cc)].get("accepted")]
     if not rows:
         return None
-    if not blocked and "open_loop_cost" not in best:
-        best["open_loop_cost"] = sel.open_loop_cost(best["vehicle"], best["all_values"])
-    win = min(rows if blocked else [best, *rows], key=lambda r: r["open_loop_cost"])
+    pool = rows if blocked else [best, *rows]
+    _open_loop_costs(sel, pool)
+    win = min(pool, key=lambda r: r["open_loop_cost"])
     if win is best:
         return None
     if blocked:
@@ -389,7 +384,12 @@ def _fitted_with_open_loop(sel, best, st, val_cur, todo) -> list:
         if ok:
             rows.append(row)
     if rows:
-        for row in ([] if best is None else [best]) + rows:
-            if "open_loop_cost" not in row:
-                row["open_loop_cost"] = sel.open_loop_cost(row["vehicle"], row["all_values"])
+        _open_loop_costs(sel, ([] if best is None else [best]) + rows)
     return rows
+
+
+def _open_loop_costs(sel, rows) -> None:
+    """Each row's open-loop validation cost (:meth:`Selector.open_loop_cost`), where it has none yet."""
+    for row in rows:
+        if "open_loop_cost" not in row:
+            row["open_loop_cost"] = sel.open_loop_cost(row["vehicle"], row["all_values"])

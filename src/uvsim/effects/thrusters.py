@@ -66,6 +66,7 @@ import copy
 
 import numpy as np
 
+from uvsim.bilinear import matvec
 from uvsim.effects.base import Effect, Field
 from uvsim.errors import SimulationError, VehicleError
 from uvsim.forces import register
@@ -105,8 +106,7 @@ class _ActuatorEffect(Effect):
         through the allocation with the units' (possibly fitted) positions."""
         if ctx.input_kind == "force":
             return f
-        B = prep["act"]["B"]
-        return f @ B.T if B.ndim == 2 else np.einsum("nij,nj->ni", B, f)
+        return matvec(prep["act"]["B"], f)
 
 
 @register("thruster_lag")

@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from uvsim.bilinear import matvec
 from uvsim.errors import SimulationError, VehicleError
 from uvsim.forces import register
 from uvsim.forces.base import ForceTerm
@@ -188,7 +189,7 @@ class Actuators(ForceTerm):
         # inputs are held over a sample interval, so the four RK4 stages see the same
         # array object: map PWM -> thrust once per interval (cache keyed on identity)
         prep = {"groups": groups, "u": None, "v": None, "f": None, "gain": None, "rev": None, "B": self.matrix,
-                "fgain": None, "frev": None, "supply": None}
+                "fgain": None, "frev": None, "supply": None, "B_pinv": None}
         if "supply_voltage" in params and self._supply_voltage() is not None:
             sv = np.asarray(params["supply_voltage"], float)
             prep["supply"] = np.broadcast_to(sv, (n,)) if sv.ndim else sv
@@ -277,17 +278,16 @@ class Actuators(ForceTerm):
         for ``repeat`` consecutive rows of ``u`` (m = n * repeat)."""
         gain, rev = _rows(prep["gain"], repeat, 1), _rows(prep["rev"], repeat, 1)
         fg, fr = _rows(prep["fgain"], repeat, 1), _rows(prep["frev"], repeat, 1)
-        B = _rows(prep["B"], repeat, 2)
         if kind == "force":
             tau = u
             if self.matrix is not None and (gain is not None or rev is not None):
                 # thrusters that deliver less than commanded: the commanded generalized force is
                 # allocated by the pseudo-inverse (unconstrained allocation), scaled per thruster
                 # and summed back
-                Bp = np.linalg.pinv(B)
-                f = tau @ np.swapaxes(Bp, -1, -2) if Bp.ndim == 2 else np.einsum("nij,nj->ni", Bp, tau)
-                f = _scaled(f, gain, rev)
-                tau = f @ B.T if B.ndim == 2 else np.einsum("nij,nj->ni", B, f)
+                if prep["B_pinv"] is None:  # B is fixed for the prepared rows: once
+                    prep["B_pinv"] = np.linalg.pinv(prep["B"])
+                f = _scaled(matvec(_rows(prep["B_pinv"], repeat, 2), tau), gain, rev)
+                tau = matvec(_rows(prep["B"], repeat, 2), f)
             return tau if fg is None and fr is None else _scaled(tau, fg, fr)
         if self.matrix is None:
             raise SimulationError(f"inputs are per-thruster {kind} but the vehicle defines no thrusters")
@@ -307,8 +307,7 @@ class Actuators(ForceTerm):
         if ctx.input_kind == "force":
             tau = d
         else:
-            B = prep["B"]
-            tau = d @ B.T if B.ndim == 2 else np.einsum("nij,nj->ni", B, d)
+            tau = matvec(prep["B"], d)
         prep["u"], prep["v"], prep["f"] = u, ctx.voltage, tau
         return tau
 
