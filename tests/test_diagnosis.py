@@ -13,7 +13,7 @@ from uvsim.benchmarks.scenarios import BASE_RETUNE, TRUTH_TO_CATALOGUE
 from uvsim.cli import main
 from uvsim.diagnosis import diagnose
 from uvsim.diagnosis.candidates import EFFECTS, catalogue
-from uvsim.diagnosis.selector import _stepwise
+from uvsim.diagnosis.regression import stepwise as _stepwise
 from uvsim.errors import CalibrationError
 from uvsim.fitting.compare import bootstrap_improvement
 from uvsim.scenarios import generate, load_truth, sample_scenario

@@ -18,6 +18,7 @@ from uvsim.checkpoint import fingerprint
 from uvsim.diagnosis.candidates import (Candidate, catalogue, coupled_candidate, coupling_terms, mirror_start,
                                         observability)
 from uvsim.diagnosis.decision import compare, judge
+from uvsim.diagnosis.regression import BaseBlock, ls_step, stepwise
 from uvsim.diagnosis.starts import SLACK_GN_ITERATIONS, candidate_starts, slack_starts
 from uvsim.fitting.guard import block_costs, start_aligned
 from uvsim.errors import CalibrationError, UvsimError, VehicleError
@@ -207,20 +208,20 @@ class Selector:
         J, rl = EquationError(veh_c, motions, sp_l, scale=ee0.scale).jacobian()
         J = J / sp_l.scale[:, None]  # per unit of each parameter
         nb = len(cur["free"])
-        base_cols = list(range(nb))
+        base = BaseBlock(J[:nb])  # the current parameters' columns, factored once for every candidate
         if coupled:
-            cands = cands + [coupled_candidate(_stepwise(J[nb:nb + len(terms)], rl, terms, k=2, base=J[:nb]))]
+            cands = cands + [coupled_candidate(stepwise(J[nb:nb + len(terms)], rl, terms, k=2, base=base))]
         single = {}
         for i, g in enumerate(gains):
             col = nb + len(terms) + i
             if col < J.shape[0]:
-                single[g] = _ls_step(J[base_cols + [col]], rl, [*cur["free"], g], {**vals0})
+                single[g] = ls_step(base, J[col], rl, [*cur["free"], g], {**vals0})
         order = sorted(cands, key=lambda c: (c.effect != "tether", c.complexity if c.effect == "tether" else 0,
                                              c.variant != "3d"))
-        res = self._screen_each(order, motions, cur, vals0, J[:nb], ee0.scale, single, rss0)
+        res = self._screen_each(order, motions, cur, vals0, base, ee0.scale, single, rss0)
         return list(zip(order, res)), info
 
-    def _screen_each(self, cands, motions, cur, vals0, J_base, scale, single, rss0) -> list:
+    def _screen_each(self, cands, motions, cur, vals0, base: BaseBlock, scale, single, rss0) -> list:
         """Screening numbers of ``cands`` in order; each tether starts from the best simpler
         tether before it (a small multi-start on the cheap equation error, the global
         stage, for the first)."""
@@ -241,7 +242,7 @@ class Selector:
             its = SLACK_GN_ITERATIONS if "tether_slack_length" in c.free else 2
             for st in starts:
                 try:
-                    r = self._joint_gn(veh, motions, c, cur, vals0, st, J_base, scale, iterations=its)
+                    r = self._joint_gn(veh, motions, c, cur, vals0, st, base, scale, iterations=its)
                 except (UvsimError, np.linalg.LinAlgError, ValueError) as exc:
                     r = {"rss": np.inf, "values": {}, "error": str(exc)}
                 if best is None or r["rss"] < best["rss"]:
@@ -253,12 +254,12 @@ class Selector:
                                                                        if "error" in best else {})})
         return res
 
-    def _joint_gn(self, veh, motions, c: Candidate, cur, vals0: Mapping, start: Mapping, J_base: np.ndarray,
+    def _joint_gn(self, veh, motions, c: Candidate, cur, vals0: Mapping, start: Mapping, block: BaseBlock,
                   scale: np.ndarray, iterations: int = 2) -> dict:
         """Gauss-Newton on the equation error of candidate ``c`` together with the current
         free parameters: the candidate's columns are re-differentiated at every step, the
-        current parameters' columns ``J_base`` (per unit, at ``vals0``) are reused (they move
-        little), so a step costs ``1 + len(c.free)`` evaluations."""
+        current parameters' columns (``block``: per unit, at ``vals0``, factored once) are reused
+        (they move little), so a step costs ``1 + len(c.free)`` evaluations."""
         base = dict(vals0)
         names_b = list(cur["free"])
         lo_b = np.array([cur["bounds"][n][0] for n in names_b])
@@ -268,15 +269,16 @@ class Selector:
         for it in range(iterations + 1):
             sp = self.space(veh, c.free, c.bounds, xc, base)
             ee = EquationError(veh, motions, sp, scale=scale)
-            Jc, r = ee.jacobian()
+            if it == iterations:  # the last point needs its residual only
+                Jc, r = None, ee.residuals(sp.z0[None])[0]
+            else:
+                Jc, r = ee.jacobian()
             rss = float(r @ r)
             if best is None or rss < best["rss"]:
                 best = {"rss": rss, "values": {**{n: base[n] for n in names_b}, **xc}}
             if it == iterations:
                 break
-            Jc = Jc / sp.scale[:, None]
-            A = np.vstack([J_base, Jc]).T
-            d, *_ = np.linalg.lstsq(A, -r, rcond=None)
+            d, _ = block.solve(Jc / sp.scale[:, None], r)
             nb = len(names_b)
             if nb:
                 b = np.clip(np.array([base[n] for n in names_b]) + d[:nb], lo_b, hi_b)
@@ -409,9 +411,13 @@ class Selector:
         cable with drag, taut beyond 2.7 m of slack, fitted as ``horizontal_full`` with the
         slack length on its 50 m bound, which switches the elastic pull off and leaves tension
         and drag).  True when a fit was accepted."""
-        row = self.fit_candidate(c, s, cur, val_cur)
-        row["accepted"], row["why"] = judge(row, val_cur)
-        fitted.append(row)
+        def one(cand, scr, **extra) -> dict:
+            row = {**self.fit_candidate(cand, scr, cur, val_cur), **extra}
+            row["accepted"], row["why"] = judge(row, val_cur)
+            fitted.append(row)
+            return row
+
+        row = one(c, s)
         if row["accepted"] or not row.get("bound_rejected") or c.effect in replaced:
             return bool(row["accepted"])
         replaced.add(c.effect)
@@ -422,11 +428,7 @@ class Selector:
         if not alt:
             return False
         cc, ss = max(alt, key=lambda x: x[1]["reduction"])
-        row = self.fit_candidate(cc, ss, cur, val_cur)
-        row["accepted"], row["why"] = judge(row, val_cur)
-        row["replaces"] = c.label
-        fitted.append(row)
-        return bool(row["accepted"])
+        return bool(one(cc, ss, replaces=c.label)["accepted"])
 
     def fit_candidate(self, c: Candidate, s, cur, val_cur) -> dict:
         """Output-error fit of ``c`` together with the current model's free parameters,
@@ -474,37 +476,3 @@ class Selector:
                    open_loop_cost=vc["open_loop"]["total"],
                    at_bounds=[n for n in best.at_bounds if n in c.free], vehicle=veh, all_values=vals)
         return row
-
-
-def _ls_step(J: np.ndarray, r: np.ndarray, names: Sequence[str], start: Mapping) -> tuple[dict, float]:
-    """One Gauss-Newton step on the columns ``J`` (k, m) (per unit of each named parameter)
-    from ``start``: (values, residual sum of squares of the linearization)."""
-    coef, *_ = np.linalg.lstsq(J.T, -r, rcond=None)
-    res = r + J.T @ coef
-    vals = {n: float(start.get(n, 0.0 if not n.startswith("thruster_gain") else 1.0)) + float(c)
-            for n, c in zip(names, coef)}
-    return vals, float(res @ res)
-
-
-def _stepwise(J: np.ndarray, r: np.ndarray, names: Sequence[str], k: int = 2, base: np.ndarray | None = None
-              ) -> list[str]:
-    """Forward stepwise selection of ``k`` regressors (rows of ``J``, (n_terms, m)) that,
-    together with the ``base`` regressors (always in), best explain ``-r`` (least squares);
-    at most one per force row (the first letter)."""
-    chosen: list[int] = []
-    B = np.zeros((0, J.shape[1])) if base is None else base
-    for _ in range(k):
-        best, best_rss = None, np.inf
-        for j in range(J.shape[0]):
-            if j in chosen or names[j][0] in {names[c][0] for c in chosen}:
-                continue
-            A = np.vstack([B, J[chosen + [j]]]).T
-            coef, *_ = np.linalg.lstsq(A, -r, rcond=None)
-            res = r + A @ coef
-            rss = float(res @ res)
-            if rss < best_rss:
-                best, best_rss = j, rss
-        if best is None:
-            break
-        chosen.append(best)
-    return [names[j] for j in chosen]
