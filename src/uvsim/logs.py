@@ -13,7 +13,6 @@ from __future__ import annotations
 import csv
 import importlib.util
 import math
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -23,45 +22,15 @@ import yaml
 
 from uvsim.errors import LogFormatError
 from uvsim.files import load_yaml
-from uvsim.kinematics import attitude_error_angle, euler_to_quat, quat_to_euler
+from uvsim.kinematics import euler_to_quat, quat_to_euler
+from uvsim.log_columns import (  # noqa: F401  (the column names are part of this module's interface)
+    ACCEL_COLUMNS, ATTITUDE_CONSISTENCY_TOL, DEPTH_COLUMN, EULER_COLUMNS, FORCE_COLUMNS, INPUT_KINDS,
+    MEASURED_COLUMNS, POSITION_COLUMNS, PWM_RANGE_US, QUAT_COLUMNS, QUAT_NORM_TOL, QUAT_NOTE_TOL, RATE_COLUMNS,
+    VELOCITY_COLUMNS, VOLTAGE_COLUMN, _quaternion_notes, _validate)
 from uvsim.schema import check_keys, require_mapping
 
 DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw", "mixed")
 SPLITS = ("train", "validation")
-INPUT_KINDS = ("force", "thrust", "pwm")
-FORCE_COLUMNS = ("X", "Y", "Z", "K", "M", "N")
-POSITION_COLUMNS = ("x", "y", "z")
-QUAT_COLUMNS = ("qw", "qx", "qy", "qz")
-EULER_COLUMNS = ("roll", "pitch", "yaw")
-VELOCITY_COLUMNS = ("u", "v", "w")
-RATE_COLUMNS = ("p", "q", "r")
-#: Depth (m, NED z, positive down) measured by a pressure sensor at its own position on the
-#: body (vehicle file ``sensors.pressure.position``; default the body origin).
-DEPTH_COLUMN = "depth"
-#: Accelerometer specific force (m/s^2, body axes) at the IMU position (``sensors.imu.position``):
-#: ``f = R^T (a - g e_3)``, so a vehicle at rest and level reads (0, 0, -g).
-ACCEL_COLUMNS = ("acc_x", "acc_y", "acc_z")
-#: Battery voltage (V) per sample, an optional auxiliary input of PWM thrust curves.
-VOLTAGE_COLUMN = "voltage"
-MEASURED_COLUMNS = (POSITION_COLUMNS + (DEPTH_COLUMN,) + QUAT_COLUMNS + EULER_COLUMNS + VELOCITY_COLUMNS
-                    + RATE_COLUMNS + ACCEL_COLUMNS)
-
-#: Accepted ESC command range, microseconds.  Hobby/RC ESCs take 1000-2000 us
-#: pulses with 1500 us neutral; the Blue Robotics BlueESC is specified for
-#: 1000-2000 us and the Basic ESC for 1100-1900 us (Blue Robotics forum,
-#: discuss.bluerobotics.com/t/380 and /t/712).  A value outside 1000-2000 us
-#: is not a command any of these ESCs understands (e.g. 0 = "no pulse", or a
-#: column logged in percent or in normalized units), so it is rejected.
-PWM_RANGE_US = (1000.0, 2000.0)
-#: Tolerance on |q| - 1 for logged quaternions: beyond it a run is rejected.
-QUAT_NORM_TOL = 1e-2
-#: Quaternions are divided by their norm; when |q| - 1 exceeds this in some row (more
-#: than the rounding of a log written with 4+ decimals) the run records a note
-#: (:attr:`Run.notes`) that the commands print and put in their reports.
-QUAT_NOTE_TOL = 1e-3
-#: Largest disagreement (rad) allowed between quaternion and Euler columns
-#: when a run logs both.
-ATTITUDE_CONSISTENCY_TOL = 1e-2
 MANIFEST = "manifest.yaml"
 #: Top-level keys of a manifest: the contract (vehicle, description, runs), the keys that
 #: uvsim's own generators and importers write (truth, noise, sources, import) and ``meta``
@@ -69,15 +38,6 @@ MANIFEST = "manifest.yaml"
 #: Anything else is a typo (``vehicel``, ``run``) and an error with a did-you-mean.
 MANIFEST_KEYS = ("vehicle", "description", "runs", "meta", "truth", "noise", "sources", "import")
 _RUN_KEYS = ("file", "dof", "weight", "split")
-_ACTUATOR_RE = re.compile(r"^(thrust|pwm)_([1-9][0-9]*)$")
-_ACTUATOR_LIKE_RE = re.compile(r"^(thrust|pwm|thruster)\D*\d+$", re.IGNORECASE)
-
-
-def _row(i: int, source: str) -> str:
-    """``"row i (line i+2)"`` for CSV files, ``"row i"`` otherwise."""
-    if source.lower().endswith(".csv"):
-        return f"row {i} (line {i + 2} of the file)"
-    return f"row {i}"
 
 
 def _check_choice(value, allowed, what: str, source: str, none_ok: bool = True):
@@ -93,196 +53,6 @@ def _check_weight(weight, source: str) -> float:
     if not ok or not math.isfinite(float(weight)) or float(weight) <= 0:
         raise LogFormatError(f"{source}: weight {weight!r} must be a positive finite number")
     return float(weight)
-
-
-def _clean(df: pd.DataFrame, source: str) -> tuple[pd.DataFrame, list[str]]:
-    """Numeric float64 copy of ``df`` with entirely empty columns removed.
-
-    Returns the frame and the names of the removed (empty) columns."""
-    df = df.copy()
-    df.columns = [str(c).strip() for c in df.columns]
-    dup = df.columns[df.columns.duplicated()]
-    if len(dup):
-        raise LogFormatError(f"{source}: column {dup[0]!r} appears more than once")
-    df = df.reset_index(drop=True)
-    if len(df) < 2:
-        raise LogFormatError(f"{source}: needs at least 2 samples, found {len(df)}")
-    empty = [c for c in df.columns if df[c].isna().all()]
-    df = df.drop(columns=empty)
-    for c in df.columns:
-        col = df[c]
-        if pd.api.types.is_bool_dtype(col):
-            bad = col.notna().to_numpy()
-        elif not pd.api.types.is_numeric_dtype(col):
-            num = pd.to_numeric(col, errors="coerce")
-            bad = (col.notna() & num.isna()).to_numpy()
-            col = num
-        else:
-            bad = np.zeros(len(col), dtype=bool)
-        if bad.any():
-            i = int(np.flatnonzero(bad)[0])
-            raise LogFormatError(
-                f"{source}: column {c!r}, {_row(i, source)}: {df[c].iloc[i]!r} is not a number "
-                "(expected a numeric value, or an empty cell for a missing sample)"
-            )
-        df[c] = col.astype("float64")
-        inf = np.isinf(df[c].to_numpy())
-        if inf.any():
-            i = int(np.flatnonzero(inf)[0])
-            raise LogFormatError(
-                f"{source}: column {c!r}, {_row(i, source)} is infinite (expected a finite number "
-                "or an empty cell for a missing sample)"
-            )
-    return df, empty
-
-
-def _actuator_columns(cols, source: str) -> tuple[str | None, list[str]]:
-    """Input kind and input column names in order; raises on mixed or gappy inputs."""
-    found: dict[str, list[str]] = {"force": [c for c in FORCE_COLUMNS if c in cols]}
-    numbered: dict[str, dict[int, str]] = {"thrust": {}, "pwm": {}}
-    for c in cols:
-        m = _ACTUATOR_RE.match(c)
-        if m:
-            numbered[m.group(1)][int(m.group(2))] = c
-        elif _ACTUATOR_LIKE_RE.match(c):
-            raise LogFormatError(
-                f"{source}: column {c!r} looks like an actuator column; expected thrust_1..thrust_n "
-                "or pwm_1..pwm_n (lower case, underscore, numbered from 1)"
-            )
-    for kind, cols_by_index in numbered.items():
-        found[kind] = [cols_by_index[i] for i in sorted(cols_by_index)]
-        if cols_by_index and sorted(cols_by_index) != list(range(1, len(cols_by_index) + 1)):
-            missing = sorted(set(range(1, max(cols_by_index) + 1)) - set(cols_by_index))
-            raise LogFormatError(
-                f"{source}: {kind} columns must be numbered 1..n without gaps; "
-                f"found {found[kind]}, missing {[f'{kind}_{i}' for i in missing]}"
-            )
-    kinds = [k for k in INPUT_KINDS if found[k]]
-    if not kinds:
-        raise LogFormatError(
-            f"{source}: no input columns; expected all of X,Y,Z,K,M,N, or thrust_1..thrust_n, "
-            "or pwm_1..pwm_n"
-        )
-    if len(kinds) > 1:
-        raise LogFormatError(
-            f"{source}: mixed input kinds {kinds} ({', '.join(c for k in kinds for c in found[k])}); "
-            "a run must use exactly one of force (X..N), thrust_i or pwm_i"
-        )
-    kind = kinds[0]
-    if kind == "force" and len(found["force"]) != 6:
-        missing = [c for c in FORCE_COLUMNS if c not in cols]
-        raise LogFormatError(
-            f"{source}: force inputs need all six columns X,Y,Z,K,M,N; missing {missing}"
-        )
-    return kind, found[kind]
-
-
-def _validate(df: pd.DataFrame, source: str) -> tuple[pd.DataFrame, list[str], str, list[str]]:
-    """Check a run frame against the contract; returns (clean frame, empty
-    columns, input kind, input columns)."""
-    df, empty = _clean(df, source)
-    cols = list(df.columns)
-    if "t" not in cols:
-        raise LogFormatError(f"{source}: missing time column 't' (columns found: {cols})")
-    t = df["t"].to_numpy()
-    bad = np.flatnonzero(~np.isfinite(t))
-    if bad.size:
-        raise LogFormatError(
-            f"{source}: column 't', {_row(int(bad[0]), source)} is empty/NaN; time must be given in every row"
-        )
-    bad = np.flatnonzero(np.diff(t) <= 0)
-    if bad.size:
-        i = int(bad[0]) + 1
-        raise LogFormatError(
-            f"{source}: column 't' must be strictly increasing; {_row(i, source)} has t = {float(t[i])!r} "
-            f"after t = {float(t[i - 1])!r}"
-        )
-    # a quaternion is all-or-nothing; Euler angles may be any subset (an IMU without a
-    # magnetometer logs roll and pitch only, a compass yaw only)
-    for group, names in (("quaternion", QUAT_COLUMNS), ("acceleration", ACCEL_COLUMNS)):
-        present = [c for c in names if c in cols]
-        if present and len(present) != len(names):
-            raise LogFormatError(
-                f"{source}: partial {group} columns {present}; expected all of {list(names)} "
-                "(an entirely empty column counts as absent)"
-            )
-    if not any(c in cols for c in MEASURED_COLUMNS):
-        raise LogFormatError(
-            f"{source}: no measured columns; a run needs at least one of position (x, y, z), depth, "
-            "attitude (qw..qz or any of roll, pitch, yaw), velocity (u, v, w), rates (p, q, r) or "
-            "acceleration (acc_x, acc_y, acc_z)"
-        )
-    if VOLTAGE_COLUMN in cols:
-        _check_voltage_column(df[VOLTAGE_COLUMN].to_numpy(), source)
-    kind, in_cols = _actuator_columns(cols, source)
-    for c in in_cols:
-        v = df[c].to_numpy()
-        nan = np.flatnonzero(np.isnan(v))
-        if nan.size:
-            raise LogFormatError(
-                f"{source}: input column {c!r}, {_row(int(nan[0]), source)} is empty/NaN; "
-                "inputs must be given in every row"
-            )
-        if kind == "pwm":
-            lo, hi = PWM_RANGE_US
-            out = np.flatnonzero((v < lo) | (v > hi))
-            if out.size:
-                i = int(out[0])
-                raise LogFormatError(
-                    f"{source}: column {c!r}, {_row(i, source)}: PWM {float(v[i])!r} us outside the accepted "
-                    f"{lo:g}..{hi:g} us (standard ESC pulse range, 1500 us neutral; values must be in "
-                    "microseconds)"
-                )
-    if all(c in cols for c in QUAT_COLUMNS):
-        q = df[list(QUAT_COLUMNS)].to_numpy()
-        norm = np.linalg.norm(q, axis=1)
-        far = np.flatnonzero(np.abs(norm - 1.0) > QUAT_NORM_TOL)  # NaN rows compare False
-        if far.size:
-            i = int(far[0])
-            raise LogFormatError(
-                f"{source}: quaternion qw..qz in {_row(i, source)} has norm {norm[i]:.6g}; expected a unit "
-                f"quaternion (|q| within {QUAT_NORM_TOL:g} of 1)"
-            )
-        if all(c in cols for c in EULER_COLUMNS):
-            qe = euler_to_quat(df[list(EULER_COLUMNS)].to_numpy())
-            err = attitude_error_angle(q / norm[:, None], qe)
-            off = np.flatnonzero(err > ATTITUDE_CONSISTENCY_TOL)
-            if off.size:
-                i = int(off[0])
-                raise LogFormatError(
-                    f"{source}: quaternion and roll/pitch/yaw columns disagree by {err[i]:.4g} rad in "
-                    f"{_row(i, source)}; expected the same attitude (within {ATTITUDE_CONSISTENCY_TOL:g} rad)"
-                )
-    return df, empty, kind, in_cols
-
-
-def _check_voltage_column(v: np.ndarray, source: str) -> None:
-    """``voltage``: positive where logged; NaN = no new sample (held, see :attr:`Run.voltage`),
-    so the first row must carry a value."""
-    if np.isnan(v[0]):
-        raise LogFormatError(
-            f"{source}: column 'voltage', {_row(0, source)} is empty; the battery voltage is held from one "
-            "sample to the next (empty cells = no new sample), so the first row must have a value"
-        )
-    bad = np.flatnonzero(~np.isnan(v) & ~(v > 0))
-    if bad.size:
-        i = int(bad[0])
-        raise LogFormatError(
-            f"{source}: column 'voltage', {_row(i, source)}: {float(v[i])!r} V is not a positive battery voltage"
-        )
-
-
-def _quaternion_notes(df: pd.DataFrame, source: str) -> list[str]:
-    """A note when the logged quaternions are renormalized by more than QUAT_NOTE_TOL."""
-    if not all(c in df.columns for c in QUAT_COLUMNS):
-        return []
-    dev = np.abs(np.linalg.norm(df[list(QUAT_COLUMNS)].to_numpy(), axis=1) - 1.0)
-    if not np.any(dev > QUAT_NOTE_TOL):  # NaN rows compare False
-        return []
-    i = int(np.nanargmax(dev))
-    n = int(np.sum(dev > QUAT_NOTE_TOL))
-    return [f"{source}: quaternion qw..qz renormalized to unit norm; |q| deviates from 1 by up to "
-            f"{dev[i]:.3g} ({_row(i, source)}; {n} of {len(dev)} rows beyond {QUAT_NOTE_TOL:g})"]
 
 
 @dataclass

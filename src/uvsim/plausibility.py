@@ -154,7 +154,7 @@ def _src(run) -> str:
 
 
 def _row(run, i: int) -> str:
-    from uvsim.logs import _row as row
+    from uvsim.log_columns import _row as row
 
     return row(int(i), _src(run))
 
