@@ -62,6 +62,23 @@ def test_supply_voltage_reads_the_curves_where_the_run_logged_no_voltage():
     np.testing.assert_array_equal(logged16, nominal)
 
 
+def test_a_lag_along_a_logged_motion_reads_the_curves_at_the_supply_voltage_for_a_batch_of_rows():
+    """The equation error's lag states (``Model.term_states_along``, many rows at once, each row
+    a run of L samples) equal each row computed alone, with one supply voltage for every row
+    (it raised a broadcasting error before) and with one per row."""
+    from uvsim.model import Model
+    veh = _on_family(16.0).with_effects([{"type": "thruster_lag", "time_constant": 0.1}])
+    n, L = 3, 5
+    T = np.tile(np.arange(L) * 0.02, (n, 1))
+    U = np.random.default_rng(0).uniform(1300.0, 1700.0, size=(n, L, veh.n_thrusters))
+    for over in ({}, {"supply_voltage": np.array([14.0, 16.0, 18.0])}):
+        xs = Model(veh, over, n=n, input_kind="pwm").term_states_along(T, U, None)
+        alone = [Model(veh, {k: float(v[i]) for k, v in over.items()}, n=1, input_kind="pwm")
+                 .term_states_along(T[i:i + 1], U[i:i + 1], None)[0] for i in range(n)]
+        np.testing.assert_allclose(xs, np.array(alone), rtol=0, atol=1e-12)
+    assert np.abs(xs[0] - xs[2]).max() > 1.0  # 14 V and 18 V lag different thrusts (N)
+
+
 def test_bounds_are_the_measured_family_and_the_prior_a_battery():
     assert default_bounds("supply_voltage", 16.0, 0.5) == (10.0, 20.0)   # T200 sheets: 10-20 V
     assert default_prior_sd("supply_voltage", 16.0) == SUPPLY_VOLTAGE_SD == 2.0

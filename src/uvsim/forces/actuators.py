@@ -292,7 +292,7 @@ class Actuators(ForceTerm):
         if self.matrix is None:
             raise SimulationError(f"inputs are per-thruster {kind} but the vehicle defines no thrusters")
         volt = voltage
-        sv = _rows(prep["supply"], repeat, -1)
+        sv = _rows(prep["supply"], repeat, 0)  # one fitted voltage (0-d) or one per row (n,)
         if sv is not None:  # the fitted supply where the run logged no voltage
             volt = (np.broadcast_to(sv, (u.shape[0],)) if volt is None
                     else np.where(np.isnan(np.asarray(volt, float)), sv, volt))
