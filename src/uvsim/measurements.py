@@ -173,6 +173,10 @@ class RunMeasurements:
         return "rates" in self.groups
 
     @property
+    def has_accelerometer(self) -> bool:
+        return "acceleration" in self.groups
+
+    @property
     def has_filter_attitude(self) -> bool:
         """Roll and pitch logged as Euler angles beside a gyro: an attitude filter's output
         (an AHRS / EKF), whose tilt carries a constant bias (``attitude_bias`` of :meth:`predict`)."""
@@ -241,11 +245,13 @@ class RunMeasurements:
 
     # ------------------------------------------------------------------ prediction
     def predict(self, y: np.ndarray, nu_dot: np.ndarray | None = None,
-                gyro_bias: np.ndarray | None = None, attitude_bias: np.ndarray | None = None) -> dict[str, np.ndarray]:
+                gyro_bias: np.ndarray | None = None, attitude_bias: np.ndarray | None = None,
+                acc_bias: np.ndarray | None = None) -> dict[str, np.ndarray]:
         """Predicted measurements from states ``y`` (..., n, n_y) and accelerations
         ``nu_dot`` (..., n, 6) (needed only for the accelerometer); ``gyro_bias``
         (..., 3) rad/s; ``attitude_bias`` (..., 2) rad: the attitude filter's constant roll
-        and pitch offset (Euler mode only, :attr:`has_filter_attitude`).  Returns group ->
+        and pitch offset (Euler mode only, :attr:`has_filter_attitude`); ``acc_bias`` (..., 3)
+        m/s^2: the accelerometer's constant offset in body axes, added to the specific force.  Returns group ->
         (..., n, k) (attitude: (..., n, 4) quaternions in quaternion mode, Euler angles
         otherwise)."""
         y = np.asarray(y, float)
@@ -306,6 +312,8 @@ class RunMeasurements:
                     raise CalibrationError(f"run {self.name}: the accelerometer model needs the simulated accelerations")
                 f = _specific_force(qnu()[4:10], _components(nu_dot), down(), self.sensors.get("imu"), self.g)
                 out[g] = np.stack(f, axis=-1)
+                if acc_bias is not None:
+                    out[g] = out[g] + np.asarray(acc_bias, float)[..., None, :]
         return out
 
     # ------------------------------------------------------------------ residuals

@@ -57,7 +57,10 @@ VEHICLE_KEYS = ("name", "description", "sources", "meta", "environment", "rigid_
                 "damping", "thrusters", "effects", "sensors", "uncertainty")
 ENVIRONMENT_KEYS = ("g", "rho", "current_ned")
 RIGID_BODY_KEYS = ("mass", "buoyancy", "r_g", "r_b", "inertia")
-SENSOR_KEYS = ("position", "source", "gyro_bias_sd")
+SENSOR_KEYS = ("position", "source", "gyro_bias_sd", "acc_bias_sd")
+#: the IMU's bias specs: key -> (unit, largest plausible value (exclusive), what it is)
+IMU_BIAS_SPECS = {"gyro_bias_sd": ("rad/s", 1.0, "a MEMS gyro's in-run bias (0.001-0.05 rad/s)"),
+                  "acc_bias_sd": ("m/s^2", 2.0, "a MEMS accelerometer's offset (0.01-0.8 m/s^2)")}
 
 
 def inertia_tensor(Ixx, Iyy, Izz, Ixy=0.0, Ixz=0.0, Iyz=0.0) -> np.ndarray:
@@ -97,6 +100,9 @@ class Vehicle:
     #: the IMU gyro's in-run bias, 1-sigma per axis, rad/s (``sensors.imu.gyro_bias_sd``): the prior
     #: of the gyro bias a fit estimates per run; None: :data:`uvsim.fitting.objective.GYRO_BIAS_SIGMA`
     gyro_bias_sd: float | None = None
+    #: the IMU accelerometer's offset, 1-sigma per axis, m/s^2 (``sensors.imu.acc_bias_sd``): the
+    #: prior of the offset a fit estimates per run; None: :data:`uvsim.fitting.objective.ACC_BIAS_SIGMA`
+    acc_bias_sd: float | None = None
     #: how late every logged sensor reads relative to the logged inputs, s (``sensors.latency``;
     #: docs/model.md, "Sensor latency"): a prediction applies each input this much later than its
     #: time stamp (:mod:`uvsim.latency`)
@@ -227,8 +233,9 @@ class Vehicle:
         }
         if self.sensors:
             d["sensors"] = {k: {"position": [float(x) for x in p]} for k, p in self.sensors.items()}
-        if self.gyro_bias_sd is not None:
-            d.setdefault("sensors", {}).setdefault("imu", {})["gyro_bias_sd"] = float(self.gyro_bias_sd)
+        for key in IMU_BIAS_SPECS:
+            if getattr(self, key) is not None:
+                d.setdefault("sensors", {}).setdefault("imu", {})[key] = float(getattr(self, key))
         if self.sensor_latency:
             d.setdefault("sensors", {})["latency"] = float(self.sensor_latency)
         if self.uncertainty:
@@ -397,14 +404,14 @@ def check_latency(value, where: str) -> float:
     return x
 
 
-def _sensors(spec, f: str) -> tuple[dict, float | None, float]:
-    """``sensors:`` section -> ({name: position (3,)}, the imu's ``gyro_bias_sd`` (rad/s) or
-    None, ``latency`` (s, 0 when not given)); validated."""
+def _sensors(spec, f: str) -> tuple[dict, dict, float]:
+    """``sensors:`` section -> ({name: position (3,)}, the imu's bias specs {key of
+    :data:`IMU_BIAS_SPECS`: value}, ``latency`` (s, 0 when not given)); validated."""
     if spec is None:
-        return {}, None, 0.0
+        return {}, {}, 0.0
     if not isinstance(spec, dict):
         raise VehicleError(f"{f}: sensors: expected a mapping such as {{pressure: {{position: [x, y, z]}}}}")
-    out, bias_sd = {}, None
+    out, bias_sd = {}, {}
     latency = check_latency(spec["latency"], f"{f}: sensors.latency") if "latency" in spec else 0.0
     for name, val in spec.items():
         if name == "latency":
@@ -415,15 +422,15 @@ def _sensors(spec, f: str) -> tuple[dict, float | None, float]:
             raise VehicleError(f"{f}: sensors.{name}: expected a mapping {{position: [x, y, z]}} "
                                "(m, body frame; optional source)")
         check_keys(val, SENSOR_KEYS, f"{f}: sensors.{name}", error=VehicleError)
-        if "gyro_bias_sd" in val and name != "imu":
-            raise VehicleError(f"{f}: sensors.{name}.gyro_bias_sd: only the imu has a gyro")
-        if val.get("gyro_bias_sd") is not None:
-            bias_sd = _num(val, "gyro_bias_sd", f"{f}: sensors.imu", positive=True)
-            if bias_sd >= 1.0:
-                raise VehicleError(f"{f}: sensors.imu.gyro_bias_sd = {bias_sd:g}: expected rad/s, a MEMS gyro's "
-                                   "in-run bias (0.001-0.05 rad/s)")
-        if name == "imu" and "position" not in val and "gyro_bias_sd" in val:
-            continue  # the gyro's bias spec alone (the accelerometer's position not given)
+        for key, (unit, top, what) in IMU_BIAS_SPECS.items():
+            if key in val and name != "imu":
+                raise VehicleError(f"{f}: sensors.{name}.{key}: only the imu has a gyro and an accelerometer")
+            if val.get(key) is not None:
+                bias_sd[key] = _num(val, key, f"{f}: sensors.imu", positive=True)
+                if bias_sd[key] >= top:
+                    raise VehicleError(f"{f}: sensors.imu.{key} = {bias_sd[key]:g}: expected {unit}, {what}")
+        if name == "imu" and "position" not in val and any(k in val for k in IMU_BIAS_SPECS):
+            continue  # the IMU's bias specs alone (the accelerometer's position not given)
         if "position" not in val:
             raise VehicleError(f"{f}: sensors.{name}.position: missing (expected [x, y, z], m, body frame)")
         pos = _vec3(val, "position", f"{f}: sensors.{name}")
@@ -521,7 +528,8 @@ def vehicle_from_dict(d: dict, *, source: str = "<dict>", actuators: Actuators |
         rho=rho,
         current_ned=current,
         sensors=sensors,
-        gyro_bias_sd=bias_sd,
+        gyro_bias_sd=bias_sd.get("gyro_bias_sd"),
+        acc_bias_sd=bias_sd.get("acc_bias_sd"),
         sensor_latency=latency,
         description=str(d.get("description", "")),
         source=source,

@@ -72,7 +72,8 @@ def weak_thruster(truth: dict) -> tuple[str, float] | None:
 
 def truth_errors(cal, truth: dict) -> dict:
     """Errors of a fitted :class:`uvsim.calibration.Calibrator` against a scenario's
-    ``truth.yaml`` (dict): percent for parameters, rad/s for gyro biases."""
+    ``truth.yaml`` (dict): percent for parameters, rad/s for gyro biases, m/s^2 for
+    accelerometer offsets."""
     from uvsim.calibration.params import EFFECTIVE_INERTIA, LINEAR_DAMPING, QUADRATIC_DAMPING
 
     p = cal.vehicle_.parameters()
@@ -86,16 +87,17 @@ def truth_errors(cal, truth: dict) -> dict:
         out[f"{a}+{b}"] = 100 * ((p[a] + p[b]) / (t[a] + t[b]) - 1)
     for k in list(QUADRATIC_DAMPING.values()) + list(LINEAR_DAMPING.values()):
         out[k] = 100 * (p[k] / t[k] - 1)
-    err, true = [], []
-    for r in truth["runs"]:
-        name = r["file"].rsplit(".", 1)[0]
-        if name in cal.report_["gyro_bias"]:
-            err.append(np.subtract(cal.report_["gyro_bias"][name], r["gyro_bias"]))
-            true.append(r["gyro_bias"])
-    if err:
-        out["gyro_bias_rms_error_radps"] = float(np.sqrt(np.mean(np.square(err))))
-        out["gyro_bias_rms_error_pct_of_rms_bias"] = float(100 * np.sqrt(np.mean(np.square(err)))
-                                                           / np.sqrt(np.mean(np.square(true))))
+    for key, unit in (("gyro_bias", "radps"), ("acc_bias", "mps2")):
+        err, true = [], []
+        for r in truth["runs"]:
+            name = r["file"].rsplit(".", 1)[0]
+            if name in cal.report_.get(key, {}):
+                err.append(np.subtract(cal.report_[key][name], r[key]))
+                true.append(r[key])
+        if err:
+            out[f"{key}_rms_error_{unit}"] = float(np.sqrt(np.mean(np.square(err))))
+            out[f"{key}_rms_error_pct_of_rms_bias"] = float(100 * np.sqrt(np.mean(np.square(err)))
+                                                            / np.sqrt(np.mean(np.square(true))))
     lag = cal.report_["attitude_lag"]["tau"]
     out["attitude_lag"] = 100 * (lag / truth["sensors"]["euler"]["time_constant"] - 1)
     return out

@@ -158,6 +158,9 @@ class Calibrator:
         3 prior sds is flagged).
     gyro_bias : fit a constant gyro bias per run (joint stage; the GA removes each run's
         median rate residual).
+    acc_bias : fit a constant accelerometer offset (body axes) per run that logs an
+        accelerometer (joint stage; prior sd the vehicle's ``sensors.imu.acc_bias_sd``, else
+        :data:`uvsim.fitting.objective.ACC_BIAS_SIGMA`, 0.1 m/s^2; beyond 3 prior sds flagged).
     screen : free mixed runs' candidates only if the data excite them.
     attitude_lag : time constant (s) of the attitude filter that logged the Euler angles
         (a first-order lag in their measurement model, :mod:`uvsim.estimation.lag`), or
@@ -210,7 +213,8 @@ class Calibrator:
                  signal_weights: Mapping | None = None, noise: Mapping | None = None, ga_channels: str = "own",
                  sample_weighting: str = DEFAULT_SAMPLE_WEIGHTING, low_speed_exponent: float = 0.0, refine: bool = True, horizons=DEFAULT_HORIZONS,
                  continuity=DEFAULT_CONTINUITY,
-                 max_iter: int = 80, gyro_bias: bool = True, attitude_bias: bool = True, screen: bool = True,
+                 max_iter: int = 80, gyro_bias: bool = True, attitude_bias: bool = True, acc_bias: bool = True,
+                 screen: bool = True,
                  attitude_lag="auto", latency=None,
                  initial_velocity: str = "zero", prior: bool = True, loss: str = "linear",
                  workers: int = 1, dask: str | None = None, batch_rows: int = DEFAULT_BATCH_ROWS, checkpoint=None,
@@ -229,6 +233,7 @@ class Calibrator:
         self.attitude_lag = attitude_lag
         self.latency = latency
         self.attitude_bias = attitude_bias
+        self.acc_bias = acc_bias
         self.initial_velocity = initial_velocity
         self.prior = prior
         self.loss = loss
@@ -499,7 +504,9 @@ class Calibrator:
             "prior": bool(self.prior), "uncertainty": self.initial_vehicle_.uncertainty,
             # (the default loss leaves the key, and so earlier checkpoints, as they were)
             **({} if self.loss == "linear" else {"loss": self.loss}),
-            "attitude_bias": bool(self.attitude_bias)})
+            "attitude_bias": bool(self.attitude_bias),
+            # (without the accelerometer bias the key, and so earlier checkpoints, as they were)
+            **({"acc_bias": True} if self.acc_bias else {})})
         ck_path = self.checkpoint if self.checkpoint is not None else self.resume
         ck = None
         if ck_path is not None or self.resume is not None:  # (tag: the refit with an estimated latency)
@@ -509,7 +516,7 @@ class Calibrator:
                          bounds={k: bounds_of(k) for k in names}, horizons=horizons,
                          continuity=continuity, ftol=JOINT_FTOL, max_iter=int(self.max_iter),
                          gyro_bias=bool(self.gyro_bias), attitude_bias=bool(self.attitude_bias),
-                         initial_velocity=self.initial_velocity,
+                         acc_bias=bool(self.acc_bias), initial_velocity=self.initial_velocity,
                          workers=self._workers(), checkpoint=ck, progress=self.progress,
                          prior_mean=self.initial_vehicle_.parameters() if self.prior else None,
                          prior_sd=self.initial_vehicle_.uncertainty, loss=self.loss)

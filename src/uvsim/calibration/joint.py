@@ -85,7 +85,7 @@ def _bar(progress: bool, total: int):
 
 
 def run_joint(vehicle, runs, meas, params, *, keep, screen, bounds, horizons, max_iter: int, gyro_bias: bool,
-              attitude_bias: bool = False, initial_velocity: str = "zero", workers: int = 1,
+              attitude_bias: bool = False, acc_bias: bool = False, initial_velocity: str = "zero", workers: int = 1,
               checkpoint: JointCheckpoint | None = None,
               progress: bool = False, prior_mean=None, prior_sd=None, loss: str = "linear",
               continuity=(1.0,), ftol: float = 1e-6):
@@ -98,7 +98,8 @@ def run_joint(vehicle, runs, meas, params, *, keep, screen, bounds, horizons, ma
     params : ``vehicle.parameters()``.
     keep : names freed whatever the screen says; screen : candidates freed if excited.
     bounds : {name: (low, high)} for every name of ``keep`` and ``screen``.
-    horizons, max_iter, gyro_bias, attitude_bias, initial_velocity, workers : see :func:`uvsim.fitting.fit`.
+    horizons, max_iter, gyro_bias, attitude_bias, acc_bias, initial_velocity, workers : see
+        :func:`uvsim.fitting.fit`.
     prior_mean, prior_sd : {name: value} (every parameter) and {name: sd} (some): the prior
         of :func:`uvsim.fitting.fit` (None: no prior).
     loss : "linear" or "huber" (:func:`uvsim.fitting.fit`).
@@ -117,7 +118,8 @@ def run_joint(vehicle, runs, meas, params, *, keep, screen, bounds, horizons, ma
         if saved is None:
             space = make_space(params, keep + screen, bounds=bounds)
             probs, _ = build_problems(vehicle, runs, meas, space, horizons[0], space.z0, gyro_bias=gyro_bias,
-                                      attitude_bias=attitude_bias, initial_velocity=initial_velocity, loss=loss)
+                                      attitude_bias=attitude_bias, acc_bias=acc_bias,
+                                      initial_velocity=initial_velocity, loss=loss)
             rel = excitation(space, information(probs, space.z0, workers))
             saved = {"relative_sigma": {k: rel[k] for k in screen},
                      "not_excited": [k for k in screen if not rel[k] <= EXCITATION_REL_SIGMA]}
@@ -139,7 +141,7 @@ def run_joint(vehicle, runs, meas, params, *, keep, screen, bounds, horizons, ma
 
     try:
         res = fit(vehicle, runs, space, meas=meas, horizons=horizons, max_iter=max_iter, gyro_bias=gyro_bias,
-                  attitude_bias=attitude_bias, initial_velocity=initial_velocity, workers=workers,
+                  attitude_bias=attitude_bias, acc_bias=acc_bias, initial_velocity=initial_velocity, workers=workers,
                   checkpoint=checkpoint, on_iteration=on_it,
                   progress=lambda msg: log.debug(msg), prior_mean=prior_mean, prior_sd=prior_sd,
                   loss=loss, continuity=continuity, ftol=ftol)

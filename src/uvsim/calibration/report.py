@@ -16,7 +16,7 @@ import numpy as np
 
 from uvsim.calibration.params import EFFECTIVE_INERTIA, LINEAR_DAMPING, QUADRATIC_DAMPING
 from uvsim.fitting.evaluate import open_loop
-from uvsim.fitting.objective import ATTITUDE_BIAS_SIGMA, gyro_bias_sd
+from uvsim.fitting.objective import ATTITUDE_BIAS_SIGMA, acc_bias_sd, gyro_bias_sd
 from uvsim.metrics import measurement_metrics, pooled_group_rmse
 
 #: 1-sigma above this fraction of the value: reported as "weakly_determined".
@@ -205,6 +205,20 @@ def gyro_bias_flags(res, sd: float) -> list[str]:
     return out
 
 
+def acc_bias_flags(res, sd: float) -> list[str]:
+    """Runs and axes whose fitted accelerometer offset is more than :data:`BIAS_FLAG_SD` prior
+    sds (``sd``, m/s^2): a constant force per unit mass the dynamics do not give (a misfit of
+    the model: buoyancy, a current, a tether; or a wrong ``sensors.imu.acc_bias_sd``)."""
+    out = []
+    for run, b in ({} if res is None else getattr(res, "acc_bias", {})).items():
+        for axis, x in zip("xyz", b):
+            if abs(x) > BIAS_FLAG_SD * sd:
+                out.append(f"run {run}: accelerometer offset in {axis} {x:+.4f} m/s^2 is {abs(x) / sd:.1f} sd of the "
+                           f"IMU's offset ({sd:g} m/s^2): it explains what the dynamics do not (a misfit of the "
+                           "model, e.g. buoyancy, a current or a tether; or a wrong sensors.imu.acc_bias_sd)")
+    return out
+
+
 def attitude_bias_flags(res) -> list[str]:
     """Runs whose fitted attitude-filter offset is more than :data:`BIAS_FLAG_SD` prior sds
     (:data:`uvsim.fitting.objective.ATTITUDE_BIAS_SIGMA`): a constant tilt the dynamics do not
@@ -273,6 +287,8 @@ def build_report(cal, ds, runs, problems, ga, bounds_of, t0, t_ga, t_ref) -> dic
         "gyro_bias_flags": gyro_bias_flags(res, gyro_bias_sd(cal.initial_vehicle_)),
         "attitude_bias": {} if res is None else dict(res.attitude_bias),
         "attitude_bias_flags": attitude_bias_flags(res),
+        "acc_bias": {} if res is None else dict(getattr(res, "acc_bias", {})),
+        "acc_bias_flags": acc_bias_flags(res, acc_bias_sd(cal.initial_vehicle_)),
         "validation_rmse": val, "validation_fit_percent": val_fit,
         "training_rmse": tr, "training_fit_percent": tr_fit,
         "initial_validation_rmse": val0, "initial_validation_fit_percent": val0_fit,
@@ -302,7 +318,7 @@ def build_report(cal, ds, runs, problems, ga, bounds_of, t0, t_ga, t_ref) -> dic
                      "bounds": {k: list(v) for k, v in (cal.bounds or {}).items()},
                      "refine": cal.refine, "horizons": cal._horizons(), "continuity": cal._continuity(),
                      "max_iter": cal.max_iter,
-                     "gyro_bias": cal.gyro_bias, "screen": cal.screen, "attitude_lag": cal.attitude_lag,
+                     "gyro_bias": cal.gyro_bias, "acc_bias": cal.acc_bias, "screen": cal.screen, "attitude_lag": cal.attitude_lag,
                      "latency": cal.latency,
                      "initial_velocity": cal.initial_velocity, "prior": cal.prior, "loss": cal.loss,
                      "sample_weighting": cal.sample_weighting},

@@ -60,6 +60,8 @@ def register(sub) -> None:
                    help="Levenberg-Marquardt iterations per horizon; a last stage that stops there is reported as "
                         "unfinished (exit 2) unless --keep-worse")
     p.add_argument("--no-gyro-bias", action="store_true", help="do not fit a gyro bias per run")
+    p.add_argument("--no-acc-bias", action="store_true",
+                   help="do not fit an accelerometer offset per run (runs logging acc_x, acc_y, acc_z)")
     p.add_argument("--no-attitude-bias", action="store_true",
                    help="do not fit a roll / pitch offset per run of an attitude filter (runs logging Euler angles "
                         "beside a gyro)")
@@ -309,6 +311,12 @@ def print_summary(cal, out=None) -> None:
             say(f"  {name:28s} " + " ".join(f"{x:+.5f}" for x in b))
         for flag in rep.get("attitude_bias_flags", []):
             say(f"  FLAG {flag}")
+    if rep.get("acc_bias"):
+        say("accelerometer offset per run (m/s^2, x y z):")
+        for name, b in rep["acc_bias"].items():
+            say(f"  {name:28s} " + " ".join(f"{x:+.4f}" for x in b))
+        for flag in rep.get("acc_bias_flags", []):
+            say(f"  FLAG {flag}")
     lag = rep["attitude_lag"]
     if lag["tau"]:
         say(f"attitude filter lag {lag['tau']:.3f} s ({lag['source']})")
@@ -361,7 +369,7 @@ def _run(args) -> int:
                      refine=not args.no_refine, free=args.free, fix=args.fix, bounds=bounds,
                      signal_weights=weights, noise=noise, horizons=horizons,
                      continuity=parse_continuity(args.continuity), max_iter=args.max_iter,
-                     gyro_bias=not args.no_gyro_bias,
+                     gyro_bias=not args.no_gyro_bias, acc_bias=not args.no_acc_bias,
                      attitude_bias=not args.no_attitude_bias, prior=not args.no_prior, loss=args.loss,
                      sample_weighting=args.sample_weighting,
                      screen=not args.no_screen,

@@ -72,11 +72,13 @@ class FitResult:
     data_weight: float | None = None
     #: run name -> fitted [roll, pitch] offset (rad) of its attitude filter (runs that have one)
     attitude_bias: dict = field(default_factory=dict)
+    #: run name -> fitted accelerometer offset [x, y, z] (m/s^2, body axes) (runs that log one)
+    acc_bias: dict = field(default_factory=dict)
 
     def summary(self) -> dict:
         return {"values": self.values, "std": self.std, "cost": self.cost, "n_residuals": self.n_residuals,
                 "stages": self.stages, "gyro_bias": self.gyro_bias, "attitude_bias": self.attitude_bias,
-                "at_bounds": self.at_bounds,
+                "acc_bias": self.acc_bias, "at_bounds": self.at_bounds,
                 "physical_limit": self.physical_limit, "identifiability": self.identifiability}
 
 
@@ -112,7 +114,7 @@ def _chunks(idx: list, sizes: list) -> list[list]:
 
 
 def build_problems(vehicle, runs, meas, space: ParameterSpace, horizon, z_ref, *, gyro_bias=True,
-                   attitude_bias: bool = False, initial_velocity="zero", loss: str = "linear",
+                   attitude_bias: bool = False, acc_bias: bool = False, initial_velocity="zero", loss: str = "linear",
                    continuity: float = 1.0) -> tuple[list, list]:
     """:class:`WindowedProblem` s of at most :data:`RUNS_PER_PROBLEM` runs and
     :data:`SAMPLES_PER_PROBLEM` samples of one input kind each; returns (problems, run order)."""
@@ -127,7 +129,8 @@ def build_problems(vehicle, runs, meas, space: ParameterSpace, horizon, z_ref, *
         for sub in _chunks(idx, [runs[i].t.size for i in idx]):
             probs.append(WindowedProblem(vehicle, [runs[i] for i in sub], [meas[i] for i in sub], space, horizon,
                                          z_ref=z_ref, gyro_bias=gyro_bias, attitude_bias=attitude_bias,
-                                         initial_velocity=initial_velocity, yref=yref[a:a + len(sub)], loss=loss,
+                                         acc_bias=acc_bias, initial_velocity=initial_velocity,
+                                         yref=yref[a:a + len(sub)], loss=loss,
                                          continuity=continuity))
             order += sub
             a += len(sub)
@@ -135,7 +138,8 @@ def build_problems(vehicle, runs, meas, space: ParameterSpace, horizon, z_ref, *
 
 
 def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence = DEFAULT_HORIZONS,
-        max_iter: int = 20, gyro_bias: bool = True, attitude_bias: bool = False, noise=None, weights=None,
+        max_iter: int = 20, gyro_bias: bool = True, attitude_bias: bool = False, acc_bias: bool = False,
+        noise=None, weights=None,
         initial_velocity: str = "zero",
         z0=None, progress=None, workers: int = 1, ftol: float = 1e-6, checkpoint=None,
         on_iteration=None, prior_mean=None, prior_sd=None, loss: str = "linear",
@@ -156,6 +160,8 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
     gyro_bias : fit a constant gyro bias per run that logs rates.
     attitude_bias : fit a constant roll and pitch offset per run whose attitude comes from a
         filter beside a gyro (:data:`uvsim.fitting.objective.ATTITUDE_BIAS_SIGMA` prior).
+    acc_bias : fit a constant accelerometer offset per run that logs one
+        (:func:`uvsim.fitting.objective.acc_bias_sd` prior).
     z0 : start (scaled) instead of the space's start values.
     progress : callable(message) for stage / iteration reports.
     workers : processes for the simulations (results do not depend on it).
@@ -200,7 +206,7 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
     problems = []
     if saved is not None and first == len(plan):  # every stage finished: the final linearization only
         problems, order = build_problems(vehicle, runs, meas, space, plan[-1][0], np.array(saved["z_start"]),
-                                         gyro_bias=gyro_bias, attitude_bias=attitude_bias,
+                                         gyro_bias=gyro_bias, attitude_bias=attitude_bias, acc_bias=acc_bias,
                                          initial_velocity=initial_velocity, loss=loss, continuity=plan[-1][1])
         res = solve(problems, z, saved["nus"], max_iter=0, workers=workers, prior=prior)
         # the finished fit's own cost (re-evaluated here in a batch of another size, the sum may
@@ -212,7 +218,7 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
         t0 = time.perf_counter()
         z_start = z
         problems, order = build_problems(vehicle, runs, meas, space, H, z, gyro_bias=gyro_bias,
-                                         attitude_bias=attitude_bias,
+                                         attitude_bias=attitude_bias, acc_bias=acc_bias,
                                          initial_velocity=initial_velocity, loss=loss, continuity=cont)
         label = ("whole runs" if H is None else f"{H:g} s windows") + ("" if cont == 1 else f", continuity {cont:g}")
         say(f"fitting {space.p} parameter(s) on {len(runs)} run(s), {label}")
@@ -254,20 +260,19 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
     else:
         C, std, ident = np.zeros((0, 0)), {}, {}
     # per-run nuisance: sensor biases (in the problems' run order)
-    gb, ab = {}, {}
+    gb, ab, cb = {}, {}, {}
     k = 0
     for prob in problems:
         for r, run in enumerate(prob.runs):
-            g, a = prob.split_bias(r, prob.split_nuisance(r, res["nus"][k])[1])
-            if g is not None:
-                gb[run.name] = [float(x) for x in g]
-            if a is not None:
-                ab[run.name] = [float(x) for x in a]
+            g, a, c = prob.split_bias(r, prob.split_nuisance(r, res["nus"][k])[1])
+            for got, into in ((g, gb), (a, ab), (c, cb)):
+                if got is not None:
+                    into[run.name] = [float(x) for x in got]
             k += 1
     n_res = int(sum(b.n for b in blocks))
     out = FitResult(space.names, values, std, C, float(res["cost"]), n_res, stages, gb, space.at_bounds(z),
                     space.physical_limit(z), ident, z, res["nus"], problems, [b.window_sse for b in blocks],
-                    order, attitude_bias=ab)
+                    order, attitude_bias=ab, acc_bias=cb)
     if prior is not None:
         sc = space.scale
         out.prior_mean = {k: float(prior.mean_z[i] * sc[i]) for i, k in enumerate(space.names)}

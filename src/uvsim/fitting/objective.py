@@ -24,7 +24,8 @@ windows of all runs and all parameter sets as rows of one batched RK4 call
    ``continuity``), diagnosis keeps 1;
 3. priors on the free node components (their reference is a measurement-derived
    estimate; :data:`uvsim.fitting.nodes.PRIOR_SIGMA`) and on the sensor biases (gyro;
-   the roll and pitch of an attitude filter, :data:`ATTITUDE_BIAS_SIGMA`).
+   the roll and pitch of an attitude filter, :data:`ATTITUDE_BIAS_SIGMA`; the
+   accelerometer, :data:`ACC_BIAS_SIGMA`).
 
 Long horizons make the output-error cost rugged (the trajectory of an ROV that yaws away
 under the Munk moment depends very nonlinearly on the parameters); short windows keep it
@@ -69,10 +70,26 @@ GYRO_BIAS_SIGMA = 0.02
 ATTITUDE_BIAS_SIGMA = 0.01
 
 
+#: Prior standard deviation of a run's accelerometer bias, m/s^2 per body axis, when the vehicle
+#: file states none (``sensors.imu.acc_bias_sd``): 0.1 m/s^2, about 0.01 g, the offset left in a
+#: consumer MEMS accelerometer after the autopilot's calibration (the same figure as
+#: :data:`ATTITUDE_BIAS_SIGMA`'s; uncalibrated, such parts are specified at +-25-80 mg, e.g.
+#: InvenSense MPU-6000 / ICM-20602 data sheets, zero-g offset).  A per-run offset the model does
+#: not carry is a force the fit must explain otherwise: on the structural benchmark's seed 22 it
+#: bent the thruster gains by 1-4 % (docs/calibration.md, "Accelerometer bias").
+ACC_BIAS_SIGMA = 0.1
+
+
 def gyro_bias_sd(vehicle) -> float:
     """Prior sd (rad/s) of a run's gyro bias: the vehicle's ``sensors.imu.gyro_bias_sd``, else
     :data:`GYRO_BIAS_SIGMA`."""
     return float(getattr(vehicle, "gyro_bias_sd", None) or GYRO_BIAS_SIGMA)
+
+
+def acc_bias_sd(vehicle) -> float:
+    """Prior sd (m/s^2) of a run's accelerometer bias: the vehicle's ``sensors.imu.acc_bias_sd``,
+    else :data:`ACC_BIAS_SIGMA`."""
+    return float(getattr(vehicle, "acc_bias_sd", None) or ACC_BIAS_SIGMA)
 #: Residual given to a diverged simulation (in noise sigmas).
 FILL = 30.0
 #: Largest number of simulated rows per batched call (memory; throughput is flat above ~500).
@@ -272,13 +289,15 @@ class WindowedProblem:
     attitude_bias : fit a constant roll and pitch offset per run whose attitude comes from a
         filter (:attr:`uvsim.measurements.RunMeasurements.has_filter_attitude`), prior sd
         :data:`ATTITUDE_BIAS_SIGMA`.
+    acc_bias : fit a constant accelerometer offset (3, body axes) per run that logs one,
+        prior sd :func:`acc_bias_sd`.
     loss : "linear" (least squares) or "huber" (:func:`robust_residuals`) on the
         measurement residuals; defects and priors stay quadratic.
     """
 
     def __init__(self, vehicle, runs, meas, space, horizon=None, *, z_ref=None, gyro_bias=True,
-                 attitude_bias: bool = False, initial_velocity: str = "zero", yref: np.ndarray | None = None,
-                 loss: str = "linear", continuity: float = 1.0):
+                 attitude_bias: bool = False, acc_bias: bool = False, initial_velocity: str = "zero",
+                 yref: np.ndarray | None = None, loss: str = "linear", continuity: float = 1.0):
         check_loss(loss)  # an unknown loss is an error here, not in a worker
         self.loss = loss
         if not isinstance(continuity, (int, float)):
@@ -301,6 +320,9 @@ class WindowedProblem:
         #: prior sd of a run's gyro bias, rad/s (the vehicle's IMU spec, else GYRO_BIAS_SIGMA)
         self.gyro_bias_sd = gyro_bias_sd(vehicle)
         self.att_bias_runs = np.array([attitude_bias and m.has_filter_attitude for m in self.meas])
+        self.acc_bias_runs = np.array([acc_bias and m.has_accelerometer for m in self.meas])
+        #: prior sd of a run's accelerometer bias, m/s^2 (the vehicle's IMU spec, else ACC_BIAS_SIGMA)
+        self.acc_bias_sd = acc_bias_sd(vehicle)
         self.accel = any(m.needs_acceleration for m in self.meas)
         #: NED position axes no term reads (ForceTerm.position_axes): a node moved along one
         #: moves its window's trajectory by as much and changes nothing else
@@ -342,16 +364,21 @@ class WindowedProblem:
     # ------------------------------------------------------------------ nuisance layout
     def bias_sd(self, r: int) -> np.ndarray:
         """Prior sds of run r's sensor-bias vector: gyro (3, rad/s) when fitted, then the
-        attitude filter's roll and pitch (2, rad) when fitted; (0,) for neither."""
+        attitude filter's roll and pitch (2, rad) when fitted, then the accelerometer's
+        (3, m/s^2) when fitted; (0,) for none."""
         return np.array([self.gyro_bias_sd] * (3 if self.bias_runs[r] else 0)
-                        + [ATTITUDE_BIAS_SIGMA] * (2 if self.att_bias_runs[r] else 0), float)
+                        + [ATTITUDE_BIAS_SIGMA] * (2 if self.att_bias_runs[r] else 0)
+                        + [self.acc_bias_sd] * (3 if self.acc_bias_runs[r] else 0), float)
 
     def split_bias(self, r: int, b):
-        """(gyro bias (..., 3) or None, attitude bias (..., 2) or None) of run r's bias vector."""
+        """(gyro bias (..., 3), attitude bias (..., 2), accelerometer bias (..., 3)) of run r's
+        bias vector, each None when not fitted."""
         if b is None:
-            return None, None
+            return None, None, None
         g = 3 if self.bias_runs[r] else 0
-        return (b[..., :3] if g else None), (b[..., g:g + 2] if self.att_bias_runs[r] else None)
+        a = 2 if self.att_bias_runs[r] else 0
+        return ((b[..., :3] if g else None), (b[..., g:g + 2] if a else None),
+                (b[..., g + a:g + a + 3] if self.acc_bias_runs[r] else None))
 
     def nuisance_size(self, r: int) -> int:
         nw = len(self.lay.bounds[r])
@@ -469,8 +496,8 @@ class WindowedProblem:
     def predict_run(self, r: int, y, a, bias):
         """Run r's predicted measurements from states ``y``, accelerations ``a`` and its
         sensor-bias vector ``bias`` (P, q_b) or None."""
-        gb, ab = self.split_bias(r, bias)
-        return self.meas[r].predict(y, a, gb, ab)
+        gb, ab, cb = self.split_bias(r, bias)
+        return self.meas[r].predict(y, a, gb, ab, cb)
 
     def measurement_residuals(self, Y, A, r: int, bias: np.ndarray | None) -> np.ndarray:
         """Normalized measurement residuals (P, m_r) of run r."""
