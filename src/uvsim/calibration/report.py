@@ -195,28 +195,24 @@ def gyro_bias_flags(res, sd: float) -> list[str]:
     """Runs and axes whose fitted gyro bias is more than :data:`BIAS_FLAG_SD` prior sds
     (``sd``, rad/s): the bias then absorbs a misfit of the dynamics (issue 21: 0.081 rad/s in
     r where the vehicle's own EKF estimated at most 0.017)."""
-    out = []
-    for run, b in ({} if res is None else res.gyro_bias).items():
-        for axis, x in zip("pqr", b):
-            if abs(x) > BIAS_FLAG_SD * sd:
-                out.append(f"run {run}: gyro bias in {axis} {x:+.4f} rad/s is {abs(x) / sd:.1f} sd of the IMU's "
-                           f"in-run bias ({sd:g} rad/s): it explains what the dynamics do not (a misfit of the model, "
-                           "or a wrong sensors.imu.gyro_bias_sd)")
-    return out
+    return _bias_flags({} if res is None else res.gyro_bias, "pqr", sd, "gyro bias", "rad/s",
+                       "in-run bias", "(a misfit of the model, or a wrong sensors.imu.gyro_bias_sd)")
+
+
+def _bias_flags(biases: dict, axes: str, sd: float, what: str, unit: str, spec: str, why: str) -> list[str]:
+    """One sentence per run and axis whose fitted sensor bias is beyond :data:`BIAS_FLAG_SD` prior sds."""
+    return [f"run {run}: {what} in {axis} {x:+.4f} {unit} is {abs(x) / sd:.1f} sd of the IMU's {spec} ({sd:g} "
+            f"{unit}): it explains what the dynamics do not {why}"
+            for run, b in biases.items() for axis, x in zip(axes, b) if abs(x) > BIAS_FLAG_SD * sd]
 
 
 def acc_bias_flags(res, sd: float) -> list[str]:
     """Runs and axes whose fitted accelerometer offset is more than :data:`BIAS_FLAG_SD` prior
     sds (``sd``, m/s^2): a constant force per unit mass the dynamics do not give (a misfit of
     the model: buoyancy, a current, a tether; or a wrong ``sensors.imu.acc_bias_sd``)."""
-    out = []
-    for run, b in ({} if res is None else getattr(res, "acc_bias", {})).items():
-        for axis, x in zip("xyz", b):
-            if abs(x) > BIAS_FLAG_SD * sd:
-                out.append(f"run {run}: accelerometer offset in {axis} {x:+.4f} m/s^2 is {abs(x) / sd:.1f} sd of the "
-                           f"IMU's offset ({sd:g} m/s^2): it explains what the dynamics do not (a misfit of the "
-                           "model, e.g. buoyancy, a current or a tether; or a wrong sensors.imu.acc_bias_sd)")
-    return out
+    return _bias_flags({} if res is None else getattr(res, "acc_bias", {}), "xyz", sd, "accelerometer offset",
+                       "m/s^2", "offset", "(a misfit of the model, e.g. buoyancy, a current or a tether; "
+                       "or a wrong sensors.imu.acc_bias_sd)")
 
 
 def attitude_bias_flags(res) -> list[str]:
@@ -318,7 +314,8 @@ def build_report(cal, ds, runs, problems, ga, bounds_of, t0, t_ga, t_ref) -> dic
                      "bounds": {k: list(v) for k, v in (cal.bounds or {}).items()},
                      "refine": cal.refine, "horizons": cal._horizons(), "continuity": cal._continuity(),
                      "max_iter": cal.max_iter,
-                     "gyro_bias": cal.gyro_bias, "acc_bias": cal.acc_bias, "screen": cal.screen, "attitude_lag": cal.attitude_lag,
+                     "gyro_bias": cal.gyro_bias, "acc_bias": cal.acc_bias, "screen": cal.screen,
+                     "attitude_lag": cal.attitude_lag,
                      "latency": cal.latency,
                      "initial_velocity": cal.initial_velocity, "prior": cal.prior, "loss": cal.loss,
                      "sample_weighting": cal.sample_weighting},

@@ -299,24 +299,15 @@ def print_summary(cal, out=None) -> None:
         say("the data determine only: " + "; ".join(ident["identifiable_combinations"]))
     for pair, r in ident.get("correlations", {}).items():
         say(f"correlated: {pair} ({r:+.3f})")
-    if rep["gyro_bias"]:
-        say("gyro bias per run (rad/s, p q r):")
-        for name, b in rep["gyro_bias"].items():
-            say(f"  {name:28s} " + " ".join(f"{x:+.5f}" for x in b))
-        for flag in rep.get("gyro_bias_flags", []):
-            say(f"  FLAG {flag}")
-    if rep.get("attitude_bias"):
-        say("attitude filter offset per run (rad, roll pitch):")
-        for name, b in rep["attitude_bias"].items():
-            say(f"  {name:28s} " + " ".join(f"{x:+.5f}" for x in b))
-        for flag in rep.get("attitude_bias_flags", []):
-            say(f"  FLAG {flag}")
-    if rep.get("acc_bias"):
-        say("accelerometer offset per run (m/s^2, x y z):")
-        for name, b in rep["acc_bias"].items():
-            say(f"  {name:28s} " + " ".join(f"{x:+.4f}" for x in b))
-        for flag in rep.get("acc_bias_flags", []):
-            say(f"  FLAG {flag}")
+    for key, title, fmt in (("gyro_bias", "gyro bias per run (rad/s, p q r):", "+.5f"),
+                            ("attitude_bias", "attitude filter offset per run (rad, roll pitch):", "+.5f"),
+                            ("acc_bias", "accelerometer offset per run (m/s^2, x y z):", "+.4f")):
+        if rep.get(key):
+            say(title)
+            for name, b in rep[key].items():
+                say(f"  {name:28s} " + " ".join(f"{x:{fmt}}" for x in b))
+            for flag in rep.get(f"{key}_flags", []):
+                say(f"  FLAG {flag}")
     lag = rep["attitude_lag"]
     if lag["tau"]:
         say(f"attitude filter lag {lag['tau']:.3f} s ({lag['source']})")

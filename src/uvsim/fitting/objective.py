@@ -90,6 +90,8 @@ def acc_bias_sd(vehicle) -> float:
     """Prior sd (m/s^2) of a run's accelerometer bias: the vehicle's ``sensors.imu.acc_bias_sd``,
     else :data:`ACC_BIAS_SIGMA`."""
     return float(getattr(vehicle, "acc_bias_sd", None) or ACC_BIAS_SIGMA)
+
+
 #: Residual given to a diverged simulation (in noise sigmas).
 FILL = 30.0
 #: Largest number of simulated rows per batched call (memory; throughput is flat above ~500).
