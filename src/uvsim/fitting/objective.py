@@ -364,23 +364,26 @@ class WindowedProblem:
         self._yref = Yref
 
     # ------------------------------------------------------------------ nuisance layout
+    def _bias_blocks(self, r: int) -> list:
+        """Run r's sensor-bias blocks in nuisance order, (size, prior sd) each, size 0 when not
+        fitted: gyro (3, rad/s), attitude filter's roll and pitch (2, rad), accelerometer (3, m/s^2)."""
+        return [(3 if self.bias_runs[r] else 0, self.gyro_bias_sd),
+                (2 if self.att_bias_runs[r] else 0, ATTITUDE_BIAS_SIGMA),
+                (3 if self.acc_bias_runs[r] else 0, self.acc_bias_sd)]
+
     def bias_sd(self, r: int) -> np.ndarray:
-        """Prior sds of run r's sensor-bias vector: gyro (3, rad/s) when fitted, then the
-        attitude filter's roll and pitch (2, rad) when fitted, then the accelerometer's
-        (3, m/s^2) when fitted; (0,) for none."""
-        return np.array([self.gyro_bias_sd] * (3 if self.bias_runs[r] else 0)
-                        + [ATTITUDE_BIAS_SIGMA] * (2 if self.att_bias_runs[r] else 0)
-                        + [self.acc_bias_sd] * (3 if self.acc_bias_runs[r] else 0), float)
+        """Prior sds of run r's sensor-bias vector (:meth:`_bias_blocks`' blocks end to end;
+        (0,) for none)."""
+        return np.array([sd for n, sd in self._bias_blocks(r) for _ in range(n)], float)
 
     def split_bias(self, r: int, b):
         """(gyro bias (..., 3), attitude bias (..., 2), accelerometer bias (..., 3)) of run r's
         bias vector, each None when not fitted."""
-        if b is None:
-            return None, None, None
-        g = 3 if self.bias_runs[r] else 0
-        a = 2 if self.att_bias_runs[r] else 0
-        return ((b[..., :3] if g else None), (b[..., g:g + 2] if a else None),
-                (b[..., g + a:g + a + 3] if self.acc_bias_runs[r] else None))
+        out, i = [], 0
+        for n, _ in self._bias_blocks(r):
+            out.append(b[..., i:i + n] if n and b is not None else None)
+            i += n
+        return tuple(out)
 
     def nuisance_size(self, r: int) -> int:
         nw = len(self.lay.bounds[r])
