@@ -46,6 +46,22 @@ def test_a_delay_between_samples_blends_the_two_inputs_and_delaying_is_idempoten
         delay_inputs(run, -0.01)
 
 
+def test_a_delayed_copy_is_what_validating_its_table_gives_and_a_foreign_table_is_refused():
+    # delay_inputs builds its copy with Run.derived (not validated again): the same table,
+    # kind and inputs as constructing a Run from that table, which validates it
+    run = _run()
+    late = delay_inputs(run, 0.025)
+    fresh = Run(run.name, None, late.data.copy())
+    pd.testing.assert_frame_equal(late.data, fresh.data)
+    assert (late.input_kind, late.input_columns, late.empty_columns) == \
+        (fresh.input_kind, fresh.input_columns, fresh.empty_columns)
+    assert late.as_logged is run and late.input_delay == 0.025 and run.input_delay == 0.0
+    with pytest.raises(ValueError, match="this run's columns and length"):
+        run.derived(run.data.drop(columns=["z"]))
+    with pytest.raises(ValueError, match="this run's columns and length"):
+        run.derived(run.data.iloc[:-1])
+
+
 def test_the_vehicle_file_states_the_latency_and_keeps_it():
     veh = load_vehicle("bluerov2_heavy")
     assert veh.sensor_latency == 0.0 and "latency" not in (veh.to_dict().get("sensors") or {})

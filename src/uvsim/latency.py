@@ -46,7 +46,7 @@ def delay_inputs(run: Run, delay: float) -> Run:
     for c in src.input_columns:
         u = src.data[c].to_numpy()
         df[c] = np.interp(t - delay, t, u)  # before t[0]: u[0] (np.interp holds the end values)
-    out = Run(src.name, src.path, df, dof=src.dof, weight=src.weight, split=src.split)
+    out = src.derived(df)  # (interpolated between the run's validated inputs: not validated again)
     out.notes = [*src.notes, f"inputs applied {delay * 1000:.1f} ms after their time stamps (sensor latency)"]
     out.input_delay = delay
     out.as_logged = src

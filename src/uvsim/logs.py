@@ -10,6 +10,7 @@ first data row); for CSV files the message also gives the line number.
 """
 from __future__ import annotations
 
+import copy
 import csv
 import importlib.util
 import math
@@ -89,6 +90,20 @@ class Run:
         self.weight = _check_weight(self.weight, src)
         self.data, self.empty_columns, self._kind, self._input_columns = _validate(self.data, src)
         self.notes = _quaternion_notes(self.data, src)
+
+    def derived(self, data: pd.DataFrame, *, name: str | None = None) -> "Run":
+        """A copy of this run with ``data`` in place of its table, not validated again: for
+        tables derived from this run's own validated columns by the library (the inputs
+        delayed by interpolation between logged values, :func:`uvsim.latency.delay_inputs`),
+        whose columns, kind and finiteness are this run's.  ``name``: the copy's name."""
+        if list(data.columns) != list(self.data.columns) or len(data) != len(self.data):
+            raise ValueError(f"run {self.name}: a derived table must have this run's columns and length")
+        out = copy.copy(self)
+        out.data = data
+        out.notes = list(self.notes)
+        if name is not None:
+            out.name = name
+        return out
 
     def _cols(self, names) -> np.ndarray:
         """(n, len(names)) array, NaN for absent columns."""

@@ -23,7 +23,6 @@ import numpy as np
 from uvsim.fitting.objective import WindowedProblem
 from uvsim.fitting.parameters import ParameterSpace
 from uvsim.latency import delay_inputs
-from uvsim.logs import Run
 
 #: Latencies tried, s: 0-100 ms in 10 ms steps (ArduSub's sensor path is tens of ms; one
 #: 100 Hz sample is 10 ms).
@@ -62,7 +61,9 @@ def _shifted(run, delay: float, j: int):
     """A copy of ``run`` as logged with its inputs delayed by ``delay`` (:func:`uvsim.latency.delay_inputs`)
     that a vehicle without latency takes as it is (named apart for the batch)."""
     late = delay_inputs(run, delay)
-    return Run(f"{run.name}@{j}", run.path, late.data, dof=run.dof, weight=run.weight, split=run.split)
+    out = late.derived(late.data, name=f"{run.name}@{j}")
+    out.input_delay, out.as_logged = 0.0, None  # taken as logged by the scan's vehicle (no latency of its own)
+    return out
 
 
 def scan_latency(vehicle, runs, meas, *, attitude_bias: bool = False, grid=SCAN_GRID) -> dict:
