@@ -296,7 +296,7 @@ def test_node_jacobian_along_unread_position_axes_is_the_shifted_simulation(surg
     trajectory by as much: the linearization takes that shift instead of a simulation and
     gives the finite-difference Jacobian (to rounding).  A term that reads the position (a
     tether's line, the floor's height) keeps its axes simulated."""
-    from uvsim.fitting.solver import linearize
+    from uvsim.fitting.linearization import linearize
 
     v = uvsim.load_vehicle("bluerov2_heavy")
     truth = v.parameters()

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from uvsim.fitting.objective import WindowedProblem
-from uvsim.fitting.solver import _normal_pieces
+from uvsim.fitting.linearization import _normal_pieces
 from uvsim.kinematics import cross_components, down_axis_components, quat_down_axis, quat_to_rotation
 from uvsim.measurements import GROUPS, Group, RunMeasurements, specific_force
 

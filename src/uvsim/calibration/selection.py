@@ -97,7 +97,7 @@ def information(problems, z: np.ndarray, workers: int = 1) -> np.ndarray:
     """Information matrix (p, p) on the scaled parameters ``z`` of windowed problems
     (:class:`uvsim.fitting.objective.WindowedProblem`) at ``z`` with the nuisance at its
     reference, the nuisance profiled out: ``sum_r A_r - B_r^T D_r^-1 B_r``."""
-    from uvsim.fitting.solver import PoolEvaluator, SerialEvaluator
+    from uvsim.fitting.evaluators import PoolEvaluator, SerialEvaluator
 
     nus = [n for p in problems for n in p.zero_nuisance()]
     ev = PoolEvaluator(problems, int(workers)) if workers > 1 and len(problems) > 1 else SerialEvaluator(problems)

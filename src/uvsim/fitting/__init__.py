@@ -5,6 +5,10 @@
 * :mod:`~uvsim.fitting.nodes` - window-start states estimated from the log;
 * :mod:`~uvsim.fitting.objective` - the windowed (multiple-shooting) prediction-error
   residual of a set of runs, through :mod:`uvsim.measurements`;
+* :mod:`~uvsim.fitting.linearization` - one linearization of a windowed problem
+  (forward-difference Jacobians, each run's normal-equation pieces);
+* :mod:`~uvsim.fitting.evaluators` - linearizing the problems in this process, in a pool
+  of processes, or with a prior;
 * :mod:`~uvsim.fitting.solver` - Levenberg-Marquardt with the per-run nuisance
   eliminated, robust uncertainty;
 * :mod:`~uvsim.fitting.fitter` - :func:`fit`: continuation over window lengths, results;

@@ -32,12 +32,9 @@ After an accepted step the next trial point is linearized at once (:data:`SPECUL
 base row is the trial, and the linearization is the next iteration's when the step is
 accepted, as most are; after a rejection the next trial is simulated alone.
 
-Jacobians are forward differences: one batched simulation of all windows for the base
-point, one per global parameter and one per free node component (every window's
-component perturbed at once: windows are independent rows, so each window's residuals
-see only their own node; the continuity defects, which involve two windows, are
-differentiated from the same simulations piece by piece).  Sensor-bias derivatives need
-no simulation.
+The linearization of each problem (residuals, forward-difference Jacobians and the normal-
+equation pieces of each run) is :mod:`uvsim.fitting.linearization`; the evaluators that run
+it in this process or in a pool of processes are :mod:`uvsim.fitting.evaluators`.
 
 Uncertainty: ``S`` at the solution is the information on ``z`` after the nuisance is
 profiled out; the reported covariance is the cluster-robust sandwich
@@ -49,19 +46,13 @@ autocorrelation of trajectory residuals.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from uvsim.blas import single_thread
-from uvsim.fitting.objective import (FILL, WindowedProblem, apply_tangent, robust_residuals,
-                                     tangent_difference)
-from uvsim.fitting.priors import data_weight
+from uvsim.fitting.evaluators import PoolEvaluator, PriorEvaluator, SerialEvaluator
+from uvsim.fitting.linearization import reduced_system
 
-#: Forward-difference steps: scaled parameters (relative) and node components (m, rad, m/s, rad/s).
-FD_STEP_Z = 1e-5
-FD_STEP_NODE = 1e-5
-FD_STEP_BIAS = 1e-6
 #: After an accepted step, the next trial point is linearized at once (Jacobian included)
 #: instead of simulated alone and linearized when accepted: a trial simulates one parameter
 #: set per window, and on tank-size problems (20 windows of 150 steps) its cost is the numpy
@@ -72,203 +63,8 @@ FD_STEP_BIAS = 1e-6
 SPECULATE = True
 
 
-@dataclass
-class RunNormal:
-    """One run's contribution to the normal equations at the current point:
-    ``rss = r.r``, ``A = Jz^T Jz`` (p, p), ``gz = Jz^T r``, ``D = Jn^T Jn`` (q, q),
-    ``B = Jn^T Jz`` (q, p), ``gn = Jn^T r`` (Jz: Jacobian w.r.t. the global parameters,
-    Jn: w.r.t. the run's nuisance), the residual sum of squares of each window
-    ``window_sse`` (W_r,) and, when requested, the projected score of each window
-    ``scores`` (W_r, p) (nuisance profiled out; for the robust covariance)."""
-
-    rss: float
-    n: int = 0
-    A: np.ndarray | None = None
-    gz: np.ndarray | None = None
-    D: np.ndarray | None = None
-    B: np.ndarray | None = None
-    gn: np.ndarray | None = None
-    window_sse: np.ndarray | None = None
-    scores: np.ndarray | None = None
-
-
-def _run_meta(prob: WindowedProblem, r: int):
-    """Entry -> local window of run r's measurement residuals, and its free comps."""
-    rows = prob.meas[r].row_index()
-    w_local = prob.lay.own_win[r][rows] - prob.lay.first[r]
-    return w_local, np.flatnonzero(prob.free[r])
-
-
-def linearize(prob: WindowedProblem, z: np.ndarray, nus: list, *, jacobian: bool = True, scores: bool = False):
-    """Per run of ``prob``, its :class:`RunNormal` at (z, nus) (residual only when
-    ``jacobian`` is False)."""
-    p = z.size
-    comps = np.flatnonzero(prob.free.any(axis=0))
-    D0, biases = prob.assemble(nus)
-    Zs = [z]
-    Ds = [D0[0]]
-    shifted = {}  # parameter set -> position axis along which the model is translation invariant
-    if jacobian:
-        hz = FD_STEP_Z * np.maximum(1.0, np.abs(z))
-        hi = prob.space.z_upper
-        sign = np.where(z + hz > hi, -1.0, 1.0)
-        hz = hz * sign
-        for j in range(p):
-            zz = z.copy()
-            zz[j] += hz[j]
-            Zs.append(zz)
-            Ds.append(D0[0])
-        for c in comps:
-            d = D0[0].copy()
-            d[:, c] += FD_STEP_NODE
-            if c in prob.shift_axes:
-                shifted[len(Zs)] = int(c)
-            Zs.append(z)
-            Ds.append(d)
-    Z = np.array(Zs)
-    D = np.array(Ds)
-    if shifted:
-        # a node moved along an axis no term reads moves the window's whole trajectory by the
-        # same amount (position is the integral of the velocity, and nothing else sees it):
-        # the base simulation shifted, with no simulation of its own (exact, not a difference)
-        sim = [i for i in range(Z.shape[0]) if i not in shifted]
-        Ys, As = prob.simulate(Z[sim], D[sim])
-        Y = np.empty((Z.shape[0],) + Ys.shape[1:])
-        Y[sim] = Ys
-        A = None
-        if As is not None:
-            A = np.empty((Z.shape[0],) + As.shape[1:])
-            A[sim] = As
-        for i, c in shifted.items():
-            Y[i] = Y[0]
-            Y[i, ..., c] += FD_STEP_NODE
-            if A is not None:
-                A[i] = A[0]
-    else:
-        Y, A = prob.simulate(Z, D)
-    blocks = []
-    for r in range(len(prob.runs)):
-        b = biases[r]
-        bb = None if b is None else np.repeat(b, Z.shape[0], 0)
-        meas = prob.measurement_residuals(Y, A, r, bb)          # (P, m_meas)
-        dfc = prob.defects(Y, D, r)                              # (P, W_r - 1, k)
-        pri = prob.priors(D, bb, r)                              # (P, q_r)
-        res0 = np.concatenate([meas[0], dfc[0].ravel(), pri[0]])
-        if not jacobian:
-            with np.errstate(over="ignore"):  # a trial step whose simulation ran away: cost inf, rejected
-                blocks.append(RunNormal(float(res0 @ res0), res0.size))
-            continue
-        full = np.concatenate([meas, dfc.reshape(Z.shape[0], -1), pri], 1)
-        Jz = ((full[1:1 + p] - full[0]) / hz[:, None]).T
-        w_local, free = _run_meta(prob, r)
-        nw = len(prob.lay.bounds[r])
-        k = free.size
-        q = prob.nuisance_size(r)
-        m_meas, m_def = meas.shape[1], dfc[0].size
-        Jn = np.zeros((res0.size, q))
-        # measurement rows: each entry sees only its own window's node
-        for j, c in enumerate(free):
-            ci = int(np.flatnonzero(comps == c)[0])
-            dm = (meas[1 + p + ci] - meas[0]) / FD_STEP_NODE
-            Jn[np.arange(m_meas), w_local * k + j] = dm
-        # defect rows: d_w = node_w (-) end_{w-1}
-        if nw > 1:
-            # all free components at once: (k perturbed components, nw - 1 defects, k entries)
-            w0 = prob.lay.first[r]
-            sig = prob.defect_sigma[free]
-            ends = prob.end_states(Y, r)[:, :-1, :13]
-            ends0 = ends[0]
-            node0 = apply_tangent(prob.x_ref[w0 + 1:w0 + nw], D0[0, w0 + 1:w0 + nw])
-            d0 = tangent_difference(node0, ends0)[:, free] / sig
-            ends_p = ends[[1 + p + int(np.flatnonzero(comps == c)[0]) for c in free]]
-            d_end = (tangent_difference(node0[None], ends_p)[..., free] / sig - d0) / FD_STEP_NODE
-            dd = np.repeat(D0[0, w0 + 1:w0 + nw][None], k, axis=0)
-            dd[np.arange(k), :, free] += FD_STEP_NODE
-            node_p = apply_tangent(prob.x_ref[w0 + 1:w0 + nw][None], dd)
-            d_node = (tangent_difference(node_p, ends0[None])[..., free] / sig - d0) / FD_STEP_NODE
-            # defect w (1..nw-1), entry i: d/d node (w-1) comp j (the end) and d/d node w comp j
-            wv = np.arange(nw - 1)[:, None, None]
-            rows = m_meas + wv * k + np.arange(k)[None, :, None]
-            cols = wv * k + np.arange(k)[None, None, :]
-            Jn[rows, cols] = d_end.transpose(1, 2, 0)
-            Jn[rows, cols + k] = d_node.transpose(1, 2, 0)
-        # prior rows (diagonal)
-        w0 = prob.lay.first[r]
-        sig = prob.prior_sigma[w0:w0 + nw][:, free].ravel()
-        base = m_meas + m_def
-        Jn[base + np.arange(nw * k), np.arange(nw * k)] = 1.0 / sig
-        bsd = prob.bias_sd(r)
-        if bsd.size:
-            yb, ab = prob.run_prediction(Y[:1], None if A is None else A[:1], r)
-            for j in range(bsd.size):
-                b1 = b.copy()
-                b1[0, j] += FD_STEP_BIAS
-                pred = prob.predict_run(r, yb, ab, b1)
-                with np.errstate(all="ignore"):
-                    m1 = robust_residuals(prob.meas[r].normalized(pred, fill=FILL), prob.loss)[0]
-                Jn[:m_meas, nw * k + j] = (m1 - meas[0]) / FD_STEP_BIAS
-                Jn[base + nw * k + j, nw * k + j] = 1.0 / bsd[j]
-        cluster = np.concatenate([w_local, np.repeat(np.arange(1, nw), k), np.repeat(np.arange(nw), k),
-                                  np.zeros(bsd.size, int)])
-        blocks.append(_normal_pieces(res0, Jz, Jn, cluster, nw, scores))
-    return blocks
-
-
-def _normal_pieces(r, Jz, Jn, cluster, nw, scores) -> RunNormal:
-    """One run's :class:`RunNormal` from its residuals and Jacobians.
-
-    Parameters
-    ----------
-    r : (m,) residuals.
-    Jz : (m, p) Jacobian w.r.t. the global parameters.
-    Jn : (m, q) Jacobian w.r.t. the run's nuisance.
-    cluster : (m,) int, the window (0 .. nw - 1) each residual entry belongs to.
-    nw : number of windows.
-    scores : also compute the projected window scores (nw, p).
-
-    The per-window sums are :func:`numpy.bincount` with weights (one per column for the
-    scores): the same additions in the same order as ``np.add.at``, so the same values to the
-    last bit, many times faster.  The matrix products are left dense on purpose: summing
-    them block by block over the nonzeros of ``Jn`` is several times faster still but
-    changes their round-off, and the fit's path amplifies that (the fitted parameters of
-    a real-sensor benchmark moved by up to 7e-6 relative).
-    """
-    p = Jz.shape[1]
-    sse = np.bincount(cluster, weights=r * r, minlength=nw)
-    out = RunNormal(float(r @ r), r.size, Jz.T @ Jz, Jz.T @ r, Jn.T @ Jn, Jn.T @ Jz, Jn.T @ r, sse)
-    if scores:
-        Jt = Jz - Jn @ np.linalg.solve(out.D, out.B) if Jn.shape[1] else Jz  # D > 0: every nuisance has a prior
-        contrib = Jt * r[:, None]
-        sc = np.empty((nw, p))
-        for j in range(p):
-            sc[:, j] = np.bincount(cluster, weights=contrib[:, j], minlength=nw)
-        out.scores = sc
-    return out
-
-
 def _cost(blocks) -> float:
     return 0.5 * float(sum(b.rss for b in blocks))
-
-
-def _normal(blocks, lam: float):
-    """Reduced system S dz = rhs plus the per-run pieces for back-substitution."""
-    p = blocks[0].A.shape[0] if blocks else 0
-    S = np.zeros((p, p))
-    rhs = np.zeros(p)
-    per = []
-    for b in blocks:
-        S += b.A + lam * np.diag(np.diag(b.A))
-        rhs -= b.gz
-        if b.D.shape[0]:
-            Dm = b.D + lam * np.diag(np.diag(b.D))
-            Dinv_B = np.linalg.solve(Dm, b.B)
-            Dinv_g = np.linalg.solve(Dm, b.gn)
-            S -= b.B.T @ Dinv_B
-            rhs += b.B.T @ Dinv_g
-            per.append((Dinv_B, Dinv_g))
-        else:
-            per.append(None)
-    return S, rhs, per
 
 
 def _predicted_decrease(blocks, dz, dnus) -> float:
@@ -296,7 +92,7 @@ def _step(blocks, lam, z, lo, hi, clip: bool = True):
     held.  ``clip``: cut the step back into the box (else the model's own minimizer over the
     variables not held, as the convergence test needs: a clipped step predicts little
     decrease even far from the optimum)."""
-    S, rhs, per = _normal(blocks, lam)
+    S, rhs, per = reduced_system(blocks, lam)
     p = z.size
     held = np.zeros(p, bool)
     for _ in range(p + 1):
@@ -326,106 +122,6 @@ def _problems(prob) -> list:
     return list(prob) if isinstance(prob, (list, tuple)) else [prob]
 
 
-def _split(seq, sizes):
-    out, i = [], 0
-    for n in sizes:
-        out.append(list(seq[i:i + n]))
-        i += n
-    return out
-
-
-class SerialEvaluator:
-    """Linearizes every problem in this process (problems in order, their runs in order)."""
-
-    def __init__(self, probs):
-        self.probs = list(probs)
-        self.sizes = [len(p.runs) for p in self.probs]
-
-    def linearize(self, z, nus, *, jacobian=True, scores=False) -> list:
-        out = []
-        for p, n in zip(self.probs, _split(nus, self.sizes)):
-            out += linearize(p, z, n, jacobian=jacobian, scores=scores)
-        return out
-
-    def close(self):
-        pass
-
-
-_WORKER_PROBS = None
-
-
-def _init_worker(probs):
-    global _WORKER_PROBS
-    _WORKER_PROBS = probs
-
-
-def _worker_linearize(args):
-    i, z, nus, jacobian, scores = args
-    with single_thread():
-        return linearize(_WORKER_PROBS[i], z, nus, jacobian=jacobian, scores=scores)
-
-
-class PoolEvaluator(SerialEvaluator):
-    """Linearizes the problems in ``workers`` local processes, one problem per task.
-    The problems (chunks of runs) do not depend on the number of workers, so the
-    results equal the serial ones."""
-
-    def __init__(self, probs, workers: int):
-        import multiprocessing as mp
-        from concurrent.futures import ProcessPoolExecutor
-
-        super().__init__(probs)
-        method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
-        self._pool = ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context(method),
-                                         initializer=_init_worker, initargs=(self.probs,))
-
-    def linearize(self, z, nus, *, jacobian=True, scores=False) -> list:
-        tasks = [(i, z, n, jacobian, scores) for i, n in enumerate(_split(nus, self.sizes))]
-        out = []
-        for res in self._pool.map(_worker_linearize, tasks):
-            out += res
-        return out
-
-    def close(self):
-        self._pool.shutdown(wait=True, cancel_futures=True)
-
-
-class PriorEvaluator:
-    """An evaluator whose blocks are the data's, weighted by the data weight ``w``
-    (:func:`uvsim.fitting.priors.data_weight`, re-estimated at every linearization with
-    window scores), plus one block for the prior's residuals (no nuisance, no windows).
-    ``raw`` keeps the data's own blocks of the last such linearization."""
-
-    def __init__(self, ev, prior):
-        self.ev, self.prior, self.w, self.raw = ev, prior, 1.0, None
-        #: the data weight changes at every fresh linearization (the solver then re-evaluates its cost);
-        #: holding it after the first 10 was tried and left more fits unfinished (9 against 7 of the
-        #: structural benchmark's 50 at 80 iterations, docs/calibration.md)
-        self.reweighs = bool(prior.temper)
-
-    def linearize(self, z, nus, *, jacobian=True, scores=False) -> list:
-        raw = self.ev.linearize(z, nus, jacobian=jacobian, scores=scores)
-        if scores:
-            self.raw = raw
-            if self.reweighs:
-                S, _, _ = _normal(raw, 0.0)
-                self.w = data_weight(S, sum(b.scores.T @ b.scores for b in raw))
-        w = self.w
-        out = [RunNormal(w * b.rss, b.n) if b.A is None else
-               RunNormal(w * b.rss, b.n, w * b.A, w * b.gz, w * b.D, w * b.B, w * b.gn, w * b.window_sse,
-                         None if b.scores is None else w * b.scores) for b in raw]
-        r = self.prior.residual(z)
-        p = r.size
-        if not jacobian:
-            return out + [RunNormal(float(r @ r), 0)]
-        inv = 1.0 / self.prior.sd_z
-        return out + [RunNormal(float(r @ r), 0, np.diag(inv * inv), inv * r, np.zeros((0, 0)), np.zeros((0, p)),
-                                np.zeros(0), np.zeros(0), np.zeros((0, p)) if scores else None)]
-
-    def close(self):
-        self.ev.close()
-
-
 def solve(prob, z0: np.ndarray, nus0: list | None = None, *, max_iter: int = 20,
           ftol: float = 1e-6, xtol: float = 1e-7, progress=None, workers: int = 1, state: dict | None = None,
           on_step=None, prior=None) -> dict:
@@ -435,7 +131,7 @@ def solve(prob, z0: np.ndarray, nus0: list | None = None, *, max_iter: int = 20,
     (e.g. one per input kind and chunk of runs); ``nus0`` lists the runs' nuisance
     vectors in order.  ``workers`` > 1 linearizes the problems in that many processes
     (same result).  Returns dict with ``z``, ``nus``, ``cost`` (1/2 sum r^2), ``blocks``
-    (:class:`RunNormal` per run at the solution, with window scores), ``iterations``,
+    (:class:`uvsim.fitting.linearization.RunNormal` per run at the solution, with window scores), ``iterations``,
     ``evaluations`` (parameter sets simulated per run chunk), ``message``, ``history``
     (cost per accepted step), ``seconds``.  Runs with one BLAS thread per process (small
     matrix products; see :mod:`uvsim.fitting.objective`).
@@ -580,7 +276,7 @@ def _solve(probs, ev, z0, nus0, *, max_iter, ftol, xtol, progress, state=None, o
 def covariance(blocks) -> dict:
     """Plain and cluster-robust covariances of z at a solution (module docstring);
     ``blocks`` from :func:`solve` (with window scores)."""
-    S, _, per = _normal(blocks, 0.0)
+    S, _, per = reduced_system(blocks, 0.0)
     p = S.shape[0]
     Sinv = np.linalg.pinv(S)
     q = sum(b.D.shape[0] for b in blocks)

@@ -23,7 +23,7 @@ Terms declare the named scalar parameters they read in ``parameters()`` so that 
 calibration can vary them, and the NED position axes they read from ``ctx.pos`` in
 ``position_axes`` (a tether's line, the floor's height; most terms read none): the fits
 take a node moved along an unread axis as the same trajectory shifted, with no
-simulation (:func:`uvsim.fitting.solver.linearize`).  A term that does not say is taken
+simulation (:func:`uvsim.fitting.linearization.linearize`).  A term that does not say is taken
 to read all three, which is always correct, only slower.
 """
 from __future__ import annotations
@@ -90,7 +90,7 @@ class ForceTerm:
     #: NED position axes (0 north, 1 east, 2 down) that the term's forces or state
     #: derivatives read from ``ctx.pos``.  Along the others a shifted start shifts the whole
     #: trajectory and nothing else, which the fits use for their node Jacobians
-    #: (:func:`uvsim.fitting.solver.linearize`).  A plug-in that does not say is taken to
+    #: (:func:`uvsim.fitting.linearization.linearize`).  A plug-in that does not say is taken to
     #: read all three.
     position_axes: tuple = (0, 1, 2)
 
