@@ -9,7 +9,8 @@ import uvsim
 from uvsim.errors import CalibrationError
 from uvsim.estimation.noise import noise_sigma, sample_kind
 from uvsim.fitting import fit, make_space
-from uvsim.fitting.objective import WindowedProblem, layout, tangent_difference
+from uvsim.fitting.objective import WindowedProblem
+from uvsim.fitting.windows import layout, tangent_difference
 from uvsim.fitting.parameters import default_bounds, physical_inertia
 from uvsim.fitting.solver import solve
 from uvsim.kinematics import euler_to_quat, quat_to_rotation

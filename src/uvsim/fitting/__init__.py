@@ -3,6 +3,8 @@
 * :mod:`~uvsim.fitting.parameters` - which parameters are free, their bounds, the
   physical-by-construction map (:class:`ParameterSpace`);
 * :mod:`~uvsim.fitting.nodes` - window-start states estimated from the log;
+* :mod:`~uvsim.fitting.windows` - runs cut into windows, whole runs simulated in one
+  batch, the tangent coordinates of a state;
 * :mod:`~uvsim.fitting.objective` - the windowed (multiple-shooting) prediction-error
   residual of a set of runs, through :mod:`uvsim.measurements`;
 * :mod:`~uvsim.fitting.linearization` - one linearization of a windowed problem

@@ -14,8 +14,8 @@ import numpy as np
 
 from uvsim.blas import single_thread
 from uvsim.fitting.fitter import group_by_input
-from uvsim.fitting.objective import whole_runs
 from uvsim.fitting.parameters import ParameterSpace
+from uvsim.fitting.windows import whole_runs
 from uvsim.measurements import measurements_for
 from uvsim.metrics import measurement_metrics, pooled_group_rmse
 from uvsim.vehicle import load_vehicle

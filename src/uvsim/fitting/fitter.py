@@ -27,10 +27,11 @@ from typing import Sequence
 import numpy as np
 
 from uvsim.errors import CalibrationError
-from uvsim.fitting.objective import WindowedProblem, continuity_factors, whole_runs
+from uvsim.fitting.objective import WindowedProblem, continuity_factors
 from uvsim.fitting.parameters import ParameterSpace
 from uvsim.fitting.priors import make_prior
 from uvsim.fitting.solver import covariance, solve
+from uvsim.fitting.windows import whole_runs
 from uvsim.measurements import measurements_for
 
 #: Relative singular value below which a direction of the free parameters counts as

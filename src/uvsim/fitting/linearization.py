@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from uvsim.fitting.objective import (FILL, WindowedProblem, apply_tangent, robust_residuals,
-                                     tangent_difference)
+from uvsim.fitting.objective import FILL, WindowedProblem, robust_residuals
+from uvsim.fitting.windows import apply_tangent, tangent_difference
 
 #: Forward-difference steps: scaled parameters (relative) and node components (m, rad, m/s, rad/s).
 FD_STEP_Z = 1e-5

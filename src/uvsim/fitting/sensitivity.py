@@ -33,8 +33,8 @@ import numpy as np
 from uvsim.blas import single_thread
 from uvsim.fitting.fitter import group_by_input
 from uvsim.fitting.nodes import PRIOR_SIGMA
-from uvsim.fitting.objective import whole_runs
 from uvsim.fitting.parameters import ParameterSpace
+from uvsim.fitting.windows import whole_runs
 from uvsim.simulate import INITIAL_WINDOW_S, initial_state_from_run
 
 #: Initial velocity / rate perturbation (u, v, w m/s; p, q, r rad/s): the prior sd of a
