@@ -157,3 +157,24 @@ def unwrap_angles(angles: np.ndarray, axis: int = 0) -> np.ndarray:
         if sel.any():
             row[sel] = np.unwrap(row[sel])
     return np.moveaxis(flat.reshape(out.shape), -1, axis)
+
+
+def wrap(a):
+    """Angles wrapped to (-pi, pi]."""
+    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
+
+
+def rotation_vector_error(q_meas: np.ndarray, q_pred: np.ndarray) -> np.ndarray:
+    """Rotation vector (rad, body frame of the measurement) of ``q_meas^-1 (x) q_pred``.
+
+    Shapes broadcast, (..., 4) -> (..., 3); its norm is the attitude error angle.
+    Smooth at zero error (unlike the angle itself), so it suits least squares."""
+    dq = quat_multiply(quat_conjugate(q_meas), q_pred)
+    sgn = np.where(dq[..., :1] < 0, -1.0, 1.0)
+    v = dq[..., 1:] * sgn
+    s = np.linalg.norm(v, axis=-1, keepdims=True)
+    w = np.abs(dq[..., :1])
+    ang = 2.0 * np.arctan2(s, w)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        factor = np.where(s > 1e-12, ang / np.where(s > 1e-12, s, 1.0), 2.0)
+    return v * factor

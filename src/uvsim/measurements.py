@@ -52,8 +52,9 @@ import numpy as np
 from uvsim.errors import CalibrationError
 from uvsim.estimation.lag import first_order_lag, lag_time_constant
 from uvsim.estimation.noise import SampleKind, noise_sigma, sample_kind
-from uvsim.kinematics import (cross_components, down_axis_components, euler_to_quat, quat_conjugate, quat_multiply,
-                              quat_to_euler, unwrap_angles)
+from uvsim.accelerometer import _components, _specific_force, specific_force  # noqa: F401  (specific_force: re-exported)
+from uvsim.kinematics import (cross_components, down_axis_components, euler_to_quat, quat_to_euler,  # noqa: F401
+                              rotation_vector_error, unwrap_angles, wrap)  # (rotation_vector_error: re-exported)
 from uvsim.logs import ACCEL_COLUMNS, DEPTH_COLUMN, EULER_COLUMNS, POSITION_COLUMNS, RATE_COLUMNS, VELOCITY_COLUMNS
 
 #: Signal groups and their channels, in a fixed order.
@@ -82,27 +83,6 @@ def channel_weight(weights: Mapping[str, float] | None, group: str, channel: str
     weights = weights or {}
     w = float(weights.get(group, 1.0))
     return w if channel == group else w * float(weights.get(channel, 1.0))
-
-
-def wrap(a):
-    """Angles wrapped to (-pi, pi]."""
-    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
-
-
-def rotation_vector_error(q_meas: np.ndarray, q_pred: np.ndarray) -> np.ndarray:
-    """Rotation vector (rad, body frame of the measurement) of ``q_meas^-1 (x) q_pred``.
-
-    Shapes broadcast, (..., 4) -> (..., 3); its norm is the attitude error angle.
-    Smooth at zero error (unlike the angle itself), so it suits least squares."""
-    dq = quat_multiply(quat_conjugate(q_meas), q_pred)
-    sgn = np.where(dq[..., :1] < 0, -1.0, 1.0)
-    v = dq[..., 1:] * sgn
-    s = np.linalg.norm(v, axis=-1, keepdims=True)
-    w = np.abs(dq[..., :1])
-    ang = 2.0 * np.arctan2(s, w)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        factor = np.where(s > 1e-12, ang / np.where(s > 1e-12, s, 1.0), 2.0)
-    return v * factor
 
 
 @dataclass
@@ -379,46 +359,6 @@ class RunMeasurements:
                                              if k is not None and np.isfinite(k.native_interval_s) else None),
                           "samples_used": int(grp.valid[:, j].sum())}
         return out
-
-
-def specific_force(y: np.ndarray, nu_dot: np.ndarray, r_imu: np.ndarray | None, g: float) -> np.ndarray:
-    """Accelerometer specific force (..., n, 3) at body point ``r_imu`` (module
-    docstring): ``v_dot + omega x v + omega_dot x r + omega x (omega x r) - g R^T e_3``.
-
-    Parameters
-    ----------
-    y : (..., n, n_y) states (``y[..., 3:7]`` the quaternion, ``y[..., 7:13]`` nu).
-    nu_dot : (..., n, 6) accelerations.
-    r_imu : (3,) IMU position on the body, or None (the body origin).
-    g : gravity, m/s^2.
-    """
-    c = _components(np.asarray(y, float)[..., 3:13])
-    f = _specific_force(c[4:10], _components(nu_dot), down_axis_components(*c[:4]), r_imu, g)
-    return np.stack(f, axis=-1)
-
-
-def _components(a: np.ndarray) -> np.ndarray:
-    """``a`` (..., k) as a component-major copy (k, ...): each component contiguous."""
-    return np.moveaxis(np.asarray(a, float), -1, 0).copy()
-
-
-def _specific_force(nu, nu_dot, k, r_imu: np.ndarray | None, g: float) -> tuple:
-    """:func:`specific_force` component by component: ``nu`` and ``nu_dot`` are sequences
-    of 6 arrays of one shape ``S`` (e.g. (..., n); :func:`_components`), ``k`` the 3
-    components of the down axis ``R^T e_3`` (:func:`uvsim.kinematics.down_axis_components`).
-    The same operations in the same order as the (..., 3)-array formula, so the same values
-    to the last bit, with cross products written out (:func:`uvsim.kinematics.cross_components`).
-    Returns the 3 components of the specific force, each shape ``S``."""
-    v, w = nu[0:3], nu[3:6]
-    vd, wd = nu_dot[0:3], nu_dot[3:6]
-    wv = cross_components(w, v)
-    f = [vd[i] + wv[i] - g * k[i] for i in range(3)]
-    if r_imu is not None and np.any(r_imu):
-        r = np.asarray(r_imu, float)
-        tangential = cross_components(wd, r)
-        centripetal = cross_components(w, cross_components(w, r))
-        f = [f[i] + tangential[i] + centripetal[i] for i in range(3)]
-    return f
 
 
 def _noise_for(group: str, values: np.ndarray, native: np.ndarray) -> float:
