@@ -8,7 +8,8 @@ import pandas as pd
 import pytest
 
 from uvsim.calibration import Calibrator
-from uvsim.calibration.calibrator import DEFAULT_SAMPLE_WEIGHTING, _combine_weights
+from uvsim.calibration.calibrator import DEFAULT_SAMPLE_WEIGHTING
+from uvsim.calibration.inputs import combine_weights
 from uvsim.errors import CalibrationError
 from uvsim.logs import Run
 from uvsim.measurements import RunMeasurements, channel_weight, measurements_for, per_second_factors
@@ -34,7 +35,7 @@ def test_a_channel_named_like_its_group_is_weighted_once():
     np.testing.assert_allclose(m.channel_weights("depth"), [10.0])  # was 100: group x channel, both "depth"
     np.testing.assert_allclose(m.channel_weights("attitude"), [1.0, 2.0, 2.0])
     assert channel_weight({"depth": 3.0}, "depth", "depth") == 3.0
-    assert _combine_weights({"depth": 1.0}, {"depth": 3.0})["depth"] == 3.0
+    assert combine_weights({"depth": 1.0}, {"depth": 3.0})["depth"] == 3.0
 
 
 def test_per_second_factors_weight_a_slow_channel_up_by_the_rate_ratio():

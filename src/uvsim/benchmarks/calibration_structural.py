@@ -258,7 +258,7 @@ def on_voltage_family(vehicle):
 def dataset_vehicle_on_family(dataset_dir):
     """:func:`on_voltage_family` of the vehicle a generated dataset names (the benchmarks'
     ``--supply-voltage`` start model)."""
-    from uvsim.calibration.calibrator import resolve_vehicle
+    from uvsim.calibration.inputs import resolve_vehicle
     from uvsim.logs import read_dataset
 
     return on_voltage_family(resolve_vehicle(None, read_dataset(dataset_dir)))
@@ -377,7 +377,7 @@ def run_benchmark(n: int, seed: int, *, compare_no_prior: bool = False, loss: st
     ``--free free --latency latency`` (:func:`run_one`; latency None: no ``--latency``)."""
     if n < 1:
         raise UvsimError(f"--scenarios {n}: need at least one scenario")
-    from uvsim.calibration.calibrator import latency_setting
+    from uvsim.calibration.inputs import latency_setting
     from uvsim.calibration.selection import expand_names
     from uvsim.scenarios.vehicle_data import DEFAULT_VEHICLE_FILE
     from uvsim.vehicle import load_vehicle

@@ -34,20 +34,19 @@ from uvsim.calibration.batching import prepare_runs
 from uvsim.calibration.evaluation import DEFAULT_BATCH_ROWS, BatchEvaluator, DaskMap, DofProblem, ProcessMap, SerialMap
 from uvsim.calibration.fitness import used_channels
 from uvsim.calibration.ga import GASettings, fingerprint, run_ga
+from uvsim.calibration.inputs import as_dataset, combine_weights, latency_setting, resolve_vehicle, run_amplitude
 from uvsim.calibration.joint import JointCheckpoint, joint_checkpoint_path, run_joint
 from uvsim.calibration.latency_estimate import scan_latency
 from uvsim.calibration.params import DOF_PARAMETERS, default_channel_weights, parse_dofs
 from uvsim.calibration.report import build_report, evaluate_runs, identifiability_report
 from uvsim.calibration.selection import check_bounds, effective_inertia_start, expand_names, joint_candidates
-from uvsim.errors import CalibrationError, VehicleError
+from uvsim.errors import CalibrationError
 from uvsim.estimation.lag import attitude_lag_setting
 from uvsim.fitting.objective import check_loss, continuity_factors
 from uvsim.fitting.parameters import default_bounds, physical_bounds
 from uvsim.latency import runs_for
-from uvsim.logs import MANIFEST, Dataset, read_dataset
-from uvsim.measurements import CHANNEL_GROUP, channel_weight, check_sample_weighting, measurements_for
+from uvsim.measurements import check_sample_weighting, measurements_for
 from uvsim.plausibility import check_runs, parse_allow
-from uvsim.vehicle import check_latency, load_vehicle
 
 log = logging.getLogger("uvsim")
 DEFAULT_HORIZONS = (2.0,)
@@ -66,49 +65,6 @@ JOINT_FTOL = 1e-5
 #: per second of log, so that a 10 Hz depth is not outweighed tenfold by a 100 Hz IMU whose
 #: model errors are as correlated (docs/calibration.md, "Sample weighting").
 DEFAULT_SAMPLE_WEIGHTING = "per_second"
-
-
-def _as_dataset(data) -> Dataset:
-    if isinstance(data, Dataset):
-        return data
-    if isinstance(data, (str, Path)):
-        return read_dataset(data)
-    runs = list(data)
-    if not runs:
-        raise CalibrationError("no runs given")
-    return Dataset(path=Path("."), vehicle=None, description="runs given in memory", runs=runs)
-
-
-def resolve_vehicle(vehicle, ds: Dataset):
-    """The starting vehicle: ``vehicle`` (a Vehicle, a file, a built-in name, or a name
-    with ``NAME.yaml`` beside the manifest, which wins over a built-in as for the
-    manifest's own ``vehicle:``) or else the manifest's."""
-    if vehicle is None:
-        if ds.vehicle is None:
-            raise CalibrationError(f"{ds.path}: no vehicle given and the manifest names none")
-        return load_vehicle(ds.vehicle_file or ds.vehicle)
-    if isinstance(vehicle, (str, Path)) and not Path(vehicle).is_file() and (ds.path / MANIFEST).is_file():
-        beside = Dataset(ds.path, str(vehicle), "", []).vehicle_file
-        if beside is not None and beside.is_file():
-            return load_vehicle(beside)
-    return load_vehicle(vehicle)
-
-
-def _combine_weights(default: Mapping, user: Mapping | None) -> dict:
-    """Channel weights default[c] x user[group(c)] x user[c] (:func:`uvsim.measurements.channel_weight`)."""
-    return {c: float(default.get(c, 1.0)) * channel_weight(user, g, c) for c, g in CHANNEL_GROUP.items()}
-
-
-def _amplitude(meas) -> float:
-    """RMS over the used channels of (spread / noise): how much a run moves."""
-    vals = []
-    for g, grp in meas.groups.items():
-        w = meas.channel_weights(g)
-        for j in np.flatnonzero(grp.logged & (w > 0)):
-            x = grp.values[grp.valid[:, j], j] if grp.mode != "quaternion" else None
-            if x is not None and x.size > 1:
-                vals.append(np.std(x) / grp.sigma[j])
-    return float(np.sqrt(np.mean(np.square(vals)))) if vals else 1.0
 
 
 class Calibrator:
@@ -297,7 +253,7 @@ class Calibrator:
         list of Runs) starting from ``vehicle`` (name, file or Vehicle; default the
         manifest's vehicle, also a file beside the manifest).  Returns self."""
         t0 = time.perf_counter()
-        ds = _as_dataset(dataset)
+        ds = as_dataset(dataset)
         veh = resolve_vehicle(vehicle, ds)
         check_runs(ds.runs, veh, parse_allow(self.allow, "allow"))  # units, sampling, PWM range
         if self.effects:
@@ -411,7 +367,7 @@ class Calibrator:
         batch = prepare_runs(runs, initial_velocity=self.initial_velocity, sensors=veh.sensors)
         meas, problems = [], {}
         for d in ga_dofs:
-            w = _combine_weights(default_channel_weights(d) if self.ga_channels == "own" else {}, uw)
+            w = combine_weights(default_channel_weights(d) if self.ga_channels == "own" else {}, uw)
             idx = np.array([i for i, r in enumerate(runs) if r.dof == d])
             # per sample: the GA's fitness already averages each channel over its own samples
             ms = self._meas([runs[i] for i in idx], w, run_weight=1.0, sample_weighting="per_sample")
@@ -424,7 +380,7 @@ class Calibrator:
                     f"; set signal_weights (--weights) or ga_channels='all'")
             rw = np.array([runs[i].weight for i in idx], float)
             if self.low_speed_exponent:
-                amp = np.array([_amplitude(m) for m in ms])
+                amp = np.array([run_amplitude(m) for m in ms])
                 rw = rw * (amp / np.median(amp)) ** (-float(self.low_speed_exponent))
             names = tuple(k for k in DOF_PARAMETERS[d] if k not in fixed)
             b = np.array([bounds_of(k) for k in names], float)
@@ -535,19 +491,3 @@ class Calibrator:
     def _check_fitted(self):
         if not hasattr(self, "vehicle_"):
             raise CalibrationError("this Calibrator is not fitted yet; call fit(dataset, vehicle) first")
-
-
-def latency_setting(value):
-    """``Calibrator(latency=...)`` checked: None, "auto", or a number of seconds (a numeric string
-    too) returned as a float; anything else a CalibrationError."""
-    if value is None or value == "auto":
-        return value
-    if isinstance(value, str):
-        try:
-            value = float(value)
-        except ValueError:
-            raise CalibrationError(f"latency {value!r}: expected 'auto' or a latency in s (e.g. 0.03)") from None
-    try:
-        return check_latency(value, "latency")
-    except VehicleError as e:  # the same message, as a calibration setting's error
-        raise CalibrationError(str(e)) from None

@@ -337,7 +337,7 @@ def print_summary(cal, out=None) -> None:
 
 def _run(args) -> int:
     from uvsim.calibration import Calibrator
-    from uvsim.calibration.calibrator import resolve_vehicle
+    from uvsim.calibration.inputs import resolve_vehicle
     from uvsim.logs import read_dataset
     from uvsim.plausibility import parse_allow
 
