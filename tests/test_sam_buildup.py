@@ -174,7 +174,7 @@ def test_gimbal_nozzle_turns_with_the_thrust_vector():
     yaw vector gives a side force to port on the nozzle (like a rudder with its trailing edge to
     starboard), adding to the thrust's yaw moment."""
     import uvsim
-    from uvsim.sam.buildup import gimbal_matrix
+    from uvsim.sam.components import gimbal_matrix
     from uvsim.sam.model import make_model
     from uvsim.sam.vehicle import commands
 

@@ -55,14 +55,14 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
 from uvsim.errors import VehicleError
 from uvsim.forces import register
 from uvsim.forces.base import ForceTerm, first_violation
+from uvsim.sam.components import (COMPONENT_KEYS, Component, body_table, gimbal_matrix, matmul33, positive_field,
+                                  rotation_rpy, vec3_field, wing_table)
 from uvsim.schema import check_keys
 
 #: Body-table data sets (seed 003 sec. V-C compares Jorgensen-only, CFD and multifidelity).
@@ -71,108 +71,6 @@ DATASETS = ("multifidelity", "jorgensen", "datcom")
 MUNK_SOURCES = ("added_mass", "table")
 ROT_NAMES = ("K_pp", "M_qq", "N_rr")
 CROSS_NAMES = ("X_qq", "X_rr", "Y_pp", "Y_rr", "Z_pp", "Z_qq")
-
-
-def rotation_rpy(rpy_deg) -> np.ndarray:
-    """Rotation component -> body from roll, pitch, yaw (deg, ZYX convention), (3, 3)."""
-    r, p, y = np.radians(np.asarray(rpy_deg, float))
-    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
-    Rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
-    Ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
-    Rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
-    return Rz @ Ry @ Rx
-
-
-def gimbal_matrix(tv_pitch, tv_yaw) -> np.ndarray:
-    """Rotation of the thrust-vectoring unit, ``G = R_y(-tv_pitch) R_z(-tv_yaw)`` ((3, 3) or
-    (n, 3, 3)), which turns the body x axis into the thrust direction of
-    :class:`uvsim.sam.subsystems.Propulsion`, ``[cos dp cos dy, -sin dy, sin dp cos dy]``."""
-    dp, dy = np.asarray(tv_pitch, float), np.asarray(tv_yaw, float)
-    c, s, cy, sy = np.cos(dp), np.sin(dp), np.cos(dy), np.sin(dy)
-    z = np.zeros_like(c)
-    rows = [[c * cy, c * sy, -s], [-sy, cy, z], [s * cy, s * sy, c]]
-    return np.stack([np.stack(r, -1) for r in rows], -2)
-
-
-def _matmul33(A, B):
-    """Product of two 3x3 matrices given as row-major 9-sequences (plain floats)."""
-    a0, a1, a2, a3, a4, a5, a6, a7, a8 = A
-    b0, b1, b2, b3, b4, b5, b6, b7, b8 = B
-    return (a0 * b0 + a1 * b3 + a2 * b6, a0 * b1 + a1 * b4 + a2 * b7, a0 * b2 + a1 * b5 + a2 * b8,
-            a3 * b0 + a4 * b3 + a5 * b6, a3 * b1 + a4 * b4 + a5 * b7, a3 * b2 + a4 * b5 + a5 * b8,
-            a6 * b0 + a7 * b3 + a8 * b6, a6 * b1 + a7 * b4 + a8 * b7, a6 * b2 + a7 * b5 + a8 * b8)
-
-
-# ----------------------------------------------------------------------------- tables (cached)
-@lru_cache(maxsize=32)
-def _body_table(hull_json: str, dataset: str, nu: float, re_key: tuple | None, cdn_model: str = "subcritical",
-                munk_in_table: bool = False):
-    from uvsim.hydro.assembly import build_body_table
-    from uvsim.hydro.body import BodyModel
-    from uvsim.hydro.geometry import hull_from_dict, load_hull
-
-    spec = json.loads(hull_json)
-    hull = load_hull(spec) if isinstance(spec, str) else hull_from_dict(spec, name=spec.get("name", "hull"),
-                                                                        where="component_buildup hull")
-    body = BodyModel(hull, nu=nu, cdn_model=cdn_model, munk_moment=munk_in_table)
-    re_grid = None if re_key is None else np.asarray(re_key, float)
-    return body, build_body_table(body, re_grid=re_grid, method=dataset)
-
-
-@lru_cache(maxsize=32)
-def _wing_table(aspect_ratio: float, oswald: float):
-    from uvsim.hydro.assembly import naca0015_table
-
-    return naca0015_table(aspect_ratio=aspect_ratio, oswald=oswald)
-
-
-@dataclass
-class Component:
-    """One component of the build-up (resolved geometry and table).
-
-    Attributes
-    ----------
-    name, kind : str ("body" or "wing")
-    r : (3,) origin in the body frame, m (hull: moment reference station; wing: quarter chord)
-    C : (3, 3) rotation component -> body
-    area : reference area, m^2 (hull: frontal area; wing: planform area)
-    length : reference length, m (hull: length; wing: chord)
-    table : :class:`uvsim.hydro.HydroTable`
-    """
-
-    name: str
-    kind: str
-    r: np.ndarray
-    C: np.ndarray
-    area: float
-    length: float
-    table: object
-    gimbal: bool = False
-
-
-def _vec(spec, key, where, default=None):
-    val = spec.get(key, default)
-    a = np.asarray(val, float) if val is not None else None
-    if a is None or a.shape != (3,) or not np.all(np.isfinite(a)):
-        raise VehicleError(f"{where}.{key}: expected 3 finite numbers, got {val!r}")
-    return a
-
-
-def _pos(spec, key, where):
-    try:
-        v = float(spec[key])
-    except (KeyError, TypeError, ValueError):
-        raise VehicleError(f"{where}.{key}: expected a positive number, got {spec.get(key)!r}") from None
-    if not (np.isfinite(v) and v > 0):
-        raise VehicleError(f"{where}.{key}: expected a positive number, got {v}")
-    return v
-
-
-#: Keys of a ``components`` entry, by kind (see :class:`ComponentBuildup`).
-COMPONENT_KEYS = {
-    "body": ("name", "kind", "hull", "nose", "rpy_deg"),
-    "wing": ("name", "kind", "position", "rpy_deg", "area", "chord", "aspect_ratio", "oswald", "gimbal"),
-}
 
 
 @register("component_buildup")
@@ -230,8 +128,8 @@ class ComponentBuildup(ForceTerm):
         if not isinstance(components, list) or not components:
             raise VehicleError(f"{where}.components: expected a non-empty list")
         self.dataset = dataset
-        self.rho = _pos({"rho": rho}, "rho", where)
-        self.nu = _pos({"nu": nu}, "nu", where)
+        self.rho = positive_field({"rho": rho}, "rho", where)
+        self.nu = positive_field({"nu": nu}, "nu", where)
         rot = dict(rotational or {})
         check_keys(rot, ROT_NAMES, f"{where}.rotational", error=VehicleError)
         self.rotational = {k: float(rot.get(k, 0.0)) for k in ROT_NAMES}
@@ -260,21 +158,21 @@ class ComponentBuildup(ForceTerm):
         if kind == "body":
             if "hull" not in spec:
                 raise VehicleError(f"{where}.hull: missing (a built-in hull name or a stations/myring mapping)")
-            nose = _vec(spec, "nose", where)
+            nose = vec3_field(spec, "nose", where)
             re_key = None if self.re_grid is None else tuple(self.re_grid)
-            body, table = _body_table(json.dumps(spec["hull"], sort_keys=True), self.dataset, self.nu, re_key,
+            body, table = body_table(json.dumps(spec["hull"], sort_keys=True), self.dataset, self.nu, re_key,
                                       self.cdn_model, self.munk_moment == "table")
             r = nose - C @ np.array([body.xm, 0.0, 0.0])
             return Component(name, "body", r, C, body.A, body.L, table)
         if kind == "wing":
-            pos = _vec(spec, "position", where)
-            area, chord = _pos(spec, "area", where), _pos(spec, "chord", where)
-            ar = _pos(spec, "aspect_ratio", where)
-            oswald = _pos({"oswald": spec.get("oswald", 0.9)}, "oswald", where)
+            pos = vec3_field(spec, "position", where)
+            area, chord = positive_field(spec, "area", where), positive_field(spec, "chord", where)
+            ar = positive_field(spec, "aspect_ratio", where)
+            oswald = positive_field({"oswald": spec.get("oswald", 0.9)}, "oswald", where)
             gimbal = spec.get("gimbal", False)
             if not isinstance(gimbal, bool):
                 raise VehicleError(f"{where}.gimbal: expected true or false, got {gimbal!r}")
-            return Component(name, "wing", pos, C, area, chord, _wing_table(ar, oswald), gimbal)
+            return Component(name, "wing", pos, C, area, chord, wing_table(ar, oswald), gimbal)
         raise VehicleError(f"{where}.kind: expected 'body' or 'wing', got {kind!r}")
 
     def check_values(self, values):
@@ -408,7 +306,7 @@ class ComponentBuildup(ForceTerm):
             G = (c * cy, c * sy, -s_, -sy, cy, 0.0, s_ * cy, s_ * sy, c)  # gimbal_matrix(dp, dy)
         for is_body, (rx, ry, rz), Cf, qa, L, l_nu, table, gim in prep["comps"]:
             if gim and G is not None:
-                Cf = _matmul33(G, Cf)
+                Cf = matmul33(G, Cf)
             c00, c01, c02, c10, c11, c12, c20, c21, c22 = Cf
             vx = u + q * rz - r * ry
             vy = v + r * rx - p * rz
