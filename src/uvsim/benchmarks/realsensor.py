@@ -142,7 +142,8 @@ def run(quick: bool = False, workers: int = 2, out_dir=None) -> dict:
            "realsensor_workers_identical": float(serial.params_ == par.params_),
            "realsensor_worst_identifiable_error_pct": worst_identifiable(errors),
            "realsensor_depth_noise_ratio": float(np.median(depth_sigma) / truth["sensors"]["depth"]["sigma"])}
-    out.update({(f"realsensor_{k}" if k.startswith("gyro") else f"realsensor_error_pct_{k}"): v
+    # (the sensor biases' errors carry their own units in their names: not "error_pct_")
+    out.update({(f"realsensor_{k}" if k.startswith(("gyro_bias", "acc_bias")) else f"realsensor_error_pct_{k}"): v
                 for k, v in errors.items()})
     out.update({f"realsensor_validation_fit_pct_{c}": v for c, v in rep["validation_fit_percent"].items()})
     return out
