@@ -2,8 +2,12 @@
 
 ``load_vehicle("bluerov2_heavy")`` reads ``src/uvsim/vehicles/bluerov2_heavy.yaml``;
 ``load_vehicle("path/to/file.yaml")`` reads any file.  Loading validates the file
-(finite numbers, positive mass and inertia, positive-definite ``M = M_RB + M_A``,
-known thruster curves and term types) and every error names the file and field.
+against the declarative schema of :mod:`uvsim.vehicle_schema` (``src/uvsim/vehicle_schema.py``:
+every section's fields, finite numbers, positive mass and inertia, the physical rules,
+positive-definite ``M = M_RB + M_A``; the plug-in sections by their builders: known
+thruster curves and term types) and every error names the file and field.  This module
+builds the :class:`Vehicle` from the validated sections; the table of fields is in
+docs/model.md ("Vehicle file fields").
 
 File layout (see ``src/uvsim/vehicles/bluerov2_heavy.yaml`` for a commented example)::
 
@@ -42,25 +46,20 @@ from uvsim.files import load_yaml
 from uvsim.forces import ForceTerm, make_term
 from uvsim.forces.actuators import Actuators, build_actuators
 from uvsim.rigid_body import rigid_body_mass_matrix
-from uvsim.schema import check_keys, did_you_mean, require_mapping, unknown_key_message
+from uvsim.schema import did_you_mean
+from uvsim.vehicle_schema import (  # noqa: F401  (limits re-exported for the modules importing them here)
+    ADDED_MASS_NAMES, ENVIRONMENT, IMU_BIAS_SPECS, INERTIA_NAMES, MAX_LATENCY, MAX_SENSOR_OFFSET, RIGID_BODY,
+    SENSOR, SENSOR_NAMES, VEHICLE, added_mass_matrix, check_latency, validate_built_vehicle, validate_vehicle_dict)
 
-ADDED_MASS_NAMES = ("X_udot", "Y_vdot", "Z_wdot", "K_pdot", "M_qdot", "N_rdot")
-INERTIA_NAMES = ("I_xx", "I_yy", "I_zz", "I_xy", "I_xz", "I_yz")
 RIGID_NAMES = ("m", "B", "x_g", "y_g", "z_g", "x_b", "y_b", "z_b") + INERTIA_NAMES
 CURRENT_NAMES = ("current_n", "current_e", "current_d")
 DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw")
-
-#: Keys a vehicle file may have at the top level; free-form metadata goes under ``meta``
-#: (docs/contracts.md).  The plug-in sections (``damping``, ``thrusters`` with a ``type``,
-#: each ``effects`` entry) are checked by their plug-in classes.
-VEHICLE_KEYS = ("name", "description", "sources", "meta", "environment", "rigid_body", "added_mass",
-                "damping", "thrusters", "effects", "sensors", "uncertainty")
-ENVIRONMENT_KEYS = ("g", "rho", "current_ned")
-RIGID_BODY_KEYS = ("mass", "buoyancy", "r_g", "r_b", "inertia")
-SENSOR_KEYS = ("position", "source", "gyro_bias_sd", "acc_bias_sd")
-#: the IMU's bias specs: key -> (unit, largest plausible value (exclusive), what it is)
-IMU_BIAS_SPECS = {"gyro_bias_sd": ("rad/s", 1.0, "a MEMS gyro's in-run bias (0.001-0.05 rad/s)"),
-                  "acc_bias_sd": ("m/s^2", 2.0, "a MEMS accelerometer's offset (0.01-0.8 m/s^2)")}
+#: The keys a vehicle file's sections accept (:mod:`uvsim.vehicle_schema`, in the order the messages list
+#: them); free-form metadata goes under ``meta`` (docs/contracts.md).
+VEHICLE_KEYS = tuple(VEHICLE.fields)
+ENVIRONMENT_KEYS = tuple(ENVIRONMENT.fields)
+RIGID_BODY_KEYS = tuple(RIGID_BODY.fields)
+SENSOR_KEYS = tuple(SENSOR.fields)
 
 
 def inertia_tensor(Ixx, Iyy, Izz, Ixy=0.0, Ixz=0.0, Iyz=0.0) -> np.ndarray:
@@ -348,212 +347,52 @@ def load_vehicle(name_or_path: "str | Path | Vehicle") -> Vehicle:
     return vehicle_from_dict(d, source=str(path))
 
 
-def _num(d: Mapping, key: str, where: str, *, positive=False, nonneg=False, default: Any = None) -> float:
-    if key not in d or d[key] is None:
-        if default is not None:
-            return float(default)
-        raise VehicleError(f"{where}.{key}: missing (expected a number)")
-    if isinstance(d[key], bool):
-        raise VehicleError(f"{where}.{key}: expected a number, got {d[key]!r}")
-    try:
-        v = float(d[key])
-    except (TypeError, ValueError):
-        raise VehicleError(f"{where}.{key}: expected a number, got {d[key]!r}") from None
-    if not np.isfinite(v):
-        raise VehicleError(f"{where}.{key}: expected a finite number, got {v}")
-    if positive and v <= 0:
-        raise VehicleError(f"{where}.{key}: expected a positive number, got {v}")
-    if nonneg and v < 0:
-        raise VehicleError(f"{where}.{key}: expected a non-negative number, got {v}")
-    return v
-
-
-def _vec3(d: Mapping, key: str, where: str, default=None) -> np.ndarray:
-    val = d.get(key, default)
-    try:
-        a = np.asarray(val, dtype=float)
-    except (TypeError, ValueError):
-        raise VehicleError(f"{where}.{key}: expected 3 numbers, got {val!r}") from None
-    if a.shape != (3,) or not np.all(np.isfinite(a)):
-        raise VehicleError(f"{where}.{key}: expected 3 finite numbers, got {val!r}")
-    return a
-
-
-#: Sensors whose position on the body enters a measurement model (docs/log_format.md):
-#: ``imu`` (the accelerometer: specific force at that point), ``pressure`` (the ``depth``
-#: column is the depth of that point), ``dvl`` (``u, v, w`` are the velocity of that point).
-SENSOR_NAMES = ("imu", "pressure", "dvl")
-#: Largest sensor offset from the body origin accepted, m (a sensor is on the vehicle).
-MAX_SENSOR_OFFSET = 10.0
-
-
-#: Largest ``sensors.latency`` accepted, s: an autopilot's sensor and telemetry path is tens of
-#: milliseconds (ArduSub logs); half a second is a clock error, not a latency.
-MAX_LATENCY = 0.5
-
-
-def check_latency(value, where: str) -> float:
-    """A sensor latency in s, validated (0 <= latency <= :data:`MAX_LATENCY`)."""
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise VehicleError(f"{where}: expected a latency in s (a number), got {value!r}") from None
-    if not (np.isfinite(x) and 0.0 <= x <= MAX_LATENCY):
-        raise VehicleError(f"{where} = {value!r}: expected 0 <= latency <= {MAX_LATENCY:g} s "
-                           "(how late the sensors read relative to the logged inputs)")
-    return x
-
-
-def _sensors(spec, f: str) -> tuple[dict, dict, float]:
-    """``sensors:`` section -> ({name: position (3,)}, the imu's bias specs {key of
-    :data:`IMU_BIAS_SPECS`: value}, ``latency`` (s, 0 when not given)); validated."""
-    if spec is None:
-        return {}, {}, 0.0
-    if not isinstance(spec, dict):
-        raise VehicleError(f"{f}: sensors: expected a mapping such as {{pressure: {{position: [x, y, z]}}}}")
-    out, bias_sd = {}, {}
-    latency = check_latency(spec["latency"], f"{f}: sensors.latency") if "latency" in spec else 0.0
-    for name, val in spec.items():
-        if name == "latency":
-            continue
-        if name not in SENSOR_NAMES:
-            raise VehicleError(unknown_key_message(f"{f}: sensors", name, SENSOR_NAMES + ("latency",), noun="sensor"))
-        if not isinstance(val, dict):
-            raise VehicleError(f"{f}: sensors.{name}: expected a mapping {{position: [x, y, z]}} "
-                               "(m, body frame; optional source)")
-        check_keys(val, SENSOR_KEYS, f"{f}: sensors.{name}", error=VehicleError)
-        for key, (unit, top, what) in IMU_BIAS_SPECS.items():
-            if key in val and name != "imu":
-                raise VehicleError(f"{f}: sensors.{name}.{key}: only the imu has a gyro and an accelerometer")
-            if val.get(key) is not None:
-                bias_sd[key] = _num(val, key, f"{f}: sensors.imu", positive=True)
-                if bias_sd[key] >= top:
-                    raise VehicleError(f"{f}: sensors.imu.{key} = {bias_sd[key]:g}: expected {unit}, {what}")
-        if name == "imu" and "position" not in val and any(k in val for k in IMU_BIAS_SPECS):
-            continue  # the IMU's bias specs alone (the accelerometer's position not given)
-        if "position" not in val:
-            raise VehicleError(f"{f}: sensors.{name}.position: missing (expected [x, y, z], m, body frame)")
-        pos = _vec3(val, "position", f"{f}: sensors.{name}")
-        if np.linalg.norm(pos) > MAX_SENSOR_OFFSET:
-            raise VehicleError(f"{f}: sensors.{name}.position {pos.tolist()} is more than {MAX_SENSOR_OFFSET:g} m "
-                               "from the body origin (expected metres, body frame)")
-        out[name] = pos
-    return out, bias_sd, latency
-
-
 def vehicle_from_dict(d: dict, *, source: str = "<dict>", actuators: Actuators | None = None) -> Vehicle:
-    """Build and validate a :class:`Vehicle` from a vehicle-file dictionary."""
+    """Build and validate a :class:`Vehicle` from a vehicle-file dictionary.
+
+    Parameters
+    ----------
+    d : the vehicle file as read (layout and rules: :mod:`uvsim.vehicle_schema`).
+    source : the file's name, named by every error.
+    actuators : use these instead of building the ``thrusters`` section.
+
+    Raises
+    ------
+    VehicleError
+        Naming ``source``, the section and field, and what was expected.
+    """
     f = source
-    check_keys(d, VEHICLE_KEYS, f, error=VehicleError, hint=" (free-form metadata goes under 'meta:')")
-    for key in ("rigid_body", "added_mass", "damping"):
-        if not isinstance(d.get(key), dict):
-            raise VehicleError(f"{f}: '{key}' section missing or not a mapping")
-    env = require_mapping(d.get("environment"), f"{f}: environment", error=VehicleError,
-                          example="{g: 9.81, rho: 1000.0, current_ned: [0, 0, 0]}")
-    check_keys(env, ENVIRONMENT_KEYS, f"{f}: environment", error=VehicleError)
-    g = _num(env, "g", f"{f}: environment", positive=True, default=G)
-    rho = _num(env, "rho", f"{f}: environment", positive=True, default=1000.0)
-    current = _vec3(env, "current_ned", f"{f}: environment", default=[0.0, 0.0, 0.0])
-
-    rb = d["rigid_body"]
-    w = f"{f}: rigid_body"
-    check_keys(rb, RIGID_BODY_KEYS, w, error=VehicleError)
-    mass = _num(rb, "mass", w, positive=True)
-    buoyancy = _num(rb, "buoyancy", w, nonneg=True)
-    if not 0.2 < buoyancy / (mass * g) < 5.0 and buoyancy > 0:
-        raise VehicleError(
-            f"{w}.buoyancy = {buoyancy} N is {buoyancy / (mass * g):.2f} times the weight m g = {mass * g:.1f} N; "
-            "expected a value near the weight for an underwater vehicle (check units: buoyancy is a force in N)"
-        )
-    r_g = _vec3(rb, "r_g", w, default=[0, 0, 0])
-    r_b = _vec3(rb, "r_b", w, default=[0, 0, 0])
-    inertia_d = rb.get("inertia")
-    if not isinstance(inertia_d, dict):
-        raise VehicleError(f"{w}.inertia: expected a mapping I_xx, I_yy, I_zz (and optional I_xy, I_xz, I_yz)")
-    check_keys(inertia_d, INERTIA_NAMES, f"{w}.inertia", error=VehicleError)
-    inertia = {}
-    for k in INERTIA_NAMES:
-        inertia[k] = _num(inertia_d, k, f"{w}.inertia", positive=k in INERTIA_NAMES[:3], default=None if k in INERTIA_NAMES[:3] else 0.0)
-    I = inertia_tensor(*(inertia[k] for k in INERTIA_NAMES))
-    ev = np.linalg.eigvalsh(I)
-    if ev.min() <= 0:
-        raise VehicleError(f"{w}.inertia: the inertia tensor is not positive definite (eigenvalues {ev})")
-    Ixx, Iyy, Izz = ev  # principal moments must satisfy the triangle inequality
-    if Ixx + Iyy < Izz * (1 - 1e-9):
-        raise VehicleError(f"{w}.inertia: principal moments {ev} violate the triangle inequality (non-physical body)")
-
-    am = d["added_mass"]
-    w = f"{f}: added_mass"
-    check_keys(am, (*ADDED_MASS_NAMES, "matrix", "convention"), w, error=VehicleError)
-    if "matrix" in am:
-        try:
-            MA = np.asarray(am["matrix"], dtype=float)
-        except (TypeError, ValueError):
-            raise VehicleError(f"{w}.matrix: expected a finite 6x6 matrix of numbers") from None
-        if MA.shape != (6, 6) or not np.all(np.isfinite(MA)):
-            raise VehicleError(f"{w}.matrix: expected a finite 6x6 matrix")
-        if not np.allclose(MA, MA.T, atol=1e-9 * max(1.0, np.abs(MA).max())):
-            raise VehicleError(f"{w}.matrix: must be symmetric (an ideal-fluid added-mass matrix is)")
-    else:
-        MA = np.zeros((6, 6))
-    for i, k in enumerate(ADDED_MASS_NAMES):
-        if k in am:
-            MA[i, i] = _num(am, k, w, nonneg=True)
-    if np.any(np.diag(MA) < 0):
-        raise VehicleError(
-            f"{w}: diagonal added mass must be given as positive magnitudes (M_A = -diag(X_udot, ...) in SNAME sign)"
-        )
-
-    sensors, bias_sd, latency = _sensors(d.get("sensors"), f)
-    damping = make_term(d["damping"], context=f"{f}: damping")
-    effects_spec = d.get("effects") or []
-    if not isinstance(effects_spec, list):
-        raise VehicleError(f"{f}: effects: expected a list")
-    effects = [make_term(e, context=f"{f}: effects[{i}]") for i, e in enumerate(effects_spec)]
+    s = validate_vehicle_dict(d, f)
+    env, rb, sensors = s["environment"], s["rigid_body"], s["sensors"]
+    damping = make_term(s["damping"], context=f"{f}: damping")
+    effects = [make_term(e, context=f"{f}: effects[{i}]") for i, e in enumerate(s["effects"])]
     if actuators is None:
-        actuators = build_actuators(d.get("thrusters"), f)
-
+        actuators = build_actuators(s.get("thrusters"), f)
+    imu = sensors.get("imu", {})
     v = Vehicle(
-        name=str(d.get("name", Path(source).stem)),
-        mass=mass,
-        buoyancy=buoyancy,
-        r_g=r_g,
-        r_b=r_b,
-        inertia=inertia,
-        added_mass_matrix=MA,
+        name=s["name"],
+        mass=rb["mass"],
+        buoyancy=rb["buoyancy"],
+        r_g=rb["r_g"],
+        r_b=rb["r_b"],
+        inertia={k: rb["inertia"][k] for k in INERTIA_NAMES},
+        added_mass_matrix=added_mass_matrix(s["added_mass"]),
         damping=damping,
         actuators=actuators,
         effects=effects,
-        g=g,
-        rho=rho,
-        current_ned=current,
-        sensors=sensors,
-        gyro_bias_sd=bias_sd.get("gyro_bias_sd"),
-        acc_bias_sd=bias_sd.get("acc_bias_sd"),
-        sensor_latency=latency,
-        description=str(d.get("description", "")),
+        g=env["g"],
+        rho=env["rho"],
+        current_ned=env["current_ned"],
+        sensors={k: e["position"] for k, e in sensors.items() if k in SENSOR_NAMES and "position" in e},
+        gyro_bias_sd=imu.get("gyro_bias_sd"),
+        acc_bias_sd=imu.get("acc_bias_sd"),
+        sensor_latency=sensors["latency"],
+        description=s["description"],
         source=source,
         raw=d,
     )
-    v.uncertainty = _uncertainty(d.get("uncertainty"), f, v.parameters())
-    M = v.M
-    ev = np.linalg.eigvalsh(0.5 * (M + M.T))
-    if ev.min() <= 0:
-        raise VehicleError(f"{f}: M = M_RB + M_A is not positive definite (eigenvalues {np.round(ev, 6)})")
+    v.uncertainty = validate_built_vehicle(d, f, v)["uncertainty"]  # also checks M = M_RB + M_A
     return v
-
-
-def _uncertainty(spec, f: str, params: Mapping[str, float]) -> dict:
-    """The ``uncertainty:`` section: {parameter name: positive 1-sigma in its units}."""
-    if spec is None:
-        return {}
-    require_mapping(spec, f"{f}: uncertainty", error=VehicleError, example="uncertainty: {X_u: 2.0, N_rdot: 0.05}")
-    check_keys(spec, list(params), f"{f}: uncertainty", error=VehicleError,
-               hint=" (a parameter name of this vehicle: uvsim.load_vehicle(...).parameters())")
-    out = {}
-    for k, x in spec.items():
-        out[k] = _num(spec, k, f"{f}: uncertainty", positive=True)
-    return out
 
 
 class _VehicleDumper(yaml.SafeDumper):
