@@ -6,8 +6,8 @@ A *thrust curve* is a small picklable strategy object with two vectorized method
 - ``pwm(thrust)``: the inverse, used by tests and data generators; 0 N maps to the
   neutral command (middle of the deadband).
 
-This module holds the curve classes, the shipped tables and their validation, and
-imports no other uvsim curve module: the battery-aware curve builds on it
+This module holds the curve classes and the shipped tables (the value checks of a
+specification: :mod:`uvsim.curve_checks`), and imports no other uvsim curve module: the battery-aware curve builds on it
 (:mod:`uvsim.voltage_curves`), and :mod:`uvsim.thrusters` turns vehicle-file
 specifications into curves (:func:`uvsim.thrusters.load_thrust_curve`) and applies one
 per thruster (:class:`uvsim.thrusters.ThrustCurveSet`).
@@ -36,8 +36,9 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from uvsim.curve_checks import as_1d, check_curve_keys, finite_number, number_pair, readonly_array
 from uvsim.errors import SimulationError, VehicleError
-from uvsim.schema import check_keys, did_you_mean
+from uvsim.schema import did_you_mean
 
 #: Directory of the shipped tables (``<name>.csv`` with columns pwm_us, thrust_N).
 DATA_DIR = Path(__file__).resolve().parent / "data" / "thrusters"
@@ -200,8 +201,8 @@ class TabulatedThrustCurve(ThrustCurve):
 
     def __init__(self, pwm, thrust, *, deadband=None, neutral=None, name="table", source=None):
         source = source or name
-        pwm = _as_1d(pwm, f"{source}: pwm")
-        thrust = _as_1d(thrust, f"{source}: thrust")
+        pwm = as_1d(pwm, f"{source}: pwm")
+        thrust = as_1d(thrust, f"{source}: thrust")
         if pwm.size != thrust.size:
             raise VehicleError(
                 f"{source}: pwm and thrust must have the same length, got {pwm.size} and {thrust.size}"
@@ -230,7 +231,7 @@ class TabulatedThrustCurve(ThrustCurve):
                 )
             lo, hi = float(pwm[zero[0]]), float(pwm[zero[-1]])
         else:
-            lo, hi = _pair(deadband, f"{source}: deadband")
+            lo, hi = number_pair(deadband, f"{source}: deadband")
             if not lo <= hi:
                 raise VehicleError(f"{source}: deadband must satisfy lo <= hi, got [{lo:g}, {hi:g}]")
             if lo < pwm[0] or hi > pwm[-1]:
@@ -265,12 +266,12 @@ class TabulatedThrustCurve(ThrustCurve):
 
         # Table as given (for to_mapping / equality) and the interpolation knots: the
         # table points plus (lo, 0) and (hi, 0) where the table has no point there.
-        self.table_pwm = _readonly(pwm)
-        self.table_thrust = _readonly(thrust)
+        self.table_pwm = readonly_array(pwm)
+        self.table_thrust = readonly_array(thrust)
         extra = [v for v in sorted({lo, hi}) if v not in pwm]
         order = np.argsort(np.concatenate([pwm, extra]), kind="stable")
-        self._xp = _readonly(np.concatenate([pwm, extra])[order])
-        self._fp = _readonly(np.concatenate([thrust, np.zeros(len(extra))])[order])
+        self._xp = readonly_array(np.concatenate([pwm, extra])[order])
+        self._fp = readonly_array(np.concatenate([thrust, np.zeros(len(extra))])[order])
         # Uniformly spaced knots (the Blue Robotics sheets: 4 us steps) allow a
         # search-free evaluation, about twice as fast as np.interp on large arrays.
         step = np.diff(self._xp)
@@ -356,7 +357,7 @@ class TabulatedThrustCurve(ThrustCurve):
         """
         if not isinstance(d, Mapping):
             raise VehicleError(f"{field}: expected a mapping, got {type(d).__name__}")
-        _check_keys(d, {"table", "csv", "pwm", "thrust", "deadband", "neutral", "type"}, field)
+        check_curve_keys(d, {"table", "csv", "pwm", "thrust", "deadband", "neutral", "type"}, field)
         forms = [k for k in ("table", "csv", "pwm") if k in d]
         if len(forms) != 1 or ("pwm" in d) != ("thrust" in d):
             raise VehicleError(
@@ -365,10 +366,10 @@ class TabulatedThrustCurve(ThrustCurve):
             )
         deadband = d.get("deadband")
         if deadband is not None:
-            deadband = _pair(deadband, f"{field}.deadband")
+            deadband = number_pair(deadband, f"{field}.deadband")
         neutral = d.get("neutral")
         if neutral is not None:
-            neutral = _number(neutral, f"{field}.neutral")
+            neutral = finite_number(neutral, f"{field}.neutral")
         if "table" in d:
             if deadband is None and neutral is None:
                 return shipped_curve(d["table"], field=f"{field}.table")
@@ -425,14 +426,14 @@ class LinearThrustCurve(ThrustCurve):
     def __init__(self, forward_gain, reverse_gain, *, neutral=1500.0, deadband=None,
                  pwm_range=(1100.0, 1900.0), name="linear", source=None):
         source = source or name
-        self.forward_gain = _number(forward_gain, f"{source}: forward_gain")
-        self.reverse_gain = _number(reverse_gain, f"{source}: reverse_gain")
+        self.forward_gain = finite_number(forward_gain, f"{source}: forward_gain")
+        self.reverse_gain = finite_number(reverse_gain, f"{source}: reverse_gain")
         for k in ("forward_gain", "reverse_gain"):
             if not getattr(self, k) > 0:
                 raise VehicleError(f"{source}: {k} must be > 0 N/us, got {getattr(self, k):g}")
-        self.neutral = _number(neutral, f"{source}: neutral")
-        lo, hi = (self.neutral, self.neutral) if deadband is None else _pair(deadband, f"{source}: deadband")
-        pmin, pmax = _pair(pwm_range, f"{source}: pwm_range")
+        self.neutral = finite_number(neutral, f"{source}: neutral")
+        lo, hi = (self.neutral, self.neutral) if deadband is None else number_pair(deadband, f"{source}: deadband")
+        pmin, pmax = number_pair(pwm_range, f"{source}: pwm_range")
         if not (pmin <= lo <= self.neutral <= hi <= pmax):
             raise VehicleError(
                 f"{source}: need pwm_range[0] <= deadband lo <= neutral <= deadband hi <= pwm_range[1], "
@@ -456,7 +457,7 @@ class LinearThrustCurve(ThrustCurve):
     def from_mapping(cls, d: Mapping[str, Any], *, field: str = "curve") -> "LinearThrustCurve":
         """``{"type": "linear", "forward_gain": .., "reverse_gain": .., "neutral": ..,
         "deadband": [lo, hi], "pwm_range": [min, max]}`` (gains N/us)."""
-        _check_keys(d, {"type", "forward_gain", "reverse_gain", "neutral", "deadband", "pwm_range"}, field)
+        check_curve_keys(d, {"type", "forward_gain", "reverse_gain", "neutral", "deadband", "pwm_range"}, field)
         for k in ("forward_gain", "reverse_gain"):
             if k not in d:
                 raise VehicleError(f"{field}: linear thrust curve needs '{k}' (N/us)")
@@ -500,44 +501,3 @@ def shipped_curve(name: str, *, field: str = "curve") -> TabulatedThrustCurve:
     """The shipped table ``name`` (e.g. ``"t200_16v"``); one shared, read-only instance."""
     _shipped_path(name, field)
     return _cached_shipped(name)
-
-
-# --------------------------------------------------------------------------- helpers
-def _as_1d(x, what) -> np.ndarray:
-    try:
-        a = np.asarray(x, dtype=float)
-    except (TypeError, ValueError):
-        raise VehicleError(f"{what}: expected a list of numbers, got {x!r}") from None
-    if a.ndim != 1:
-        raise VehicleError(f"{what}: expected a 1-D list of numbers, got shape {a.shape}")
-    if not np.all(np.isfinite(a)):
-        i = int(np.flatnonzero(~np.isfinite(a))[0])
-        raise VehicleError(f"{what}: entry {i} is {a[i]}, expected a finite number")
-    return a
-
-
-def _pair(x, what) -> tuple[float, float]:
-    a = _as_1d(x, what)
-    if a.size != 2:
-        raise VehicleError(f"{what}: expected two numbers [lo, hi], got {list(a)}")
-    return float(a[0]), float(a[1])
-
-
-def _number(x, what) -> float:
-    try:
-        v = float(x)
-    except (TypeError, ValueError):
-        raise VehicleError(f"{what}: expected a number, got {x!r}") from None
-    if not np.isfinite(v):
-        raise VehicleError(f"{what}: expected a finite number, got {v}")
-    return v
-
-
-def _check_keys(d, allowed, field):
-    check_keys(d, sorted(allowed), field, error=VehicleError)
-
-
-def _readonly(a: np.ndarray) -> np.ndarray:
-    a = np.array(a, dtype=float)
-    a.setflags(write=False)
-    return a
