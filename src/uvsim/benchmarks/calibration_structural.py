@@ -244,15 +244,14 @@ def reference_checks(cal, dataset_dir, models: dict) -> dict:
 
 def on_voltage_family(vehicle):
     """``vehicle`` with its thrusters on the T200 voltage family at the nominal voltage its
-    fixed curve was measured at (16 V), so that ``supply_voltage`` can be fitted."""
-    from uvsim.vehicle import vehicle_from_dict
+    fixed curve was measured at (16 V), so that ``supply_voltage`` can be fitted
+    (:func:`uvsim.calibration.supply_voltage.on_voltage_family`)."""
+    from uvsim.calibration import supply_voltage
 
-    d = vehicle.to_dict()
-    if d["thrusters"].get("curve") != "t200_16v" or any("curve" in u for u in d["thrusters"].get("units", [])):
+    if supply_voltage.not_applicable(vehicle):
         raise UvsimError(f"--supply-voltage: the benchmark's start vehicle {vehicle.name!r} does not run on the "
                          "t200_16v curve")
-    d["thrusters"] = {**d["thrusters"], "curve": {"voltage_table": "t200", "nominal_voltage": 16.0}}
-    return vehicle_from_dict(d, source=f"{vehicle.name} on the T200 voltage family")
+    return supply_voltage.on_voltage_family(vehicle)
 
 
 def dataset_vehicle_on_family(dataset_dir):
@@ -281,13 +280,16 @@ def run_one(seed: int, *, prior: bool = True, loss: str = "linear", supply: bool
         truth = load_truth(out)
         t0 = time.perf_counter()
         try:
-            start = dataset_vehicle_on_family(out) if supply else None
-            names = f"{free},supply_voltage" if supply else free
-            cal = Calibrator(free=names, workers=workers, prior=prior, loss=loss, latency=latency).fit(out, start)
+            freed = supply is True  # True: freed from the start; "auto": the calibration's supply_voltage="auto"
+            start = dataset_vehicle_on_family(out) if freed else None
+            names = f"{free},supply_voltage" if freed else free
+            cal = Calibrator(free=names, workers=workers, prior=prior, loss=loss, latency=latency,
+                             supply_voltage="auto" if supply == "auto" else None).fit(out, start)
             seconds = time.perf_counter() - t0  # the calibration's, not the verdicts' and references' below
             rec = judge(cal.report_)
             rec["latency_fitted"] = cal.latency_["value"]  # s, what the fitted vehicle states
             rec["supply_voltage"] = cal.params_.get("supply_voltage")  # fitted (V), None when not freed
+            rec["supply_voltage_auto"] = cal.supply_voltage_  # the "auto" refit and its choice, None otherwise
             refs = reference_models(out, cal.initial_vehicle_, over)
             err = truth_errors(spec, {"start": cal.initial_vehicle_, "fitted": cal.vehicle_, **refs})
             rec["truth_rmse_start"], rec["truth_rmse_fitted"] = err["start"], err["fitted"]
@@ -366,7 +368,7 @@ def _label(mode: tuple) -> str:
     """The summary's key and the progress line's name of a mode (:func:`_mode`)."""
     prior, loss, supply, free, latency = mode
     return (("prior" if prior else "no_prior") + ("" if loss == "linear" else f"+{loss}")
-            + ("+supply_voltage" if supply else "") + f" (--free {free}"
+            + {True: "+supply_voltage", "auto": "+supply_voltage_auto"}.get(supply, "") + f" (--free {free}"
             + ("" if latency is None else f" --latency {latency}") + ")")
 
 

@@ -40,6 +40,7 @@ from uvsim.calibration.latency_estimate import scan_latency
 from uvsim.calibration.params import DOF_PARAMETERS, default_channel_weights, parse_dofs
 from uvsim.calibration.report import build_report, evaluate_runs, identifiability_report
 from uvsim.calibration.selection import check_bounds, effective_inertia_start, expand_names, joint_candidates
+from uvsim.calibration import supply_voltage as supply
 from uvsim.errors import CalibrationError
 from uvsim.estimation.lag import attitude_lag_setting
 from uvsim.fitting.objective import check_loss, continuity_factors
@@ -129,6 +130,11 @@ class Calibrator:
         (:mod:`uvsim.calibration.latency_estimate`) and, when it lowers the windowed cost by
         at least 2 %, the joint fit is run again from its result with it.  The fitted vehicle
         file states the latency it was fitted with.
+    supply_voltage : None (default) or "auto": after the joint fit (and the latency's), fit again
+        with the start vehicle's thrusters on the T200 voltage family (``supply_voltage`` freed
+        beside the first fit's parameters) and keep that fit when its open-loop Fit % on the
+        *training* runs is higher in every channel (:mod:`uvsim.calibration.supply_voltage`);
+        needs the vehicle's thrusters on the shipped ``t200_16v`` curve.
     initial_velocity : "zero" | "differentiate" for the GA's and the open-loop
         evaluation's unknown initial velocities (the joint stage estimates them).
     prior : the joint stage fits maximum a posteriori with the starting vehicle as the prior
@@ -171,7 +177,7 @@ class Calibrator:
                  continuity=DEFAULT_CONTINUITY,
                  max_iter: int = 80, gyro_bias: bool = True, attitude_bias: bool = True, acc_bias: bool = True,
                  screen: bool = True,
-                 attitude_lag="auto", latency=None,
+                 attitude_lag="auto", latency=None, supply_voltage=None,
                  initial_velocity: str = "zero", prior: bool = True, loss: str = "linear",
                  workers: int = 1, dask: str | None = None, batch_rows: int = DEFAULT_BATCH_ROWS, checkpoint=None,
                  resume=None, progress: bool = False, effects=None, allow=()):
@@ -188,6 +194,7 @@ class Calibrator:
         self.continuity = continuity
         self.attitude_lag = attitude_lag
         self.latency = latency
+        self.supply_voltage = supply_voltage
         self.attitude_bias = attitude_bias
         self.acc_bias = acc_bias
         self.initial_velocity = initial_velocity
@@ -293,6 +300,14 @@ class Calibrator:
             raise CalibrationError("latency='auto' (--latency auto) is estimated after the joint fit; "
                                    "it needs refine=True (no --no-refine)")
         self.latency_ = self._latency_record(veh, None)
+        if supply.check_setting(self.supply_voltage) == "auto":
+            if not self.refine:
+                raise CalibrationError("supply_voltage='auto' (--supply-voltage auto) refits after the joint fit; "
+                                       "it needs refine=True (no --no-refine)")
+            why = supply.not_applicable(veh)
+            if why:
+                raise CalibrationError(why)
+        self.supply_voltage_ = None
         bounds = check_bounds(self.bounds, base)
         fixed = expand_names(self.fix, list(base), "fix")
         extra = expand_names(self.free, list(base), "free")
@@ -339,6 +354,10 @@ class Calibrator:
             if self.latency == "auto" and fit_res is not None:
                 fit_res, start_veh = self._auto_latency(ds, start_veh, fit_res, runs, meas, dofs, ga_dofs, fixed,
                                                         extra, joint_bounds, horizons)
+            if self.supply_voltage == "auto" and fit_res is not None:
+                fit_res, start_veh, veh, joint_bounds = self._auto_supply(
+                    ds, veh, dict(params), start_veh, fit_res, runs, meas, dofs, ga_dofs, fixed, extra, joint_bounds,
+                    horizons)
         t_ref = time.perf_counter()
         unc: dict = {k: None for k in params}
         if fit_res is not None:
@@ -436,10 +455,29 @@ class Calibrator:
                                       "free_parameters": list(fit_res.names)}
         return (res if res is not None else fit_res), again
 
+    def _auto_supply(self, ds, veh, start, start_veh, fit_res, runs, meas, dofs, ga_dofs, fixed, extra, bounds_of,
+                     horizons):
+        """``supply_voltage="auto"`` (:func:`uvsim.calibration.supply_voltage.refit`) with this
+        calibrator's joint stage.  Returns the fit to keep, its start vehicle, the vehicle the
+        fitted one is built on and the bounds of its parameters."""
+        def joint(start_family, bounds, names, prior_mean):
+            return self._run_joint(ds, start_family, runs, meas, dofs, ga_dofs, fixed, extra, bounds, horizons,
+                                   tag=".supply", names=names, prior_mean=prior_mean if self.prior else None)[0]
+
+        self.supply_voltage_, kept = supply.refit(joint, veh, start, start_veh, fit_res, runs, meas, bounds_of,
+                                                  margin=float(self.margin), prior_mean=self.initial_vehicle_.parameters(),
+                                                  initial_velocity=self.initial_velocity)
+        if kept is None:
+            return fit_res, start_veh, veh, bounds_of
+        log.info("supply voltage %.2f V: higher training Fit %% in every channel; keeping that fit",
+                 self.supply_voltage_["value"])
+        return kept
+
     def _run_joint(self, ds, start_veh, runs, meas, dofs, ga_dofs, fixed, extra, bounds_of, horizons, tag="",
-                   names=None):
+                   names=None, prior_mean=None):
         """The joint stage (:func:`uvsim.calibration.joint.run_joint`); ``names``: free exactly these
-        (no screen); ``tag``: suffix of its checkpoint file."""
+        (no screen); ``tag``: suffix of its checkpoint file; ``prior_mean``: the prior's means when
+        not the start vehicle's values (the supply-voltage refit's vehicle has one more parameter)."""
         params = start_veh.parameters()
         keep = list(dict.fromkeys([k for k in joint_candidates(ga_dofs) if k not in fixed] + list(extra)))
         mixed = any(r.dof not in ga_dofs for r in runs)
@@ -474,7 +512,7 @@ class Calibrator:
                          gyro_bias=bool(self.gyro_bias), attitude_bias=bool(self.attitude_bias),
                          acc_bias=bool(self.acc_bias), initial_velocity=self.initial_velocity,
                          workers=self._workers(), checkpoint=ck, progress=self.progress,
-                         prior_mean=self.initial_vehicle_.parameters() if self.prior else None,
+                         prior_mean=(prior_mean or self.initial_vehicle_.parameters()) if self.prior else None,
                          prior_sd=self.initial_vehicle_.uncertainty, loss=self.loss)
 
     # ------------------------------------------------------------------ results

@@ -268,7 +268,9 @@ def build_report(cal, ds, runs, problems, ga, bounds_of, t0, t_ga, t_ref) -> dic
         "dofs": list(problems),
         "parameters": dict(cal.params_),
         "uncertainty": dict(cal.uncertainty_),
-        "initial_parameters": {k: float(p0[k]) for k in cal.params_},
+        # (a supply voltage kept by supply_voltage="auto": the start model's fixed curve is the family's nominal sheet)
+        "initial_parameters": {k: float(p0[k] if k in p0 else cal.supply_voltage_["nominal_voltage"])
+                               for k in cal.params_},
         "ga_parameters": dict(cal.ga_params_),
         "free_parameters": [] if res is None else list(res.names),
         "bounds": {k: [float(x) for x in bounds_of(k)] for k in cal.params_},
@@ -299,6 +301,8 @@ def build_report(cal, ds, runs, problems, ga, bounds_of, t0, t_ga, t_ref) -> dic
         "noise": noise,
         "attitude_lag": cal.lag_,
         "sensor_latency": cal.latency_,
+        # supply_voltage="auto": the refit on the T200 voltage family and whether it was kept (None: not asked)
+        "supply_voltage_auto": getattr(cal, "supply_voltage_", None),
         "notes": sorted({n for m in meas for n in m.notes}),
         "run_weights": {r.name: float(cal._ga_run_weights.get(r.name, r.weight)) for r in runs},
         "training_runs": [r.name for r in runs],

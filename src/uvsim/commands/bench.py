@@ -25,10 +25,11 @@ def register(sub) -> None:
                         "datasets and compare with the start model (default: the speed figures)")
     p.add_argument("--loss", choices=LOSSES, default="linear",
                    help="(calibrate-structural) the calibration's --loss")
-    p.add_argument("--supply-voltage", action="store_true",
+    p.add_argument("--supply-voltage", nargs="?", const="free", default=None, choices=("free", "auto"),
                    help="(calibrate-structural, diagnose-structural) start model on the T200 voltage family at "
                         "its file's 16 V: calibration frees supply_voltage beside --free's parameters, "
-                        "diagnosis has it as a base-model candidate")
+                        "diagnosis has it as a base-model candidate; '--supply-voltage auto' (calibrate-structural): "
+                        "the calibration's --supply-voltage auto instead")
     p.add_argument("--free", default=REAL_LOG_FREE,
                    help=f"(calibrate-structural) the calibration's --free (default {REAL_LOG_FREE!r}, the real-log "
                         "command of docs/calibration.md; 'z_b': the releases before, no actuator parameter)")
@@ -133,12 +134,23 @@ def _diagnose(args) -> int:
     return 0
 
 
+def _diagnosis_supply(args) -> bool:
+    """``--supply-voltage`` for diagnose-structural: a base-model candidate, not "auto"."""
+    from uvsim.errors import UvsimError
+
+    if args.supply_voltage == "auto":
+        raise UvsimError("--supply-voltage auto is a calibration setting (calibrate-structural); "
+                         "diagnose-structural takes --supply-voltage alone")
+    return args.supply_voltage == "free"
+
+
 def _structural(args) -> int:
     from uvsim.benchmarks.structural import CLASSES, run_benchmark
 
     classes = [c.strip() for c in args.only.split(",") if c.strip()] if args.only else list(CLASSES)
     out = _suite(args, lambda say: run_benchmark(args.scenarios, args.seed, classes=classes, workers=args.workers,
-                                                 supply=args.supply_voltage, results=args.results, progress=say))
+                                                 supply=_diagnosis_supply(args), results=args.results,
+                                                 progress=say))
     if out is None:
         return 0
     s = out["summary"]
@@ -157,7 +169,8 @@ def _calibrate_structural(args) -> int:
     from uvsim.benchmarks.calibration_structural import WORSE_POINTS, run_benchmark
 
     out = _suite(args, lambda say: run_benchmark(args.scenarios, args.seed, compare_no_prior=args.compare_no_prior,
-                                                 loss=args.loss, supply=args.supply_voltage, free=args.free,
+                                                 loss=args.loss, supply={"free": True, "auto": "auto"}.get(args.supply_voltage, False),
+                                                 free=args.free,
                                                  latency=None if args.latency == "none" else args.latency,
                                                  workers=args.workers, results=args.results,
                                                  progress=say))

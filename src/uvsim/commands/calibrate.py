@@ -82,6 +82,10 @@ def register(sub) -> None:
                    help="how late the logged sensors read relative to the logged inputs: 'auto' (estimated after the "
                         "joint fit, and fitted again with it when it helps; docs/calibration.md 'Sensor latency'), a "
                         "number of seconds, or omitted: the vehicle file's sensors.latency (0 when it states none)")
+    p.add_argument("--supply-voltage", choices=("auto",), default=None,
+                   help="'auto': fit again with the thrusters on the T200 voltage family (supply_voltage freed) and "
+                        "keep that fit when it fits the training runs better in every channel (vehicle on the "
+                        "t200_16v curve; docs/calibration.md 'Supply voltage')")
     p.add_argument("--no-screen", action="store_true",
                    help="free every DOF's parameters for mixed runs, also those the data do not excite")
     p.add_argument("--ga-channels", choices=("own", "all"), default="own",
@@ -320,6 +324,12 @@ def print_summary(cal, out=None) -> None:
             f"{scan['best'] * 1000:.1f} ms, {100 * scan['gain']:.1f} % below {scan['current'] * 1000:.1f} ms: {verdict}")
     elif lat.get("value"):
         say(f"sensor latency {lat['value'] * 1000:.1f} ms ({'the vehicle file' if lat['how'] == 'file' else 'given'})")
+    sv = rep.get("supply_voltage_auto")
+    if sv and sv.get("value") is not None:
+        low = min(sv["training_fit_gain"].values(), default=float("nan"))
+        say(f"supply voltage (auto): refit on the T200 voltage family found {sv['value']:.2f} V; training Fit % "
+            f"{'higher in every channel (lowest gain ' if sv['used'] else 'not higher in every channel ('}"
+            f"{low:+.1f} points): {'kept' if sv['used'] else 'the first fit kept'}")
     for text, runs in _grouped_notes(rep["notes"]).items():
         say(f"note: {text} ({len(runs)} run{'s' if len(runs) > 1 else ''}: {', '.join(runs[:3])}"
             f"{', ...' if len(runs) > 3 else ''})")
@@ -365,7 +375,7 @@ def _run(args) -> int:
                      sample_weighting=args.sample_weighting,
                      screen=not args.no_screen,
                      ga_channels=args.ga_channels,
-                     attitude_lag=lag, latency=args.latency, low_speed_exponent=args.low_speed_exponent, progress=want_progress(args),
+                     attitude_lag=lag, latency=args.latency, supply_voltage=args.supply_voltage, low_speed_exponent=args.low_speed_exponent, progress=want_progress(args),
                      allow=parse_allow(args.allow))
     logger = logging.getLogger("uvsim")
     handler = None
@@ -439,4 +449,7 @@ def _say_resume(ckpt) -> None:
     again = joint_checkpoint_path(f"{ckpt}.latency")
     if Path(again).is_file():
         held += f" and {again} the refit with the estimated sensor latency"
+    family = joint_checkpoint_path(f"{ckpt}.supply")
+    if Path(family).is_file():
+        held += f" and {family} the refit on the T200 voltage family (--supply-voltage auto)"
     say("calibrate", f"interrupted; {held}; continue with --resume {ckpt}")
