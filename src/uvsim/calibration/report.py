@@ -320,7 +320,7 @@ def build_report(cal, ds, runs, problems, ga, bounds_of, t0, t_ga, t_ref) -> dic
                      "max_iter": cal.max_iter,
                      "gyro_bias": cal.gyro_bias, "acc_bias": cal.acc_bias, "screen": cal.screen,
                      "attitude_lag": cal.attitude_lag,
-                     "latency": cal.latency,
+                     "latency": cal.latency, "supply_voltage": cal.supply_voltage,
                      "initial_velocity": cal.initial_velocity, "prior": cal.prior, "loss": cal.loss,
                      "sample_weighting": cal.sample_weighting},
         "logbook": {d: [dict(rec) for rec in lb] for d, lb in ga["logbooks"].items()},
