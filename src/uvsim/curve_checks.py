@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from uvsim.errors import VehicleError
+from uvsim import schema
 from uvsim.schema import check_keys
 
 
@@ -33,14 +34,8 @@ def number_pair(x, what) -> tuple[float, float]:
 
 
 def finite_number(x, what) -> float:
-    """``x`` as a finite float; a VehicleError naming ``what`` otherwise."""
-    try:
-        v = float(x)
-    except (TypeError, ValueError):
-        raise VehicleError(f"{what}: expected a number, got {x!r}") from None
-    if not np.isfinite(v):
-        raise VehicleError(f"{what}: expected a finite number, got {v}")
-    return v
+    """``x`` as a finite float; a VehicleError naming ``what`` otherwise (:func:`uvsim.schema.finite_number`)."""
+    return schema.finite_number(x, what, error=VehicleError)
 
 
 def check_curve_keys(d, allowed, field):

@@ -26,6 +26,18 @@ def skew(a: np.ndarray) -> np.ndarray:
     return S
 
 
+def inertia_tensor(Ixx, Iyy, Izz, Ixy=0.0, Ixz=0.0, Iyz=0.0) -> np.ndarray:
+    """Inertia tensor about the body origin with Fossen's product-of-inertia signs
+    (Fossen 2021 eq. 3.34), broadcasting over array arguments -> (..., 3, 3)."""
+    arrs = np.broadcast_arrays(*[np.asarray(a, float) for a in (Ixx, Iyy, Izz, Ixy, Ixz, Iyz)])
+    Ixx, Iyy, Izz, Ixy, Ixz, Iyz = arrs
+    Ixy, Ixz, Iyz = Ixy + 0.0, Ixz + 0.0, Iyz + 0.0
+    row0 = np.stack([Ixx, 0.0 - Ixy, 0.0 - Ixz], -1)
+    row1 = np.stack([0.0 - Ixy, Iyy, 0.0 - Iyz], -1)
+    row2 = np.stack([0.0 - Ixz, 0.0 - Iyz, Izz], -1)
+    return np.stack([row0, row1, row2], -2)
+
+
 def rigid_body_mass_matrix(mass, inertia, r_g) -> np.ndarray:
     """``M_RB`` about the body origin (Fossen 2021 eq. 3.44; seed 002 eq. 2).
 

@@ -13,6 +13,7 @@ code that reads each field: it knows the units and the physics.
 from __future__ import annotations
 
 import difflib
+import math
 from typing import Any, Iterable, Mapping
 
 from uvsim.errors import UvsimError
@@ -72,3 +73,18 @@ def require_mapping(value: Any, where: str, *, error: type = UvsimError, example
         ex = f" such as {example}" if example else ""
         raise error(f"{where}: expected a mapping{ex}, got {type(value).__name__} {value!r}"[:300])
     return dict(value)
+
+
+def finite_number(value: Any, where: str, *, error: type = UvsimError, bool_ok: bool = True) -> float:
+    """``value`` as a finite float; else ``error`` naming ``where``: "expected a number, got ..."
+    (also for ``true`` / ``false`` unless ``bool_ok``) or "expected a finite number, got ..."."""
+    if not bool_ok and isinstance(value, bool):
+        raise error(f"{where}: expected a number, got {value!r}")
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise error(f"{where}: expected a number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise error(f"{where}: expected a finite number, got {v}")
+    return v
+

@@ -45,7 +45,7 @@ from uvsim.errors import VehicleError
 from uvsim.files import load_yaml
 from uvsim.forces import ForceTerm, make_term
 from uvsim.forces.actuators import Actuators, build_actuators
-from uvsim.rigid_body import rigid_body_mass_matrix
+from uvsim.rigid_body import inertia_tensor, rigid_body_mass_matrix
 from uvsim.schema import did_you_mean
 from uvsim.vehicle_schema import (  # noqa: F401  (limits re-exported for the modules importing them here)
     ADDED_MASS_NAMES, ENVIRONMENT, IMU_BIAS_SPECS, INERTIA_NAMES, MAX_LATENCY, MAX_SENSOR_OFFSET, RIGID_BODY,
@@ -60,18 +60,6 @@ VEHICLE_KEYS = tuple(VEHICLE.fields)
 ENVIRONMENT_KEYS = tuple(ENVIRONMENT.fields)
 RIGID_BODY_KEYS = tuple(RIGID_BODY.fields)
 SENSOR_KEYS = tuple(SENSOR.fields)
-
-
-def inertia_tensor(Ixx, Iyy, Izz, Ixy=0.0, Ixz=0.0, Iyz=0.0) -> np.ndarray:
-    """Inertia tensor about the body origin with Fossen's product-of-inertia signs
-    (Fossen 2021 eq. 3.34), broadcasting over array arguments -> (..., 3, 3)."""
-    arrs = np.broadcast_arrays(*[np.asarray(a, float) for a in (Ixx, Iyy, Izz, Ixy, Ixz, Iyz)])
-    Ixx, Iyy, Izz, Ixy, Ixz, Iyz = arrs
-    Ixy, Ixz, Iyz = Ixy + 0.0, Ixz + 0.0, Iyz + 0.0
-    row0 = np.stack([Ixx, 0.0 - Ixy, 0.0 - Ixz], -1)
-    row1 = np.stack([0.0 - Ixy, Iyy, 0.0 - Iyz], -1)
-    row2 = np.stack([0.0 - Ixz, 0.0 - Iyz, Izz], -1)
-    return np.stack([row0, row1, row2], -2)
 
 
 @dataclass

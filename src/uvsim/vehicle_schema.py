@@ -17,7 +17,8 @@ import numpy as np
 
 from uvsim.constants import G
 from uvsim.errors import VehicleError
-from uvsim.schema import require_mapping, unknown_key_message
+from uvsim.rigid_body import inertia_tensor
+from uvsim.schema import finite_number, require_mapping, unknown_key_message
 
 ADDED_MASS_NAMES = ("X_udot", "Y_vdot", "Z_wdot", "K_pdot", "M_qdot", "N_rdot")
 INERTIA_NAMES = ("I_xx", "I_yy", "I_zz", "I_xy", "I_xz", "I_yz")
@@ -124,14 +125,7 @@ def _number(fld: Field, raw: Mapping, key: str, ctx: Context):
         if fld.required or (key in raw and not fld.nullable):
             raise VehicleError(f"{where}: missing (expected a number)")
         return _ABSENT
-    if isinstance(value, bool):
-        raise VehicleError(f"{where}: expected a number, got {value!r}")
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise VehicleError(f"{where}: expected a number, got {value!r}") from None
-    if not np.isfinite(v):
-        raise VehicleError(f"{where}: expected a finite number, got {v}")
+    v = finite_number(value, where, error=VehicleError, bool_ok=False)
     if (fld.positive and v <= 0) or (fld.nonneg and v < 0):
         raise VehicleError(f"{where}: expected a {'positive' if fld.positive else 'non-negative'} number, got {v}")
     if fld.upper is not None and v >= fld.upper:
@@ -284,9 +278,8 @@ def buoyancy_near_weight(v: dict, ctx: Context) -> None:
 
 
 def _principal_moments(v: Mapping) -> np.ndarray:
-    """Eigenvalues of I_b, Fossen's product signs (as :func:`uvsim.vehicle.inertia_tensor`; tested)."""
-    xx, yy, zz, xy, xz, yz = (v[k] for k in INERTIA_NAMES)
-    return np.linalg.eigvalsh(np.array([[xx, -xy, -xz], [-xy, yy, -yz], [-xz, -yz, zz]], float))
+    """Eigenvalues of the inertia tensor I_b (:func:`uvsim.rigid_body.inertia_tensor`)."""
+    return np.linalg.eigvalsh(inertia_tensor(*(v[k] for k in INERTIA_NAMES)))
 
 
 def inertia_positive_definite(v: dict, ctx: Context) -> None:

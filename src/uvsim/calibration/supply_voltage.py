@@ -120,5 +120,5 @@ def refit(joint, veh, start: dict, start_veh, fit_res, runs, meas, bounds_of, *,
                   refit={"cost": float(res.cost), "stages": res.stages})
     if not record["used"]:
         return record, None
-    return record, (res, fam_start, family.with_latency(veh.sensor_latency), family_bounds)
+    return record, (res, fam_start, family, family_bounds)  # (family keeps veh's latency: on_voltage_family)
 

@@ -17,7 +17,7 @@ import numpy as np
 from uvsim.errors import VehicleError
 from uvsim.forces import register
 from uvsim.forces.base import ForceTerm, first_violation
-from uvsim.schema import check_keys
+from uvsim.schema import check_keys, finite_number
 
 LINEAR_NAMES = ("X_u", "Y_v", "Z_w", "K_p", "M_q", "N_r")
 QUADRATIC_NAMES = ("X_uu", "Y_vv", "Z_ww", "K_pp", "M_qq", "N_rr")
@@ -33,15 +33,7 @@ def _coeffs(values, names, field):
     check_keys(values, names, f"damping.{field}", error=VehicleError)
     out = {}
     for name in names:
-        v = values.get(name, 0.0)
-        if isinstance(v, bool):
-            raise VehicleError(f"damping.{field}.{name}: expected a number, got {v!r}")
-        try:
-            v = float(v)
-        except (TypeError, ValueError):
-            raise VehicleError(f"damping.{field}.{name}: expected a number, got {v!r}") from None
-        if not np.isfinite(v):
-            raise VehicleError(f"damping.{field}.{name}: expected a finite number, got {v}")
+        v = finite_number(values.get(name, 0.0), f"damping.{field}.{name}", error=VehicleError, bool_ok=False)
         if v > 0:
             raise VehicleError(
                 f"damping.{field}.{name} = {v}: damping coefficients are given in the paper sign "
