@@ -36,7 +36,7 @@ from uvsim.calibration.fitness import used_channels
 from uvsim.calibration.ga import GASettings, fingerprint, run_ga
 from uvsim.calibration.inputs import as_dataset, combine_weights, latency_setting, resolve_vehicle, run_amplitude
 from uvsim.calibration.joint import JointCheckpoint, joint_checkpoint_path, run_joint
-from uvsim.calibration.latency_estimate import scan_latency
+from uvsim.calibration.latency_estimate import refit_with_latency
 from uvsim.calibration.params import DOF_PARAMETERS, default_channel_weights, parse_dofs
 from uvsim.calibration.report import build_report, evaluate_runs, identifiability_report
 from uvsim.calibration.selection import check_bounds, effective_inertia_start, expand_names, joint_candidates
@@ -349,15 +349,32 @@ class Calibrator:
             start, joint_bounds = effective_inertia_start(params, base, extra, fixed, joint_bounds_of, bounds)
             params.update(start)
             start_veh = veh.with_parameters(params) if params else veh
-            fit_res, screen = self._run_joint(ds, start_veh, runs, meas, dofs, ga_dofs, fixed, extra, joint_bounds,
-                                              horizons)
+            def joint(start_vehicle, bounds, names=None, tag="", prior_mean=None):  # this fit's joint stage
+                return self._run_joint(ds, start_vehicle, runs, meas, dofs, ga_dofs, fixed, extra, bounds, horizons,
+                                       tag=tag, names=names, prior_mean=prior_mean)
+
+            fit_res, screen = joint(start_veh, joint_bounds)
             if self.latency == "auto" and fit_res is not None:
-                fit_res, start_veh = self._auto_latency(ds, start_veh, fit_res, runs, meas, dofs, ga_dofs, fixed,
-                                                        extra, joint_bounds, horizons)
+                first = fit_res
+                fit_res, start_veh, scan = refit_with_latency(
+                    lambda v, names, tag: joint(v, joint_bounds, names, tag)[0], start_veh, fit_res, runs, meas,
+                    attitude_bias=bool(self.attitude_bias))
+                self.latency_ = self._latency_record(start_veh, scan)
+                if scan["use"]:
+                    log.info("sensor latency %.1f ms lowered the windowed cost by %.1f %%: fitted again with it",
+                             scan["best"] * 1000, 100 * scan["gain"])
+                    self.latency_["first_fit"] = {"cost": float(first.cost), "stages": first.stages,
+                                                  "free_parameters": list(first.names)}
             if self.supply_voltage == "auto" and fit_res is not None:
-                fit_res, start_veh, veh, joint_bounds = self._auto_supply(
-                    ds, veh, dict(params), start_veh, fit_res, runs, meas, dofs, ga_dofs, fixed, extra, joint_bounds,
-                    horizons)
+                self.supply_voltage_, kept = supply.refit(
+                    lambda v, bounds, names, mean: joint(v, bounds, names, ".supply",
+                                                         mean if self.prior else None)[0],
+                    veh, dict(params), start_veh, fit_res, runs, meas, joint_bounds, margin=float(self.margin),
+                    prior_mean=self.initial_vehicle_.parameters(), initial_velocity=self.initial_velocity)
+                if kept is not None:
+                    log.info("supply voltage %.2f V: higher training Fit %% in every channel; keeping that fit",
+                             self.supply_voltage_["value"])
+                    fit_res, start_veh, veh, joint_bounds = kept
         t_ref = time.perf_counter()
         unc: dict = {k: None for k in params}
         if fit_res is not None:
@@ -434,44 +451,6 @@ class Calibrator:
     def _latency_record(self, veh, scan) -> dict:
         how = "auto" if self.latency == "auto" else ("file" if self.latency is None else "given")
         return {"value": float(veh.sensor_latency), "how": how, "scan": scan}
-
-    def _auto_latency(self, ds, start_veh, fit_res, runs, meas, dofs, ga_dofs, fixed, extra, bounds_of, horizons):
-        """``latency="auto"``: the scan with the fitted model, and the joint fit again from its
-        result with the latency found when it is worth it (class docstring).  Returns the fit
-        to keep and its start vehicle."""
-        fitted = start_veh.with_parameters(fit_res.values)
-        scan = scan_latency(fitted, runs, meas, attitude_bias=bool(self.attitude_bias))
-        if not scan["use"]:
-            self.latency_ = self._latency_record(start_veh, scan)
-            return fit_res, start_veh
-        log.info("sensor latency %.1f ms lowers the windowed cost by %.1f %%: fitting again with it",
-                 scan["best"] * 1000, 100 * scan["gain"])
-        again = fitted.with_latency(scan["best"])
-        # the same free parameters as the first fit (no second screen), from its values
-        res, _ = self._run_joint(ds, again, runs, meas, dofs, ga_dofs, fixed, extra, bounds_of, horizons,
-                                 tag=".latency", names=list(fit_res.names))
-        self.latency_ = self._latency_record(again, scan)
-        self.latency_["first_fit"] = {"cost": float(fit_res.cost), "stages": fit_res.stages,
-                                      "free_parameters": list(fit_res.names)}
-        return (res if res is not None else fit_res), again
-
-    def _auto_supply(self, ds, veh, start, start_veh, fit_res, runs, meas, dofs, ga_dofs, fixed, extra, bounds_of,
-                     horizons):
-        """``supply_voltage="auto"`` (:func:`uvsim.calibration.supply_voltage.refit`) with this
-        calibrator's joint stage.  Returns the fit to keep, its start vehicle, the vehicle the
-        fitted one is built on and the bounds of its parameters."""
-        def joint(start_family, bounds, names, prior_mean):
-            return self._run_joint(ds, start_family, runs, meas, dofs, ga_dofs, fixed, extra, bounds, horizons,
-                                   tag=".supply", names=names, prior_mean=prior_mean if self.prior else None)[0]
-
-        self.supply_voltage_, kept = supply.refit(joint, veh, start, start_veh, fit_res, runs, meas, bounds_of,
-                                                  margin=float(self.margin), prior_mean=self.initial_vehicle_.parameters(),
-                                                  initial_velocity=self.initial_velocity)
-        if kept is None:
-            return fit_res, start_veh, veh, bounds_of
-        log.info("supply voltage %.2f V: higher training Fit %% in every channel; keeping that fit",
-                 self.supply_voltage_["value"])
-        return kept
 
     def _run_joint(self, ds, start_veh, runs, meas, dofs, ga_dofs, fixed, extra, bounds_of, horizons, tag="",
                    names=None, prior_mean=None):

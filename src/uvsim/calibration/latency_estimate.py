@@ -89,3 +89,29 @@ def scan_latency(vehicle, runs, meas, *, attitude_bias: bool = False, grid=SCAN_
     gain = 1.0 - c_best / c_now if c_now > 0 else 0.0
     return {"grid": grid, "cost": cost, "best": best, "current": current, "gain": gain,
             "use": bool(best != current and gain >= MIN_GAIN), "min_gain": MIN_GAIN, "horizon_s": SCAN_HORIZON}
+
+
+def refit_with_latency(joint, start_veh, fit_res, runs, meas, *, attitude_bias: bool = False):
+    """The scan with the fitted model, then the joint fit again from its result with the latency
+    found when it is worth it (module docstring).
+
+    Parameters
+    ----------
+    joint : ``joint(start_vehicle, names, tag) -> FitResult or None``, the calibration's joint stage
+        freeing exactly ``names`` (the first fit's: no second screen), checkpointed under ``tag``.
+    start_veh, fit_res : the first fit's start vehicle and result.
+    runs, meas : the training runs and their measurement models.
+
+    Returns
+    -------
+    (fit, start_vehicle, scan)
+        The fit to keep, its start vehicle (with the latency it was fitted at) and the scan
+        (:func:`scan_latency`).
+    """
+    fitted = start_veh.with_parameters(fit_res.values)
+    scan = scan_latency(fitted, runs, meas, attitude_bias=attitude_bias)
+    if not scan["use"]:
+        return fit_res, start_veh, scan
+    again = fitted.with_latency(scan["best"])
+    res = joint(again, list(fit_res.names), ".latency")
+    return (res if res is not None else fit_res), again, scan

@@ -10,8 +10,9 @@ fixes those and costs others: on two 16 V seeds the extra freedom moved the fit 
 validation although the voltage stayed at 16.0 V (docs/calibration.md).
 
 So "auto" fits twice and lets the *training* runs choose: after the joint fit (and the latency
-scan) the joint fit runs again from its result with the start vehicle's thrusters on the voltage
-family at their file's 16 V and ``supply_voltage`` freed; the refit is kept when its open-loop
+scan) the joint fit runs again from the same start values, at the latency the first fit ended
+with, with the start vehicle's thrusters on the voltage family at their file's 16 V and
+``supply_voltage`` freed beside the first fit's free parameters; the refit is kept when its open-loop
 Fit % on the training runs (pooled as the result check pools, :func:`uvsim.calibration.report.pooled_fit_percent`)
 is higher in every channel than the first fit's (:func:`choose`).  The validation runs are not
 looked at: the result check judges the chosen model on them as it judges any fit.
@@ -89,7 +90,8 @@ def refit(joint, veh, start: dict, start_veh, fit_res, runs, meas, bounds_of, *,
     Parameters
     ----------
     joint : ``joint(start_vehicle, bounds_of, names, prior_mean) -> FitResult or None``, the
-        calibration's joint stage freeing exactly ``names``.
+        calibration's joint stage freeing exactly ``names`` (``prior_mean`` None: the start
+        vehicle's values).
     veh : the calibration's start vehicle (effects added); ``start``: the joint stage's start values.
     start_veh, fit_res : the first fit's start vehicle (its latency) and result.
     runs, meas : the training runs and their measurement models.

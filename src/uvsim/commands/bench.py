@@ -38,12 +38,15 @@ def register(sub) -> None:
                         "real-log command; 'none': no --latency, the releases before)")
     p.add_argument("--compare-no-prior", action="store_true",
                    help="(calibrate-structural) calibrate each dataset also without the priors (--no-prior)")
-    p.add_argument("--scenarios", type=int, default=20, help="(diagnose) single-effect or clean scenarios")
+    p.add_argument("--scenarios", type=int, default=20,
+                   help="(scenario suites) scenarios: single-effect or clean ones (diagnose), per class "
+                        "(diagnose-structural), datasets (calibrate-structural)")
     p.add_argument("--two-effects", type=int, default=0, help="(diagnose) two-effect scenarios")
-    p.add_argument("--seed", type=int, default=0, help="(diagnose) first scenario seed")
-    p.add_argument("--workers", type=int, default=1, help="(diagnose) processes per diagnosis")
+    p.add_argument("--seed", type=int, default=0, help="(scenario suites) first scenario seed")
+    p.add_argument("--workers", type=int, default=1, help="(scenario suites) processes per diagnosis or calibration")
     p.add_argument("--results", default=None,
-                   help="(diagnose) JSON-lines file of finished scenarios; an interrupted benchmark resumes from it")
+                   help="(scenario suites) JSON-lines file of finished scenarios; an interrupted "
+                        "benchmark resumes from it")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--quick", action="store_true", help="smaller problems (a smoke test, not the recorded figures)")
     p.add_argument("--only", default=None, help="comma-separated areas (core, hydro, sam, calibration, diagnosis; "
