@@ -102,7 +102,7 @@ def test_records_of_another_free_set_are_not_resumed_as_this_one(tmp_path, monke
     from uvsim.benchmarks.records import append_record
 
     def fake(seed, *, prior, loss, supply, free, latency, workers):
-        calls.append((seed, free, latency))
+        calls.append((seed, free, latency, supply))
         return {"seed": seed, "prior": prior, "loss": loss, "supply": supply, "free": free, "latency": latency,
                 "worse": [],
                 "gain": {"depth": 1.0}, "check_ok": True, "farther_from_truth": [], "at_bounds": [],
@@ -117,23 +117,37 @@ def test_records_of_another_free_set_are_not_resumed_as_this_one(tmp_path, monke
     append_record(p, old)
     calls.clear()
     out = cs.run_benchmark(1, 0, results=p)
-    assert calls == [(0, cs.REAL_LOG_FREE, cs.REAL_LOG_LATENCY)]
-    assert list(out["summary"]) == [f"prior (--free {cs.REAL_LOG_FREE} --latency {cs.REAL_LOG_LATENCY})"]
+    assert calls == [(0, cs.REAL_LOG_FREE, cs.REAL_LOG_LATENCY, cs.REAL_LOG_SUPPLY)]
+    assert list(out["summary"]) == [f"prior+supply_voltage_auto (--free {cs.REAL_LOG_FREE} --latency "
+                                    f"{cs.REAL_LOG_LATENCY})"]
     calls.clear()
-    out = cs.run_benchmark(1, 0, results=p, free="z_b", latency=None)   # the old record resumes as z_b
+    out = cs.run_benchmark(1, 0, results=p, free="z_b", latency=None, supply=False)  # the old record resumes
     assert calls == [] and list(out["summary"]) == ["prior (--free z_b)"]
-    out = cs.run_benchmark(1, 0, results=p, free=cs.REAL_LOG_FREE, latency=None)  # no --latency: another mode
-    assert calls == [(0, cs.REAL_LOG_FREE, None)] and list(out["summary"]) == [f"prior (--free {cs.REAL_LOG_FREE})"]
+    out = cs.run_benchmark(1, 0, results=p, free=cs.REAL_LOG_FREE, latency=None, supply=False)  # another mode
+    assert calls == [(0, cs.REAL_LOG_FREE, None, False)]
+    assert list(out["summary"]) == [f"prior (--free {cs.REAL_LOG_FREE})"]
     # the benchmark calibrates with the command docs/calibration.md gives for real logs
     docs = (Path(__file__).resolve().parents[1] / "docs" / "calibration.md").read_text()
-    assert (f'uvsim calibrate --data mylogs/ --free "{cs.REAL_LOG_FREE}" --latency {cs.REAL_LOG_LATENCY}'
-            in docs)
+    assert (f'uvsim calibrate --data mylogs/ --free "{cs.REAL_LOG_FREE}" --latency {cs.REAL_LOG_LATENCY} '
+            f'--supply-voltage {cs.REAL_LOG_SUPPLY}' in docs)
     calls.clear()
     with pytest.raises(Exception, match="--free: unknown parameter 'thruster_gian_1'"):
         cs.run_benchmark(1, 0, results=p, free="z_b,thruster_gian_1")
     with pytest.raises(Exception, match="latency 'soon'"):
         cs.run_benchmark(1, 0, results=p, latency="soon")
     assert calls == []                                                  # before any dataset is made
+
+
+def test_summary_keeps_every_supply_setting_apart():
+    # a results file may hold fits without the voltage, with it freed and with "auto" (a bool
+    # and a string in one sort key raised TypeError before)
+    import uvsim.benchmarks.calibration_structural as cs
+
+    rec = {"seed": 0, "prior": True, "free": cs.REAL_LOG_FREE, "latency": "auto", "worse": [], "error": None,
+           "gain": {"depth": 1.0}, "check_ok": True, "farther_from_truth": [], "at_bounds": [], "seconds": 1.0}
+    out = cs.summarize([{**rec, "supply": s} for s in ("auto", False, True)])
+    assert [k.split(" ")[0] for k in out] == ["prior", "prior+supply_voltage", "prior+supply_voltage_auto"]
+    assert all(d["n"] == 1 and d["no_worse"] == 1 for d in out.values())
 
 
 @pytest.mark.slow

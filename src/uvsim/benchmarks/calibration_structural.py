@@ -25,9 +25,10 @@ calibration starts from in structure, not only in values:
   perturbation, effects and curve are what they were before they were added.
 
 Each dataset is calibrated with the command docs/calibration.md gives for real logs
-(``uvsim calibrate --data DIR --free "z_b,thruster_gain_*,thruster_reverse_*"``: :class:`uvsim.calibration.Calibrator`
-with ``free=`` :data:`REAL_LOG_FREE`; ``--free z_b`` gives the command of the releases before,
-which fitted no actuator parameter), once with the priors (default) and, with ``--compare-no-prior``, once
+(``uvsim calibrate --data DIR --free "z_b,thruster_gain_*,thruster_reverse_*" --latency auto
+--supply-voltage auto``: :class:`uvsim.calibration.Calibrator` with ``free=`` :data:`REAL_LOG_FREE`,
+``latency=`` :data:`REAL_LOG_LATENCY`, ``supply_voltage=`` :data:`REAL_LOG_SUPPLY`; ``--free z_b``
+gives the command of the releases before, which fitted no actuator parameter), once with the priors (default) and, with ``--compare-no-prior``, once
 without; ``--loss huber`` calibrates with the Huber loss instead of least squares.  Judged on
 the dataset's validation runs, per logged channel, by the open-loop Fit % of the fitted
 model against the start model's, pooled over the validation runs as the
@@ -87,6 +88,10 @@ REAL_LOG_FREE = "z_b,thruster_gain_*,thruster_reverse_*"
 #: The real-log command's ``--latency`` (docs/calibration.md, "Sensor latency"): estimated after the
 #: joint fit, fitted again with it when it lowers the windowed cost by 2 % or more.
 REAL_LOG_LATENCY = "auto"
+#: The real-log command's ``--supply-voltage`` (docs/calibration.md, "Supply voltage"): a second
+#: joint fit with the thrusters on the T200 voltage family, kept when its training Fit % is higher
+#: in every channel.  ``supply`` of :func:`run_one`: False none, True freed from the start, "auto".
+REAL_LOG_SUPPLY = "auto"
 #: Scenario size: a few runs of 15-25 s at 100 Hz (a real session's order) and two validation runs.
 SIZE = dict(n_runs=3, n_validation=2, duration=[15, 25], rate_hz=100.0)
 
@@ -263,12 +268,13 @@ def dataset_vehicle_on_family(dataset_dir):
     return on_voltage_family(resolve_vehicle(None, read_dataset(dataset_dir)))
 
 
-def run_one(seed: int, *, prior: bool = True, loss: str = "linear", supply: bool = False, workers: int = 1,
+def run_one(seed: int, *, prior: bool = True, loss: str = "linear", supply=REAL_LOG_SUPPLY, workers: int = 1,
             free: str = REAL_LOG_FREE, latency=REAL_LOG_LATENCY, tmp: Path | None = None) -> dict:
     """Generate and calibrate one scenario; returns its record.  ``free``: the calibration's
     ``--free``; ``latency``: its ``--latency`` (None: the vehicle file's, i.e. none);
-    ``supply``: the start model's thrusters on the T200 voltage family and
-    ``supply_voltage`` freed beside ``free`` (:func:`on_voltage_family`)."""
+    ``supply``: "auto" the calibration's ``supply_voltage="auto"``; True the start model's
+    thrusters on the T200 voltage family and ``supply_voltage`` freed beside ``free``
+    (:func:`on_voltage_family`); False neither."""
     from uvsim.calibration import Calibrator
     from uvsim.errors import CalibrationError
     from uvsim.scenarios import generate, load_truth, sample_scenario
@@ -314,7 +320,7 @@ def run_one(seed: int, *, prior: bool = True, loss: str = "linear", supply: bool
 
 def summarize(records: list[dict]) -> dict:
     out = {}
-    modes = sorted({_mode(r) for r in records}, key=lambda m: (not m[0], m[1], m[2], m[3], str(m[4])))
+    modes = sorted({_mode(r) for r in records}, key=lambda m: (not m[0], m[1], str(m[2]), m[3], str(m[4])))
     for mode in modes:
         mine = [r for r in records if _mode(r) == mode]
         rs = [r for r in mine if r["error"] is None]
@@ -372,11 +378,11 @@ def _label(mode: tuple) -> str:
             + ("" if latency is None else f" --latency {latency}") + ")")
 
 
-def run_benchmark(n: int, seed: int, *, compare_no_prior: bool = False, loss: str = "linear", supply: bool = False,
+def run_benchmark(n: int, seed: int, *, compare_no_prior: bool = False, loss: str = "linear", supply=REAL_LOG_SUPPLY,
                   free: str = REAL_LOG_FREE, latency=REAL_LOG_LATENCY, workers: int = 1,
                   results: str | Path | None = None, progress=None) -> dict:
     """``n`` seeds from ``seed`` (resumed from ``results``, JSON lines), calibrated with
-    ``--free free --latency latency`` (:func:`run_one`; latency None: no ``--latency``)."""
+    ``--free free --latency latency`` and ``supply`` (:func:`run_one`; latency None: no ``--latency``)."""
     if n < 1:
         raise UvsimError(f"--scenarios {n}: need at least one scenario")
     from uvsim.calibration.inputs import latency_setting

@@ -14,7 +14,7 @@ import platform
 
 
 def register(sub) -> None:
-    from uvsim.benchmarks.calibration_structural import REAL_LOG_FREE, REAL_LOG_LATENCY
+    from uvsim.benchmarks.calibration_structural import REAL_LOG_FREE, REAL_LOG_LATENCY, REAL_LOG_SUPPLY
     from uvsim.fitting.objective import LOSSES
 
     p = sub.add_parser("bench", help="measure simulator / calibration speed; 'bench diagnose': scenario benchmark")
@@ -25,11 +25,12 @@ def register(sub) -> None:
                         "datasets and compare with the start model (default: the speed figures)")
     p.add_argument("--loss", choices=LOSSES, default="linear",
                    help="(calibrate-structural) the calibration's --loss")
-    p.add_argument("--supply-voltage", nargs="?", const="free", default=None, choices=("free", "auto"),
-                   help="(calibrate-structural, diagnose-structural) start model on the T200 voltage family at "
-                        "its file's 16 V: calibration frees supply_voltage beside --free's parameters, "
-                        "diagnosis has it as a base-model candidate; '--supply-voltage auto' (calibrate-structural): "
-                        "the calibration's --supply-voltage auto instead")
+    p.add_argument("--supply-voltage", nargs="?", const="free", default=None, choices=("free", "auto", "none"),
+                   help="(calibrate-structural, diagnose-structural) '--supply-voltage' alone: start model on the "
+                        "T200 voltage family at its file's 16 V, calibration frees supply_voltage beside --free's "
+                        "parameters, diagnosis has it as a base-model candidate; 'auto' (calibrate-structural's "
+                        f"default {REAL_LOG_SUPPLY!r}, the real-log command): the calibration's --supply-voltage auto; "
+                        "'none': neither (calibrate-structural: the releases before; diagnose-structural's default)")
     p.add_argument("--free", default=REAL_LOG_FREE,
                    help=f"(calibrate-structural) the calibration's --free (default {REAL_LOG_FREE!r}, the real-log "
                         "command of docs/calibration.md; 'z_b': the releases before, no actuator parameter)")
@@ -169,10 +170,12 @@ def _structural(args) -> int:
 
 
 def _calibrate_structural(args) -> int:
-    from uvsim.benchmarks.calibration_structural import WORSE_POINTS, run_benchmark
+    from uvsim.benchmarks.calibration_structural import REAL_LOG_SUPPLY, WORSE_POINTS, run_benchmark
+
+    supply = {None: REAL_LOG_SUPPLY, "free": True, "auto": "auto", "none": False}[args.supply_voltage]
 
     out = _suite(args, lambda say: run_benchmark(args.scenarios, args.seed, compare_no_prior=args.compare_no_prior,
-                                                 loss=args.loss, supply={"free": True, "auto": "auto"}.get(args.supply_voltage, False),
+                                                 loss=args.loss, supply=supply,
                                                  free=args.free,
                                                  latency=None if args.latency == "none" else args.latency,
                                                  workers=args.workers, results=args.results,

@@ -85,7 +85,7 @@ def register(sub) -> None:
     p.add_argument("--supply-voltage", choices=("auto",), default=None,
                    help="'auto': fit again with the thrusters on the T200 voltage family (supply_voltage freed) and "
                         "keep that fit when it fits the training runs better in every channel (vehicle on the "
-                        "t200_16v curve; docs/calibration.md 'Supply voltage')")
+                        "t200_16v curve; part of the real-log command; docs/calibration.md 'Supply voltage')")
     p.add_argument("--no-screen", action="store_true",
                    help="free every DOF's parameters for mixed runs, also those the data do not excite")
     p.add_argument("--ga-channels", choices=("own", "all"), default="own",
