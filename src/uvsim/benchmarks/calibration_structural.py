@@ -28,8 +28,8 @@ Each dataset is calibrated with the command docs/calibration.md gives for real l
 (``uvsim calibrate --data DIR --free "z_b,thruster_gain_*,thruster_reverse_*" --latency auto
 --supply-voltage auto``: :class:`uvsim.calibration.Calibrator` with ``free=`` :data:`REAL_LOG_FREE`,
 ``latency=`` :data:`REAL_LOG_LATENCY`, ``supply_voltage=`` :data:`REAL_LOG_SUPPLY`; ``--free z_b``
-gives the command of the releases before, which fitted no actuator parameter), once with the priors (default) and, with ``--compare-no-prior``, once
-without; ``--loss huber`` calibrates with the Huber loss instead of least squares.  Judged on
+gives the command of the releases before, which fitted no actuator parameter), once with the
+priors (default) and, with ``--compare-no-prior``, once without; ``--loss huber`` calibrates with the Huber loss instead of least squares.  Judged on
 the dataset's validation runs, per logged channel, by the open-loop Fit % of the fitted
 model against the start model's, pooled over the validation runs as the
 result check compares them (``never_worse`` ``fit_percent`` / ``initial_fit_percent``:

@@ -361,8 +361,6 @@ class Calibrator:
                     attitude_bias=bool(self.attitude_bias))
                 self.latency_ = self._latency_record(start_veh, scan)
                 if scan["use"]:
-                    log.info("sensor latency %.1f ms lowered the windowed cost by %.1f %%: fitted again with it",
-                             scan["best"] * 1000, 100 * scan["gain"])
                     self.latency_["first_fit"] = {"cost": float(first.cost), "stages": first.stages,
                                                   "free_parameters": list(first.names)}
             if self.supply_voltage == "auto" and fit_res is not None:
