@@ -75,16 +75,18 @@ def require_mapping(value: Any, where: str, *, error: type = UvsimError, example
     return dict(value)
 
 
-def finite_number(value: Any, where: str, *, error: type = UvsimError, bool_ok: bool = True) -> float:
+def finite_number(value: Any, where: str, *, error: type = UvsimError, bool_ok: bool = True,
+                  unit: str | None = None) -> float:
     """``value`` as a finite float; else ``error`` naming ``where``: "expected a number, got ..."
-    (also for ``true`` / ``false`` unless ``bool_ok``) or "expected a finite number, got ..."."""
+    (also for ``true`` / ``false`` unless ``bool_ok``) or "expected a finite number, got ...",
+    with `` (unit)`` after "number" when ``unit`` is given."""
+    u = f" ({unit})" if unit else ""
     if not bool_ok and isinstance(value, bool):
-        raise error(f"{where}: expected a number, got {value!r}")
+        raise error(f"{where}: expected a number{u}, got {value!r}")
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise error(f"{where}: expected a number, got {value!r}") from None
+        raise error(f"{where}: expected a number{u}, got {value!r}") from None
     if not math.isfinite(v):
-        raise error(f"{where}: expected a finite number, got {v}")
+        raise error(f"{where}: expected a finite number{u}, got {v}")
     return v
-

@@ -18,7 +18,7 @@ import numpy as np
 
 from uvsim.errors import VehicleError
 from uvsim.forces.base import ForceTerm, first_violation
-from uvsim.schema import check_keys
+from uvsim.schema import check_keys, finite_number
 
 
 @dataclass(frozen=True)
@@ -123,12 +123,7 @@ class Effect(ForceTerm):
 
 def check_number(raw, f: Field, where: str) -> float:
     """Validate one field value; raise :class:`VehicleError` naming the field."""
-    try:
-        v = float(raw)
-    except (TypeError, ValueError):
-        raise VehicleError(f"{where}.{f.key}: expected a number ({f.unit}), got {raw!r}") from None
-    if not np.isfinite(v):
-        raise VehicleError(f"{where}.{f.key}: expected a finite number ({f.unit}), got {v}")
+    v = finite_number(raw, f"{where}.{f.key}", error=VehicleError, unit=f.unit)
     lo_ok = v > f.lo if f.lo_open else v >= f.lo
     if not lo_ok or v > f.hi:
         lb = "(" if f.lo_open else "["
