@@ -20,12 +20,13 @@ from pathlib import Path
 
 from uvsim.calibration import Calibrator
 from uvsim.calibration.demo import format_table5
-from uvsim.commands.calibrate import jsonable, save_fitted_vehicle
+from uvsim.commands.calibrate import jsonable, print_verdict, record_outcome, save_fitted_vehicle
+from uvsim.fitting.verdict import EXIT_CODES
 from uvsim.commands.demo import shipped_dataset_path
 from uvsim.logs import read_dataset
 
 
-def main() -> None:
+def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--population", type=int, default=60)
@@ -57,18 +58,21 @@ def main() -> None:
           f"1-sigma > 25 % of the value: {a['weakly_determined'] or 'none'}")
     for pair, r in a["correlations"].items():
         print(f"  correlated: {pair} ({r:+.3f})")
-    print(f"\nvalidation RMSE  initial {jsonable(rep['initial_validation_rmse'])}")
-    print(f"                 fitted  {jsonable(rep['validation_rmse'])}")
+    print()
+    status, why, keep = record_outcome(cal, ds)
+    print_verdict(rep, status, why)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    save_fitted_vehicle(cal, out / "fitted.yaml")
+    if keep:
+        save_fitted_vehicle(cal, out / "fitted.yaml")
     (out / "report.json").write_text(json.dumps(jsonable(rep), indent=2))
     if args.plots:
         from uvsim.plotting.calibration import plot_calibration
 
         plot_calibration(cal, ds, out / "plots")
-    print(f"-> {out}/fitted.yaml, {out}/report.json")
+    print(f"-> {out}/" + ("fitted.yaml, " if keep else "") + "report.json")
+    return EXIT_CODES[status]
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

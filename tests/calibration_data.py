@@ -8,8 +8,7 @@ from __future__ import annotations
 
 import functools
 
-from uvsim.calibration.batching import prepare_runs, simulate_dataset
-from uvsim.metrics import pooled_rmse
+from uvsim.fitting.evaluate import open_loop, pooled
 from uvsim.synthetic import generate_runs
 
 SMALL = dict(runs_per_dof=4, validation_per_dof=1, duration=10.0, rate=25.0)
@@ -24,8 +23,6 @@ def tank_runs(dofs=("surge", "sway", "heave", "roll", "pitch", "yaw"), seed=1, s
 
 
 def truth_rmse(runs, split="validation", vehicle="bluerov2_heavy"):
-    """Pooled RMSE the true model reaches on ``runs`` of ``split``: the noise floor."""
-    sel = [r for r in runs if r.split == split]
-    b = prepare_runs(sel)
-    pred = simulate_dataset(vehicle, b)
-    return pooled_rmse(zip(b.measured, pred))
+    """Pooled group RMSEs the true model reaches on ``runs`` of ``split`` (its free simulation as
+    every report sees it, :func:`uvsim.fitting.evaluate.open_loop`): the noise floor."""
+    return pooled(open_loop(vehicle, [r for r in runs if r.split == split]))

@@ -36,25 +36,25 @@ def test_the_iteration_limit_is_not_reported_as_success(heave, tmp_path, capsys)
 
 def test_without_validation_runs_the_check_compares_on_the_training_runs(tmp_path, capsys):
     """No validation run: the fitted model is still compared with its start, on the training
-    runs (report never_worse.split 'train'), never skipped."""
+    runs (report verdict.split 'train', and the message says so), never skipped."""
     d = tmp_path / "d"
     generate_dataset("bluerov2_heavy", d, dofs=["heave"], seed=2, **{**SMALL, "validation_per_dof": 0})
     argv = ["calibrate", "--data", str(d), "--vehicle", "bluerov2_heavy_initial", "--population", "6",
             "--generations", "2", "--seed", "3", "--out", str(tmp_path / "f.yaml"), "--json", str(tmp_path / "r.json"),
             "--keep-worse"]
-    assert main(argv) in (0, 2)
-    nw = json.loads((tmp_path / "r.json").read_text())["never_worse"]
-    assert nw is not None and nw["split"] == "train" and nw["channels"]
-    assert "training runs" in nw["method"] or nw["method"].startswith("open-loop train")
+    assert main(argv) in (0, 2, 3)
+    v = json.loads((tmp_path / "r.json").read_text())["verdict"]
+    assert v is not None and v["split"] == "train" and v["channels"]
+    assert "compared on the training runs" in v["message"]
 
 
 def test_start_alignment_removes_a_start_offset_and_keeps_a_drift():
-    """The never-worse comparison shifts predicted depth by its mean residual over the first
-    3 s (the shared, noisy start), never by anything later: a constant offset disappears, a
-    drift that starts after the window stays."""
+    """Every open-loop prediction (uvsim.fitting.evaluate.open_loop) shifts predicted depth by its
+    mean residual over the first 3 s (the shared, noisy start), never by anything later: a
+    constant offset disappears, a drift that starts after the window stays."""
     import numpy as np
 
-    from uvsim.fitting.guard import start_aligned
+    from uvsim.fitting.evaluate import align_start
     from uvsim.logs import Run
     from uvsim.measurements import measurements_for
     import pandas as pd
@@ -64,9 +64,7 @@ def test_start_alignment_removes_a_start_offset_and_keeps_a_drift():
     run = Run("r", None, pd.DataFrame({"t": t, "X": 0.0, "Y": 0.0, "Z": 0.0, "K": 0.0, "M": 0.0, "N": 0.0,
                                        "depth": depth}))
     m = measurements_for(run, None, noise={"depth": 0.01})
-    offset = {"pred": {"depth": (depth + 0.03)[:, None]}}
-    a = start_aligned(m, offset)["pred"]["depth"][:, 0]
+    a = align_start(m, {"depth": (depth + 0.03)[:, None]})["depth"][:, 0]
     np.testing.assert_allclose(a, depth, atol=1e-12)
-    drift = {"pred": {"depth": (depth + 0.02 * np.clip(t - 5.0, 0.0, None))[:, None]}}
-    b = start_aligned(m, drift)["pred"]["depth"][:, 0]
+    b = align_start(m, {"depth": (depth + 0.02 * np.clip(t - 5.0, 0.0, None))[:, None]})["depth"][:, 0]
     assert np.max(np.abs(b - depth)) == pytest.approx(0.02 * (t[-1] - 5.0), rel=1e-9)

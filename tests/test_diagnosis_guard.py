@@ -9,45 +9,24 @@ import pytest
 from uvsim.diagnosis import diagnose
 from uvsim.diagnosis.candidates import catalogue, observability, search_bound_hits
 from uvsim.diagnosis.decision import judge
-from uvsim.fitting.guard import MAX_WORSE, TOLERANCE, guard
+from uvsim.fitting.verdict import score
+from verdict_data import CHANNELS, errors, logged_run, model, prediction
 from uvsim.diagnosis.residual import UNEXPLAINED, verdict
 from uvsim.scenarios import generate, load_truth, sample_scenario
 
 
-def _blocks(**groups):
-    return {"groups": {g: np.asarray(v, float) for g, v in groups.items()}, "rmse": {}, "total": 0.0}
-
-
-# ----------------------------------------------------------------------------- the guard
-def test_guard_refuses_a_candidate_that_makes_one_group_worse():
-    """A candidate that halves the position error but makes depth 30 % worse in every
-    block is refused, and the reason names the group."""
-    rng = np.random.default_rng(0)
-    pos, dep = rng.uniform(80, 120, 20), rng.uniform(80, 120, 20)
-    g = guard(_blocks(position=pos, depth=dep), _blocks(position=0.5 * pos, depth=1.3 * dep))
-    assert not g["ok"] and g["worse"] == ["depth"]
-    assert "depth +30 %" in g["why"]
-    assert g["groups"]["position"]["relative"] == pytest.approx(-0.5)
-
-
-def test_guard_tolerates_noise_but_never_more_than_max_worse():
-    rng = np.random.default_rng(1)
-    a = rng.uniform(80, 120, 20)
-    # within the tolerance: accepted even if every block is a little worse
-    assert guard(_blocks(depth=a), _blocks(depth=a * (1 + 0.5 * TOLERANCE)))["ok"]
-    # 6 % worse, carried by one block of twenty: not beyond the bootstrap noise
-    b = a.copy()
-    b[3] += 0.06 * a.sum()
-    g = guard(_blocks(depth=a), _blocks(depth=b))
-    assert g["ok"] and g["groups"]["depth"]["p_worse"] < 0.9
-    # beyond MAX_WORSE it is refused whatever the resampling says
-    b[3] += MAX_WORSE * a.sum()
-    assert not guard(_blocks(depth=a), _blocks(depth=b))["ok"]
+def _open_loop(scale: dict, seed: int = 3) -> dict:
+    """What :meth:`Selector.open_loop_blocks` returns for a model whose validation errors are the
+    base errors of tests/verdict_data.py times ``scale`` per channel (two runs)."""
+    runs = [logged_run(seed + i, name=f"val_{i:02d}") for i in range(2)]
+    ms = [model(r) for r in runs]
+    preds = [prediction(m, errors(m, seed + 10 + i), scale) for i, m in enumerate(ms)]
+    return {"meas": ms, "preds": preds, "score": score(ms, preds)}
 
 
 def _row(c, values, at_bounds=(), guard_ok=True):
     cmp = {"wald": {"p": 1e-9}, "relative": 0.3, "p_better": 1.0,
-           "guard": {"ok": guard_ok, "why": "makes the open-loop validation worse: depth +40 %"}}
+           "guard": {"ok": guard_ok, "why": "trade-off: pooled error -20 %, but worse in depth +40 %"}}
     return {"candidate": c, "compare": cmp, "problem": None, "values": values, "at_bounds": list(at_bounds)}
 
 
@@ -58,7 +37,7 @@ def test_judge_needs_the_guard_and_parameters_inside_their_search_range():
     ok_vals = {"ballast_weight": 1.0, "ballast_x": 0.1, "ballast_y": 0.0}
     assert judge(_row(bal, ok_vals), None)[0]
     ok, why = judge(_row(bal, ok_vals, guard_ok=False), None)
-    assert not ok and "open-loop" in why
+    assert not ok and "trade-off" in why and "depth" in why
     # a weight at the edge of the frame's search range is not named
     ok, why = judge(_row(bal, {**ok_vals, "ballast_x": 0.5}, at_bounds=["ballast_x"]), None)
     assert not ok and "ballast_x" in why and "search range" in why
@@ -80,13 +59,12 @@ def test_a_lag_of_half_a_sample_is_the_input_timing_not_an_actuator():
     assert judge(_row(lag, {"thruster_lag_time_constant": 0.2}), None)[0]
 
 
-def _drift_row(c, *, wald_p, windowed, p_better, groups):
-    """A fitted candidate whose windowed validation gain is below MIN_RELATIVE, with the
-    guard's open-loop groups given as (relative change, share of resamples worse)."""
-    g = {k: {"relative": rel, "p_worse": pw, "before": 1.0, "after": 1.0 + rel} for k, (rel, pw) in groups.items()}
-    ok = all(rel <= TOLERANCE for rel, _ in groups.values())
+def _drift_row(c, *, wald_p, windowed, p_better, channels, ok=True):
+    """A fitted candidate whose windowed validation gain is below MIN_RELATIVE, with the open-loop
+    verdict's channels given as (MSE ratio, better beyond the noise) and its status ``ok``."""
+    ch = {k: {"mse_ratio": r, "rmse_change": np.sqrt(r) - 1.0, "better": b} for k, (r, b) in channels.items()}
     cmp = {"wald": {"p": wald_p}, "relative": windowed, "p_better": p_better,
-           "guard": {"ok": ok, "groups": g, "why": "no logged group's open-loop validation error is worse"}}
+           "guard": {"ok": ok, "channels": ch, "why": "better: pooled error -70 %"}}
     return {"candidate": c, "compare": cmp, "problem": None, "values": {"current_n": 0.02, "current_e": 0.0},
             "at_bounds": []}
 
@@ -99,25 +77,23 @@ def test_a_drift_the_windows_hide_is_accepted_on_the_free_simulation():
 
     cur = catalogue(input_kind="pwm", n_thrusters=8, dt=0.1, p_ref=np.zeros(3), has_position=True, z_max=None,
                     only=["current"])[0]
-    seed85 = dict(wald_p=1e-12, windowed=0.034, p_better=1.0, groups={"position": (-0.985, 0.0),
-                                                                       "attitude": (-0.37, 0.0)})
+    seed85 = dict(wald_p=1e-12, windowed=0.034, p_better=1.0, channels={"x": (0.015, True), "yaw": (0.63, True)})
     assert seed85["windowed"] < MIN_RELATIVE
     ok, why = judge(_drift_row(cur, **seed85), None)
-    assert ok and "free simulation" in why and "position -98 %" in why
+    assert ok and "free simulation" in why and "x -88 %" in why
     # the open-loop gain must be large ...
-    small = {**seed85, "groups": {"position": (-0.9 * OPEN_LOOP_GAIN, 0.0), "attitude": (-0.1, 0.0)}}
+    small = {**seed85, "channels": {"x": (1.0 - 0.9 * OPEN_LOOP_GAIN, True), "yaw": (0.9, True)}}
     ok, why = judge(_drift_row(cur, **small), None)
     assert not ok and "does not help the validation runs" in why
-    # ... and confirmed by the resampling ...
-    luck = {**seed85, "groups": {"position": (-0.985, 0.05), "attitude": (0.0, 0.5)}}
+    # ... and beyond the comparison's noise ...
+    luck = {**seed85, "channels": {"x": (0.015, False), "yaw": (1.0, False)}}
     assert not judge(_drift_row(cur, **luck), None)[0]
     # ... the windowed cost must fall too, the training fit must be significant at 1 % ...
     assert not judge(_drift_row(cur, **{**seed85, "windowed": -0.01, "p_better": 0.2}), None)[0]
     ok, why = judge(_drift_row(cur, **{**seed85, "wald_p": 2 * OPEN_LOOP_WALD_P}), None)
     assert not ok and "Wald" in why
-    # ... and no group may get worse
-    worse = {**seed85, "groups": {"position": (-0.985, 0.0), "depth": (0.3, 1.0)}}
-    assert not judge(_drift_row(cur, **worse), None)[0]
+    # ... and the verdict must be better: no channel worse, the pooled error lower
+    assert not judge(_drift_row(cur, **seed85, ok=False), None)[0]
 
 
 def test_a_ballast_seed_from_the_rotations_alone_is_tried_mirrored_too():
@@ -191,7 +167,7 @@ def test_an_effect_chosen_first_is_dropped_when_the_later_one_explains_it():
               "ballast_weight": -0.57, "ballast_x": -0.2, "ballast_y": -0.12}
     rng = np.random.default_rng(3)
     w_joint = rng.uniform(90, 110, 24)
-    blocks = _blocks(position=rng.uniform(80, 120, 20), attitude=rng.uniform(80, 120, 20))
+    blocks = _open_loop({})
     val_joint = {"windows": w_joint, "cost": float(w_joint.sum()), "per_entry": 1.0, "open_loop": blocks}
     # the later ballast explains it: without the tether the validation is the same
     sel = _FakeSelector(w_joint * 1.001, blocks)
@@ -201,15 +177,15 @@ def test_an_effect_chosen_first_is_dropped_when_the_later_one_explains_it():
     assert rows[0]["effect"] == "tether" and not rows[0]["kept"] and "Wald" in rows[0]["why"]
     assert np.allclose(val["windows"], w_joint * 1.001) and vals["ballast_weight"] == -0.57
     # it does not: the tether stays
-    worse = _blocks(position=3 * blocks["groups"]["position"], attitude=blocks["groups"]["attitude"])
+    worse = _open_loop({"x": 3.0, "y": 3.0})
     sel = _FakeSelector(w_joint * 2.0, worse)
     acc, _, val, _, rows = still_needed(sel, [teth, bal], values, val_joint,
                                         _joint([teth, bal], values, {"tether": 1e-12, "ballast": 1e-30}))
     assert [c.label for c in acc] == ["tether:horizontal", "ballast:xy"] and rows[0]["kept"]
     assert val is val_joint
-    # significant beside the later effect, refused by the open-loop guard alone: kept (the guard is
+    # significant beside the later effect, refused by the open-loop verdict alone: kept (the verdict is
     # the entry rule; benchmark seed 118's thruster lag beside a weak thruster)
-    better = _blocks(position=0.5 * blocks["groups"]["position"], attitude=blocks["groups"]["attitude"])
+    better = _open_loop({"x": 0.5, "y": 0.5})
     sel = _FakeSelector(w_joint * 2.0, better)
     acc, _, _, _, rows = still_needed(sel, [teth, bal], values, val_joint,
                                       _joint([teth, bal], values, {"tether": 1e-12, "ballast": 1e-30}))

@@ -2,7 +2,6 @@
 import numpy as np
 import pytest
 
-from uvsim.kinematics import attitude_error_angle, euler_to_quat
 from uvsim import metrics as M
 
 
@@ -33,63 +32,34 @@ def test_group_fit_uses_frobenius_norms():
     assert M.fit_percent(y, yh) == pytest.approx(100 * (1 - num / den))
 
 
-def _depth_only(n=50):
+def _depth_only(n=50, name="r"):
+    import pandas as pd
+
+    from uvsim.logs import Run
+    from uvsim.measurements import measurements_for
+
     t = np.linspace(0, 5, n)
-    z = 0.5 * np.sin(t)
-    pos = np.full((n, 3), np.nan)
-    pos[:, 2] = z
-    return t, {"position": pos}
+    z = 0.5 * np.sin(t) + 0.001 * np.random.default_rng(n).standard_normal(n)  # noise: every sample native
+    run = Run(name, None, pd.DataFrame({"t": t, "X": 0.0, "Y": 0.0, "Z": 0.0, "K": 0.0, "M": 0.0, "N": 0.0,
+                                        "depth": z}))
+    return run, measurements_for(run, None, noise={"depth": 0.01})
 
 
 def test_depth_only_run_metrics():
-    t, meas = _depth_only()
-    pred_pos = np.zeros((len(t), 3))
-    pred_pos[:, 2] = meas["position"][:, 2] + 0.01
-    pred_pos[:, 0] = 5.0  # x is not logged: must not count
-    pred = {"position": pred_pos, "quaternion": np.tile([1.0, 0, 0, 0], (len(t), 1)),
-            "velocity": np.zeros((len(t), 3)), "rates": np.zeros((len(t), 3))}
-    m = M.run_metrics(meas, pred)
-    assert set(m["channels"]) == {"z"}
-    assert m["position_m"] == pytest.approx(0.01)
-    z = meas["position"][:, 2]
-    assert m["channels"]["z"]["fit_percent"] == pytest.approx(
+    run, m = _depth_only()
+    z = run.depth
+    met = M.measurement_metrics(m, {"depth": (z + 0.01)[:, None]})
+    assert set(met["channels"]) == {"depth"}
+    assert met["depth_m"] == pytest.approx(0.01)
+    assert met["channels"]["depth"]["fit_percent"] == pytest.approx(
         100 * (1 - np.linalg.norm(np.full_like(z, 0.01)) / np.linalg.norm(z - z.mean())))
-    assert "attitude_rad" not in m
+    assert "attitude_rad" not in met
 
 
-def test_attitude_metrics_and_wrapping():
-    n = 40
-    yaw = np.linspace(2.9, 3.3, n)  # crosses +-pi
-    e = np.zeros((n, 3))
-    e[:, 2] = (yaw + np.pi) % (2 * np.pi) - np.pi
-    qm = euler_to_quat(e)
-    ep = e.copy()
-    ep[:, 2] = e[:, 2] - 0.05
-    qp = euler_to_quat(ep)
-    meas = {"quaternion": qm}
-    pred = {"quaternion": qp, "position": np.zeros((n, 3))}
-    m = M.run_metrics(meas, pred)
-    assert m["attitude_rad"] == pytest.approx(0.05, rel=1e-6)
-    assert m["channels"]["yaw"]["rmse"] == pytest.approx(0.05, rel=1e-6)  # wrapped, not ~2 pi
-    assert np.allclose(np.linalg.norm(M.rotation_vector_error(qm, qp), axis=-1), attitude_error_angle(qm, qp))
-
-
-def test_pooled_rmse_pools_samples():
-    t, meas = _depth_only(10)
-    p1 = {"position": np.nan_to_num(meas["position"]) + np.array([0, 0, 0.1])}
-    t2, meas2 = _depth_only(30)
-    p2 = {"position": np.nan_to_num(meas2["position"]) + np.array([0, 0, 0.2])}
-    r = M.pooled_rmse([(meas, p1), (meas2, p2)])
-    assert r["position_m"] == pytest.approx(np.sqrt((10 * 0.01 + 30 * 0.04) / 40))
-
-
-def test_weights_and_residual_vector():
-    n = 20
-    pos = np.column_stack([np.linspace(0, 1, n), np.zeros(n), np.zeros(n)])
-    pos[3, 0] = np.nan
-    meas = {"position": pos}
-    pred = {"position": np.nan_to_num(pos) + 0.01}
-    r = M.normalized_residuals(meas, pred, {"position": 0.01})
-    assert r.size == 3 * n - 1 and np.allclose(r, -1.0)
-    r = M.normalized_residuals(meas, pred, {"position": 0.01}, {"y": 0, "z": 0})
-    assert r.size == n - 1
+def test_pooled_metrics_pool_samples():
+    (r1, m1), (r2, m2) = _depth_only(10, "a"), _depth_only(30, "b")
+    met = [M.measurement_metrics(m1, {"depth": (r1.depth + 0.1)[:, None]}),
+           M.measurement_metrics(m2, {"depth": (r2.depth + 0.2)[:, None]})]
+    assert M.pooled_group_rmse(met)["depth_m"] == pytest.approx(np.sqrt((10 * 0.01 + 30 * 0.04) / 40))
+    sst = sum(float(np.sum((r.depth - r.depth.mean()) ** 2)) for r in (r1, r2))
+    assert M.pooled_fit_percent(met)["depth"] == pytest.approx(100 * (1 - np.sqrt((10 * 0.01 + 30 * 0.04) / sst)))

@@ -12,12 +12,12 @@ group          columns             model (predicted measurement)
 =============  ==================  ==================================================
 position       x, y, z             NED position of the body origin (motion capture)
 depth          depth               ``z + (R r_p)_z``: depth of the pressure sensor at r_p
-attitude       qw..qz, or any of   full attitude: compared as the rotation vector of
-               roll, pitch, yaw    ``q_meas^-1 (x) q_pred`` (3 components); partial
-                                   Euler angles (e.g. roll and pitch of a magnetometer-
-                                   free IMU): each logged angle, wrapped difference;
-                                   optionally through an attitude filter's first-order
-                                   lag (``attitude_lag``, below)
+attitude       qw..qz, or any of   ZYX Euler angles, each logged angle compared by its
+               roll, pitch, yaw    wrapped difference (a quaternion log is turned into
+                                   its three angles; e.g. roll and pitch only of a
+                                   magnetometer-free IMU); optionally through an
+                                   attitude filter's first-order lag (``attitude_lag``,
+                                   below)
 velocity       u, v, w             ``v + omega x r_d``: velocity of the DVL at r_d
 rates          p, q, r             ``omega + b``: gyro with a constant bias ``b`` per run
                                    (a nuisance parameter the fits estimate)
@@ -26,6 +26,14 @@ acceleration   acc_x..acc_z        specific force at the IMU r_i:
                                    omega x (omega x r_i) - g k`` (a level vehicle at
                                    rest reads (0, 0, -g))
 =============  ==================  ==================================================
+
+**One error per channel.**  :meth:`RunMeasurements.residuals` is the only definition of a
+channel's error, ``measured - predicted`` in the channel's unit, with angles as the wrapped
+difference of Euler angles in (-pi, pi] whether the log holds a quaternion or angles.  The
+fits, the verdict (:mod:`uvsim.fitting.verdict`), Fit %, the CLI tables, report.json and the
+plots all read it, so "roll got worse" means the same thing everywhere.  (Near pitch +-90 deg
+the split of an attitude into roll and yaw is ill-conditioned; an ROV does not go there, and
+for a hydrobatic vehicle that does, the roll and yaw errors there are large but bounded by pi.)
 
 Every logged channel has a noise level (``sigma``, estimated on its native samples
 by :mod:`uvsim.estimation.noise` or given by the user) and a weight; residuals are
@@ -92,12 +100,14 @@ class Group:
     Attributes
     ----------
     name : group name (key of :data:`GROUPS`).
-    values : (n, k) measured values (attitude in ``quaternion`` mode: (n, 4) quaternions).
+    values : (n, k) measured values (attitude: ZYX Euler angles (n, 3) in either mode, as logged:
+        not unwrapped).
     logged : (k,) bool, which channels of the group the run logged.
     valid : (n, k) bool, rows that carry a measurement of each channel (native samples).
     sigma : (k,) noise level per channel (NaN for channels not logged).
     kinds : per channel, how it was logged (:class:`uvsim.estimation.noise.SampleKind`) or None.
-    mode : attitude only: "quaternion" (full attitude) or "euler" (some angles).
+    mode : attitude only: "quaternion" (logged as a quaternion: all three angles, a sample is all or
+        nothing) or "euler" (logged as angles, any subset).
     """
 
     name: str
@@ -173,6 +183,16 @@ class RunMeasurements:
         grp = self.groups[group]
         return grp.valid & (self.channel_weights(group) > 0)[None, :]
 
+    def with_sigma(self, sigma: Mapping[str, float]) -> "RunMeasurements":
+        """This model with the noise levels of the channels in ``sigma`` (channel -> scale, the
+        channel's unit) replaced, the others as they were: e.g. the judged scales of a fit's
+        whole-run stage (:func:`uvsim.fitting.evaluate.judged_scales`)."""
+        groups = {}
+        for g, grp in self.groups.items():
+            new = np.array([float(sigma.get(c, s)) for c, s in zip(grp.channels, grp.sigma)])
+            groups[g] = replace(grp, sigma=np.where(grp.logged, new, grp.sigma))
+        return replace(self, groups=groups, _restart_cache=None)
+
     def n_used(self) -> int:
         return int(sum(self.used(g).sum() for g in self.groups))
 
@@ -189,8 +209,7 @@ class RunMeasurements:
         """Logged Euler angles (R, 3) at ``rows``, each from a straight-line fit over the
         valid samples within :data:`LAG_RESTART_HALF_S` (NaN where none / not logged)."""
         grp = self.groups["attitude"]
-        e = quat_to_euler(grp.values) if grp.mode == "quaternion" else np.asarray(grp.values, float)
-        e = unwrap_angles(np.where(grp.valid, e, np.nan))
+        e = unwrap_angles(np.where(grp.valid, grp.values, np.nan))
         out = np.full((len(rows), 3), np.nan)
         for j in range(3):
             ok = grp.valid[:, j] & np.isfinite(e[:, j])
@@ -232,8 +251,7 @@ class RunMeasurements:
         (..., 3) rad/s; ``attitude_bias`` (..., 2) rad: the attitude filter's constant roll
         and pitch offset (Euler mode only, :attr:`has_filter_attitude`); ``acc_bias`` (..., 3)
         m/s^2: the accelerometer's constant offset in body axes, added to the specific force.  Returns group ->
-        (..., n, k) (attitude: (..., n, 4) quaternions in quaternion mode, Euler angles
-        otherwise)."""
+        (..., n, k) (attitude: ZYX Euler angles (..., n, 3) in both modes)."""
         y = np.asarray(y, float)
         out: dict[str, np.ndarray] = {}
         q = y[..., 3:7]
@@ -269,11 +287,7 @@ class RunMeasurements:
                 if attitude_bias is not None and grp.mode == "euler":
                     ab = np.asarray(attitude_bias, float)
                     off = np.concatenate([ab, np.zeros(ab.shape[:-1] + (1,))], -1)  # roll, pitch; yaw 0
-                if self.attitude_lag > 0:
-                    e = self._lagged_euler(quat_to_euler(q), off)
-                    out[g] = euler_to_quat(e) if grp.mode == "quaternion" else e
-                else:
-                    out[g] = q if grp.mode == "quaternion" else quat_to_euler(q)
+                out[g] = self._lagged_euler(quat_to_euler(q), off) if self.attitude_lag > 0 else quat_to_euler(q)
                 if off is not None:
                     out[g] = out[g] + off[..., None, :]
             elif g == "velocity":
@@ -299,17 +313,12 @@ class RunMeasurements:
     # ------------------------------------------------------------------ residuals
     def residuals(self, pred: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
         """Measured minus predicted per group, (..., n, k) in the channel unit (attitude:
-        rotation-vector components or wrapped angle differences); NaN where the entry
-        is not a measurement."""
+        wrapped differences of the Euler angles, module docstring); NaN where the entry is
+        not a measurement.  The one definition of a channel's error (module docstring)."""
         out = {}
         for g, grp in self.groups.items():
             p = np.asarray(pred[g])
-            if g == "attitude" and grp.mode == "quaternion":
-                e = rotation_vector_error(grp.values, p)
-            elif g == "attitude":
-                e = wrap(grp.values - p)
-            else:
-                e = grp.values - p
+            e = wrap(grp.values - p) if g == "attitude" else grp.values - p
             out[g] = np.where(grp.valid, e, np.nan)
         return out
 
@@ -449,13 +458,10 @@ def measurements_for(run, vehicle=None, *, noise: Mapping[str, float] | None = N
         valid = np.zeros((n, k), bool)
         sigma = np.full(k, np.nan)
         kinds: list = [None] * k
-        comp = values
-        if name == "attitude" and mode == "quaternion":
-            comp = unwrap_angles(quat_to_euler(values))  # noise per Euler angle, sampling from the quaternion
         for j in range(k):
             if not logged[j]:
                 continue
-            col = comp[:, j]
+            col = values[:, j]
             sk: SampleKind = sample_kind(t, col)
             kinds[j] = sk
             valid[:, j] = sk.native
@@ -479,7 +485,7 @@ def measurements_for(run, vehicle=None, *, noise: Mapping[str, float] | None = N
         build("depth", run.depth[:, None], [True])
     if run.has_attitude:
         if run.has_full_attitude:
-            build("attitude", run.quaternion, [True, True, True], "quaternion")
+            build("attitude", run.euler, [True, True, True], "quaternion")
         else:
             build("attitude", run.euler, list(run.euler_mask), "euler")
     if run.has_velocity:

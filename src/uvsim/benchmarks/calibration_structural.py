@@ -29,17 +29,14 @@ Each dataset is calibrated with the command docs/calibration.md gives for real l
 --supply-voltage auto``: :class:`uvsim.calibration.Calibrator` with ``free=`` :data:`REAL_LOG_FREE`,
 ``latency=`` :data:`REAL_LOG_LATENCY`, ``supply_voltage=`` :data:`REAL_LOG_SUPPLY`; ``--free z_b``
 gives the command of the releases before, which fitted no actuator parameter), once with the
-priors (default) and, with ``--compare-no-prior``, once without; ``--loss huber`` calibrates with the Huber loss instead of least squares.  Judged on
-the dataset's validation runs, per logged channel, by the open-loop Fit % of the fitted
-model against the start model's, pooled over the validation runs as the
-result check compares them (``never_worse`` ``fit_percent`` / ``initial_fit_percent``:
-position and depth aligned over the first 3 s; a run on which either model's free
-simulation amplifies the uncertainty of its start has its attitude, rates and accelerations
-left out, :mod:`uvsim.fitting.sensitivity`).  A fit is *worse* when some channel loses more
-than :data:`WORSE_POINTS` Fit % points: a fixed threshold, not the check's bootstrap, so the
-two can disagree.  The earlier judge (the mean of each validation run's own Fit %, every
-channel of every run) is recorded beside it (``worse_run_mean``): a run whose channel
-hardly moves or whose simulation is unstable swung it by thousands of points.
+priors (default) and, with ``--compare-no-prior``, once without; ``--loss huber`` calibrates with
+the Huber loss instead of least squares.  Judged by the calibration's own verdict
+(:mod:`uvsim.fitting.verdict`: the validation runs' free simulations, every logged channel, the
+pooled error and each channel against the start model, by a block bootstrap): *better*,
+*trade-off* or *worse*, with the verdict's per-channel figures.  Beside it, a fixed threshold the
+verdict does not use: a channel whose pooled validation Fit % drops by more than
+:data:`WORSE_POINTS` points (``worse_points``), so that a *better* verdict on a fit that loses a
+point somewhere within the comparison's noise is counted, not hidden.
 
 A second verdict needs no data at all: the generator's noise-free truth of each validation
 run (:func:`uvsim.scenarios.generate.simulate_spec`), against which the start and the fitted
@@ -49,8 +46,8 @@ the start's by more than :data:`TRUTH_TOLERANCE`. (uvsim with the generator's tr
 coefficients follows its truth to 0.1 mm on a 16 V scenario without effects, so what remains is
 the structural mismatch and the fit.)
 
-Two references are judged exactly as a fit is, against the same start model on the same
-validation runs (:func:`reference_checks`): the truth itself as a uvsim vehicle file states it
+Two references are judged exactly as a fit is (the verdict), against the same start model on the
+same validation runs (:func:`reference_checks`): the truth itself as a uvsim vehicle file states it
 (coefficients, centre of buoyancy, thrust curve, thruster positions, a weak thruster, latency;
 seeds with another effect have no such reference; never the time-stamp jitter), counted only where
 it follows the generator's noise-free truth to :data:`REFERENCE_TOLERANCE`, and the start model
@@ -59,10 +56,10 @@ with the truth's coefficients (what a fit of the coefficients alone could at bes
 model whose errors happen to cancel, or compares a free simulation the vehicle's own instability
 makes diverge.
 
-Metrics: share of seeds whose fit is no worse in every channel (goal >= 95 %), share of the
-worse fits that the result check reports as not ok (goal 100 %), the same two against the
-truth, median Fit % gain per channel. Records go to a JSON-lines file as they finish, so an
-interrupted run resumes.
+Metrics: share of seeds whose verdict is *better* (goal >= 95 %), *better* verdicts on fits that
+lose more than WORSE_POINTS in some channel, the median pooled error change and the median Fit %
+gain per channel, and the fits farther from the noise-free truth. Records go to a JSON-lines
+file as they finish, so an interrupted run resumes.
 """
 from __future__ import annotations
 
@@ -89,8 +86,8 @@ REAL_LOG_FREE = "z_b,thruster_gain_*,thruster_reverse_*"
 #: joint fit, fitted again with it when it lowers the windowed cost by 2 % or more.
 REAL_LOG_LATENCY = "auto"
 #: The real-log command's ``--supply-voltage`` (docs/calibration.md, "Supply voltage"): a second
-#: joint fit with the thrusters on the T200 voltage family, kept when its training Fit % is higher
-#: in every channel.  ``supply`` of :func:`run_one`: False none, True freed from the start, "auto".
+#: joint fit with the thrusters on the T200 voltage family, kept when the verdict on the training
+#: runs calls it better than the first fit.  ``supply`` of :func:`run_one`: False none, True freed from the start, "auto".
 REAL_LOG_SUPPLY = "auto"
 #: Scenario size: a few runs of 15-25 s at 100 Hz (a real session's order) and two validation runs.
 SIZE = dict(n_runs=3, n_validation=2, duration=[15, 25], rate_hz=100.0)
@@ -121,35 +118,20 @@ def scenario(seed: int, *, structure: bool = True) -> dict:
     return over
 
 
-def _pooled_validation(rep: dict, key: str) -> dict:
-    """Per channel, the mean Fit % over the validation runs."""
-    vals: dict = {}
-    for r in rep["per_run"].values():
-        if r.get("split") != "validation":
-            continue
-        for c, v in (r.get(key) or {}).items():
-            if v is not None and np.isfinite(v):
-                vals.setdefault(c, []).append(float(v))
-    return {c: float(np.mean(v)) for c, v in vals.items()}
-
-
 def judge(rep: dict) -> dict:
-    """The benchmark's own verdict on a calibration report (module docstring)."""
-    nw = rep.get("never_worse") or {}
-    if nw.get("fit_percent"):  # pooled over the validation runs, as the check compared them
-        after, before = nw["fit_percent"], nw["initial_fit_percent"]
-    else:
-        after, before = rep["validation_fit_percent"], rep["initial_validation_fit_percent"]
-    gain = {c: after[c] - before[c] for c in after if c in before}
-    worse = sorted(c for c, g in gain.items() if g < -WORSE_POINTS)
-    # the earlier judge, kept for comparison: the mean of the runs' own Fit %, every channel of every run
-    a1, b1 = _pooled_validation(rep, "fit_percent"), _pooled_validation(rep, "initial_fit_percent")
-    worse_mean = sorted(c for c in a1 if c in b1 and a1[c] - b1[c] < -WORSE_POINTS)
+    """The benchmark's record of a calibration report (module docstring): the verdict's status,
+    pooled change and worse channels, each channel's Fit % gain, and the fixed-threshold judge."""
+    v = rep.get("verdict") or {}
+    ch = v.get("channels") or {}
+    gain = {c: d["fit_b"] - d["fit_a"] for c, d in ch.items()
+            if d["fit_a"] is not None and d["fit_b"] is not None and np.isfinite(d["fit_a"]) and np.isfinite(d["fit_b"])}
     stages = (rep.get("refinement") or {}).get("stages") or []
     unfinished = bool(stages) and str(stages[-1].get("message", "")).startswith("maximum number of iterations")
-    check_ok = bool(nw.get("ok", True)) and not unfinished
-    return {"gain": gain, "worse": worse, "worse_run_mean": worse_mean, "check_ok": check_ok,
-            "unfinished": unfinished, "not_compared": sorted(nw.get("not_compared") or {}),
+    status = "worse" if unfinished else v.get("status", "worse")
+    return {"status": status, "pooled_rmse_change": (v.get("pooled") or {}).get("rmse_change"),
+            "gain": gain, "worse": list(v.get("worse") or []),
+            "worse_points": sorted(c for c, g in gain.items() if g < -WORSE_POINTS),
+            "check_ok": status == "better", "unfinished": unfinished, "horizon": v.get("horizon") or {},
             "at_bounds": list(rep.get("at_bounds", [])), "data_weight": (rep.get("prior") or {}).get("data_weight")}
 
 
@@ -225,13 +207,12 @@ def reference_models(dataset_dir, start, over: dict) -> dict:
 
 
 def reference_checks(cal, dataset_dir, models: dict) -> dict:
-    """Per reference model (:func:`reference_models`): the result check's verdict on it against the
-    start model, on the validation runs, exactly as a fit is judged (:func:`judge`'s ``worse``, by
-    :data:`WORSE_POINTS`, and the check's ``ok``): whether "no worse than the start in every channel"
-    is within reach of the truth itself on this dataset.  ``cal``: the fitted Calibrator (its start
-    model, measurement models and open-loop evaluations of the start are reused); ``models``: name ->
+    """Per reference model (:func:`reference_models`): the verdict on it against the start model, on
+    the validation runs, exactly as a fit is judged (:func:`judge`): whether *better* is within reach
+    of the truth itself on this dataset.  ``cal``: the fitted Calibrator (its start model,
+    measurement models and open-loop evaluations of the start are reused); ``models``: name ->
     vehicle (:func:`reference_models`)."""
-    from uvsim.calibration.report import evaluate_runs, never_worse
+    from uvsim.calibration.report import calibration_verdict, evaluate_runs
     from uvsim.logs import read_dataset
 
     runs = [r for r in read_dataset(dataset_dir).runs if r.split == "validation"]
@@ -239,11 +220,9 @@ def reference_checks(cal, dataset_dir, models: dict) -> dict:
     out = {}
     for name, veh in models.items():
         ev = evaluate_runs(veh, runs, [md[r.name] for r in runs], None, initial_velocity=cal.initial_velocity)
-        nw = never_worse(runs, ev, base, md, (cal.initial_vehicle_, veh), initial_velocity=cal.initial_velocity)
-        gain = {c: nw["fit_percent"][c] - nw["initial_fit_percent"][c] for c in nw["fit_percent"]
-                if c in nw["initial_fit_percent"]}
-        out[name] = {"ok": bool(nw["ok"]), "gain": gain,
-                     "worse": sorted(c for c, g in gain.items() if g < -WORSE_POINTS)}
+        j = judge({"verdict": calibration_verdict(runs, ev, base, md)})
+        out[name] = {"ok": j["check_ok"], "status": j["status"], "gain": j["gain"], "worse": j["worse"],
+                     "pooled_rmse_change": j["pooled_rmse_change"]}
     return out
 
 
@@ -308,8 +287,8 @@ def run_one(seed: int, *, prior: bool = True, loss: str = "linear", supply=REAL_
                                                if err["fitted"][c] > (1 + TRUTH_TOLERANCE) * e0)
             error = None
         except CalibrationError as exc:  # refused before a result: counted as "not ok", not as worse
-            rec, error = {"gain": {}, "worse": [], "worse_run_mean": [], "check_ok": False, "unfinished": False,
-                          "not_compared": [], "at_bounds": [],
+            rec, error = {"status": "refused", "pooled_rmse_change": None, "gain": {}, "worse": [],
+                          "worse_points": [], "check_ok": False, "unfinished": False, "horizon": {}, "at_bounds": [],
                           "data_weight": None, "farther_from_truth": []}, str(exc)
         if error is not None:
             seconds = time.perf_counter() - t0
@@ -323,23 +302,25 @@ def summarize(records: list[dict]) -> dict:
     modes = sorted({_mode(r) for r in records}, key=lambda m: (not m[0], m[1], str(m[2]), m[3], str(m[4])))
     for mode in modes:
         mine = [r for r in records if _mode(r) == mode]
-        rs = [r for r in mine if r["error"] is None]
+        rs = [r for r in mine if r["error"] is None and "status" in r]  # records of the verdict's releases
         if not rs:
             continue
-        worse = [r for r in rs if r["worse"]]
+        status = {k: sum(r["status"] == k for r in rs) for k in ("better", "trade-off", "worse")}
+        better = [r for r in rs if r["status"] == "better"]
         farther = [r for r in rs if r.get("farther_from_truth")]
         chans = sorted({c for r in rs for c in r["gain"]})
+        changes = [r["pooled_rmse_change"] for r in rs if r.get("pooled_rmse_change") is not None]
         out[_label(mode)] = {
-            "n": len(rs), "errors": sum(1 for r in mine if r["error"] is not None),
-            "no_worse": len(rs) - len(worse), "no_worse_rate": (len(rs) - len(worse)) / len(rs),
-            "worse": len(worse), "worse_reported_not_ok": sum(not r["check_ok"] for r in worse),
-            "no_worse_run_mean_judge": sum(not r.get("worse_run_mean", r["worse"]) for r in rs),
-            "seeds_with_runs_not_compared": sum(bool(r.get("not_compared")) for r in rs),
+            "n": len(rs), "errors": sum(1 for r in mine if r["error"] is not None), **status,
+            "better_rate": status["better"] / len(rs),
+            "better_but_a_channel_loses_points": sum(bool(r["worse_points"]) for r in better),
+            "worse_channels_named": sum(len(r["worse"]) for r in rs),
+            "seeds_compared_over_a_shorter_horizon": sum(bool(r.get("horizon")) for r in rs),
             "closer_to_truth_everywhere": len(rs) - len(farther),
-            "farther_from_truth": len(farther), "farther_reported_not_ok": sum(not r["check_ok"] for r in farther),
-            "refused_though_closer_to_truth": sum(not r["check_ok"] for r in rs if not r.get("farther_from_truth")),
-            "ok_reported": sum(r["check_ok"] for r in rs),
+            "farther_from_truth": len(farther), "farther_not_better": sum(not r["check_ok"] for r in farther),
+            "not_better_though_closer_to_truth": sum(not r["check_ok"] for r in rs if not r.get("farther_from_truth")),
             **_reference_summary(rs),
+            "median_pooled_rmse_change": float(np.median(changes)) if changes else None,
             "median_gain_points": {c: float(np.median([r["gain"][c] for r in rs if c in r["gain"]])) for c in chans},
             "fits_with_a_bound_hit": sum(bool(r["at_bounds"]) for r in rs),
             "seconds_median": float(np.median([r["seconds"] for r in rs])),
@@ -348,17 +329,16 @@ def summarize(records: list[dict]) -> dict:
 
 
 def _reference_summary(rs: list[dict]) -> dict:
-    """Per reference (:func:`reference_checks`): on how many seeds it is no worse than the start in
-    every channel, and of the worse fits, on how many it is worse too, over the records that have it
-    (``<name>_n``: not the releases before, and ``truth`` only where uvsim states the truth)."""
+    """Per reference (:func:`reference_checks`): on how many seeds its verdict against the start is
+    *better*, and of the fits not better, on how many the reference is not better either, over the
+    records that have it (``truth`` only where uvsim states the truth)."""
     out = {}
     for name in REFERENCES:
-        have = [r for r in rs if name in (r.get("reference") or {})]
+        have = [r for r in rs if name in (r.get("reference") or {}) and "status" in r["reference"][name]]
         out[f"{name}_n"] = len(have)
-        out[f"{name}_no_worse"] = sum(not r["reference"][name]["worse"] for r in have)
-        out[f"{name}_refused"] = sum(not r["reference"][name]["ok"] for r in have)
-        out[f"worse_fits_whose_{name}_is_worse_too"] = sum(bool(r["worse"]) and bool(r["reference"][name]["worse"])
-                                                           for r in have)
+        out[f"{name}_better"] = sum(r["reference"][name]["ok"] for r in have)
+        out[f"fits_not_better_whose_{name}_is_not_better_either"] = sum(
+            not r["check_ok"] and not r["reference"][name]["ok"] for r in have)
     return out
 
 
@@ -410,7 +390,8 @@ def run_benchmark(n: int, seed: int, *, compare_no_prior: bool = False, loss: st
         say(f"[{i}/{len(todo)}] seed {s} {_label(key[1:])}: effects {rec['effects'] or 'none'}, "
             f"curve {rec['curve'] or '16 V'}, off {rec['perturbation']:.0%}: "
             + (f"ERROR {rec['error']}" if rec["error"] else
-               f"worse in {rec['worse'] or 'no channel'}, check {'ok' if rec['check_ok'] else 'NOT OK'}")
+               f"verdict {rec['status']} (pooled {100 * (rec['pooled_rmse_change'] or 0):+.0f} %)"
+               + (f", worse in {', '.join(rec['worse'])}" if rec["worse"] else ""))
             + (f"; farther from the truth in {rec['farther_from_truth'] or 'no channel'}" if not rec["error"] else "")
             + f", {rec['seconds']:.1f} s")
     return {"summary": summarize(records), "records": records}

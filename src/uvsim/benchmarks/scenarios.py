@@ -83,16 +83,16 @@ def run_scenario(seed: int, n_effects: int, *, workers: int = 1, retune=BASE_RET
 
 
 def worst_group_change(rep: dict) -> float | None:
-    """Largest relative change of a logged group's open-loop validation error caused by a
-    chosen candidate (the guard's numbers, uvsim.fitting.guard; > 0: worse); None when
+    """Largest relative change of a logged channel's open-loop validation MSE caused by a
+    chosen candidate (the verdict's numbers, uvsim.fitting.verdict; > 0: worse); None when
     nothing was chosen."""
     worst = None
     for st in rep["steps"]:
         for c in st["candidates"]:
             g = (c.get("compare") or {}).get("guard")
             if c.get("chosen") and g:
-                for d in g["groups"].values():
-                    worst = d["relative"] if worst is None else max(worst, d["relative"])
+                for d in g["channels"].values():
+                    worst = d["mse_ratio"] - 1.0 if worst is None else max(worst, d["mse_ratio"] - 1.0)
     return worst
 
 

@@ -19,7 +19,7 @@ whose only error is in values, and re-tunes them.  Real data differ in structure
                       one, base coefficients and z_b re-tuned as in the real-sensor test.
 
 Per scenario: the truth, the named set, the verdict, the largest open-loop worsening of
-any logged group that an accepted candidate caused (the guard's numbers), and seconds.
+any logged channel that an accepted candidate caused (the verdict's numbers), and seconds.
 Records go to a JSON-lines file as they finish, so an interrupted run resumes.
 """
 from __future__ import annotations

@@ -26,7 +26,6 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from uvsim.errors import CalibrationError, SimulationError
-from uvsim.metrics import signals_from_run, signals_from_states
 from uvsim.simulate import INITIAL_WINDOW_S, initial_state_from_run, simulate_batch
 from uvsim.vehicle import load_vehicle
 
@@ -43,7 +42,7 @@ class RunBatch:
     input_kind : shared input kind ("force", "thrust" or "pwm").
     pos0, q0, nu0 : (R, 3), (R, 4), (R, 6) initial states.
     nu0_known : (R, 6) bool, which initial velocity components were logged.
-    measured : per run, its measured signals (:func:`uvsim.metrics.signals_from_run`).
+    measured : per run, its measured signals (:func:`signals_from_run`).
     voltage : (R, L) battery voltages (V, held; padded like the inputs; NaN for runs
         that logged none, i.e. nominal voltage), or None when no run logged one.
     """
@@ -74,6 +73,32 @@ class RunBatch:
         return RunBatch([self.runs[i] for i in idx], self.t[idx], self.inputs[idx], self.lengths[idx],
                         self.input_kind, self.pos0[idx], self.q0[idx], self.nu0[idx], self.nu0_known[idx],
                         [self.measured[i] for i in idx], None if self.voltage is None else self.voltage[idx])
+
+
+def signals_from_run(run) -> dict[str, np.ndarray]:
+    """A run's logged signals by kind of state: "position" (n, 3), "quaternion" (n, 4),
+    "velocity" (n, 3), "rates" (n, 3), for the groups it logged (NaN for absent axes and
+    missing samples).  Plumbing for the batch's start states, not a measure: runs are compared
+    through :mod:`uvsim.measurements` and :mod:`uvsim.metrics`."""
+    out: dict[str, np.ndarray] = {}
+    groups = run.signals()
+    if "position" in groups:
+        out["position"] = run.position
+    if "attitude" in groups:
+        out["quaternion"] = run.quaternion
+    vel = run.velocity
+    if "velocity" in groups:
+        out["velocity"] = vel[:, :3]
+    if "rates" in groups:
+        out["rates"] = vel[:, 3:]
+    return out
+
+
+def signals_from_states(y: np.ndarray) -> dict[str, np.ndarray]:
+    """Simulated states ``y`` (..., n, n_y) as the signals of :func:`signals_from_run`
+    (columns as in :mod:`uvsim.model`: position 0:3, quaternion 3:7, nu 7:13)."""
+    y = np.asarray(y)
+    return {"position": y[..., 0:3], "quaternion": y[..., 3:7], "velocity": y[..., 7:10], "rates": y[..., 10:13]}
 
 
 def initial_state(run, *, initial_velocity: str = "zero", window_s: float = INITIAL_WINDOW_S, sensors=None):
@@ -170,7 +195,7 @@ def simulate_dataset(vehicle, runs, overrides: Mapping[str, float] | None = None
 
     Returns
     -------
-    list, one per run, of predicted signals (:func:`uvsim.metrics.signals_from_states`)
+    list, one per run, of predicted signals (:func:`signals_from_states`)
     cut to the run's length, plus ``"states"`` (n, n_y) and ``"t"`` (n,).
     """
     batch = as_batch(runs, initial_velocity=initial_velocity)

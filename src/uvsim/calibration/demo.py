@@ -73,11 +73,12 @@ def format_table5(cal, truth: dict | None = None) -> str:
     return "\n".join(lines)
 
 
-def run(out_dir, dataset, settings: dict | None = None) -> None:
-    """Calibrate ``dataset`` (the shipped tank data) and write fitted.yaml,
-    calibration_report.json and plots into ``out_dir``."""
+def run(out_dir, dataset, settings: dict | None = None) -> str:
+    """Calibrate ``dataset`` (the shipped tank data), print the verdict and write
+    calibration_report.json, the plots and (unless the verdict is worse) fitted.yaml into
+    ``out_dir``.  Returns the verdict's status (:mod:`uvsim.fitting.verdict`)."""
     from uvsim.calibration import Calibrator
-    from uvsim.commands.calibrate import jsonable, save_fitted_vehicle
+    from uvsim.commands.calibrate import jsonable, print_verdict, record_outcome, save_fitted_vehicle
 
     s = {**DEMO_SETTINGS, **(settings or {})}
     out = Path(out_dir)
@@ -89,12 +90,14 @@ def run(out_dir, dataset, settings: dict | None = None) -> None:
     truth = (dataset.meta.get("truth") or {}).get("parameters")
     print(f"{rep['evaluations']} GA evaluations in {rep['ga_seconds']:.1f} s, joint fit {rep['refine_seconds']:.1f} s")
     print(format_table5(cal, truth))
-    print(f"RMSE on the validation runs: initial {jsonable(rep['initial_validation_rmse'])}")
-    print(f"                             fitted  {jsonable(rep['validation_rmse'])}")
-    save_fitted_vehicle(cal, out / "fitted.yaml")
+    status, why, keep = record_outcome(cal, dataset)
+    print_verdict(rep, status, why)
+    if keep:
+        save_fitted_vehicle(cal, out / "fitted.yaml")
     (out / "calibration_report.json").write_text(json.dumps(jsonable(rep), indent=2))
     from uvsim.plotting.calibration import plot_calibration
 
     plot_calibration(cal, dataset, out / "calibration_plots", run_plots="validation")
-    print(f"calibration outputs: {out / 'fitted.yaml'}, {out / 'calibration_report.json'}, "
-          f"{out / 'calibration_plots'}/")
+    print(f"calibration outputs: {(str(out / 'fitted.yaml') + ', ') if keep else ''}"
+          f"{out / 'calibration_report.json'}, {out / 'calibration_plots'}/")
+    return status

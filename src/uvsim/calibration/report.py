@@ -2,11 +2,12 @@
 
 Every run (training and validation) is simulated from its estimated initial state with
 its logged inputs (:func:`uvsim.fitting.evaluate.open_loop`) and compared with what it
-logged through the measurement models (:func:`uvsim.metrics.measurement_metrics`).  A
-run that logs gyro rates is compared after removing its gyro bias: the joint fit's
-estimate for a training run; for a validation run (and for the initial model) the
-median rate residual of the run (a constant sensor offset, estimated from the run
-itself as a bias-calibrated gyro would be; not a model parameter).
+logged through the one measure (:mod:`uvsim.metrics`).  A run that logs gyro rates is
+compared after removing its gyro bias: the joint fit's estimate for a training run; for a
+validation run (and for the initial model) the median rate residual of the run (a constant
+sensor offset, estimated from the run itself as a bias-calibrated gyro would be; not a model
+parameter).  The verdict (:func:`calibration_verdict`) compares the fitted model with the
+start on the same predictions.
 """
 from __future__ import annotations
 
@@ -17,7 +18,8 @@ import numpy as np
 from uvsim.calibration.params import EFFECTIVE_INERTIA, LINEAR_DAMPING, QUADRATIC_DAMPING
 from uvsim.fitting.evaluate import open_loop
 from uvsim.fitting.objective import ATTITUDE_BIAS_SIGMA, acc_bias_sd, gyro_bias_sd
-from uvsim.metrics import measurement_metrics, pooled_group_rmse
+from uvsim.fitting.verdict import compare
+from uvsim.metrics import pooled_fit_percent, pooled_group_rmse
 
 #: 1-sigma above this fraction of the value: reported as "weakly_determined".
 WEAK_RELATIVE_SIGMA = 0.25
@@ -25,40 +27,10 @@ WEAK_RELATIVE_SIGMA = 0.25
 
 def evaluate_runs(vehicle, runs, meas, gyro_bias: dict | None = None, *, initial_velocity: str = "zero") -> dict:
     """Per run name: ``{"metrics", "pred", "states", "gyro_bias"}`` of the open-loop
-    simulation of ``vehicle`` (module docstring); ``gyro_bias``: run name -> (3,) known
-    biases (the others are estimated as the median rate residual)."""
-    out = {}
-    for run, m, r in zip(runs, meas, open_loop(vehicle, runs, meas=meas, initial_velocity=initial_velocity)):
-        pred = r["pred"]
-        b = None
-        if m.has_gyro:
-            if gyro_bias and run.name in gyro_bias:
-                b = np.asarray(gyro_bias[run.name], float)
-            else:
-                e = m.residuals(pred)["rates"]
-                with np.errstate(all="ignore"):
-                    b = np.array([np.nanmedian(e[:, j]) if np.isfinite(e[:, j]).any() else 0.0 for j in range(3)])
-            pred = m.predict(r["states"], r["nu_dot"], b)
-        out[run.name] = {"metrics": measurement_metrics(m, pred), "pred": pred, "states": r["states"],
-                         "gyro_bias": None if b is None else [float(x) for x in b]}
-    return out
-
-
-def pooled_fit_percent(metrics_list) -> dict[str, float]:
-    """Per channel, the Fit % of several runs pooled:
-    ``100 (1 - sqrt(sum ||e||^2) / sqrt(sum ||y - mean_run(y)||^2))`` (each run's channel
-    centred on its own mean), from per-run :func:`uvsim.metrics.measurement_metrics`."""
-    err: dict[str, float] = {}
-    var: dict[str, float] = {}
-    for m in metrics_list:
-        for c, d in m["channels"].items():
-            f, n, r = d["fit_percent"], d["n"], d["rmse"]
-            if not (n and np.isfinite(f) and np.isfinite(r) and f < 100):
-                continue
-            e2 = r * r * n
-            err[c] = err.get(c, 0.0) + e2
-            var[c] = var.get(c, 0.0) + e2 / (1.0 - f / 100.0) ** 2
-    return {c: float(100.0 * (1.0 - np.sqrt(err[c] / var[c]))) for c in err if var[c] > 0}
+    simulation of ``vehicle`` (:func:`uvsim.fitting.evaluate.open_loop`: start-aligned position,
+    gyro biases of ``gyro_bias`` (run name -> (3,)) or else the run's median rate residual)."""
+    return {r["name"]: r for r in open_loop(vehicle, runs, meas=meas, initial_velocity=initial_velocity,
+                                            gyro_bias=gyro_bias)}
 
 
 def run_entry(run, fitted: dict, initial: dict) -> dict:
@@ -72,75 +44,28 @@ def run_entry(run, fitted: dict, initial: dict) -> dict:
                         **{g: v["fit_percent"] for g, v in m["groups"].items()}},
         "initial_rmse": {k: v for k, v in m0.items() if k not in ("channels", "groups")},
         "initial_fit_percent": {c: v["fit_percent"] for c, v in m0["channels"].items()},
-        "channels": m["channels"],
+        "channels": {c: {k: v[k] for k in ("rmse", "nrmse", "fit_percent", "n", "unit")}
+                     for c, v in m["channels"].items()},
         "gyro_bias": fitted["gyro_bias"],
     }
 
 
-def never_worse(runs, fitted: dict, initial: dict, meas: dict, vehicles: tuple | None = None, *,
-                initial_velocity: str = "zero") -> dict | None:
-    """The fitted model against the model the user started from, on the validation runs'
-    open-loop simulations, per logged channel the fit used (:func:`uvsim.fitting.guard.guard`:
-    a channel is worse when its error grows beyond the block bootstrap's noise, or by more
-    than 10 %), position and depth aligned at the start (:func:`start_aligned`).  Without
-    validation runs the training runs are compared instead (a weaker
-    check: the fit has seen them; ``split`` says which).  None without runs.  ``ok`` False
-    means the calibration is not a success (issue 21: a fit that trades unexcited
-    coefficients for residual can validate worse than its start, and the report must say so).
-
-    ``vehicles`` (start, fitted): with them, a run on which either model's free simulation
-    amplifies the uncertainty of its start (:func:`uvsim.fitting.sensitivity.initial_state_growth`:
-    a directionally unstable vehicle) has its attitude, rate, velocity and acceleration
-    channels left out of the comparison for both models; ``not_compared`` names them with
-    the models' growth factors, and ``unstable_fit`` the runs where only the fitted model is
-    unstable: then ``ok`` is False (the check cannot vouch for what it left out, and the start
-    was stable there; the vehicle may be unstable too, so the message says how to keep it).  ``fit_percent`` /
-    ``initial_fit_percent``: per channel, the pooled Fit % of the fitted / start model over
-    what was compared."""
-    from uvsim.fitting.guard import ALIGN_WINDOW_S, BLOCK_S, block_costs, compare_open_loop, start_aligned
-    from uvsim.fitting.sensitivity import initial_state_growth
-
+def calibration_verdict(runs, fitted: dict, initial: dict, meas: dict) -> dict | None:
+    """The verdict (:func:`uvsim.fitting.verdict.compare`) on the fitted model against the model
+    the user started from, on the validation runs' free simulations, every logged channel (also
+    those a zero weight left out of the fit).  Without validation runs the training runs are
+    compared instead (a weaker check: the fit has seen them; ``split`` says which).  None
+    without runs."""
     split = "validation" if any(r.split == "validation" for r in runs) else "train"
-    val = [r for r in runs if r.split == split]
-    if not val:
+    sel = [r for r in runs if r.split == split]
+    if not sel:
         return None
-    ms = [meas[r.name] for r in val]
-    sides = []
-    for i, ev in enumerate((initial, fitted)):
-        side = block_costs(ms, [start_aligned(m, ev[r.name]) for m, r in zip(ms, val)], by="channel")
-        growth = {} if vehicles is None else initial_state_growth(vehicles[i], val, ms, [ev[r.name] for r in val],
-                                                                  initial_velocity=initial_velocity)
-        side["unstable"] = {k: x["channels"] for k, x in growth.items() if x["unstable"]}
-        sides.append((side, growth))
-    (before, g0), (after, g1) = sides
-    g = compare_open_loop(before, after, refuse_newly_unstable=True,
-                          names=("the starting model", "the fitted model"))
-    exclude = g["not_compared"]
-    not_compared = {k: {"channels": v, "growth_start": g0[k]["growth"], "growth_fitted": g1[k]["growth"]}
-                    for k, v in exclude.items()}
-    unstable_fit = g["newly_unstable"]
-    what = "validates" if split == "validation" else "simulates its own training runs (no validation runs)"
-    why = g["why"].replace("makes the open-loop validation worse", f"the fitted model {what} worse than the "
-                                                                     "starting model")
-    if unstable_fit:
-        why += "; if the vehicle is unstable there too, keep the fit knowingly"
-    method = (f"open-loop {split} runs, per channel, position and depth aligned over the first "
-              f"{ALIGN_WINDOW_S:g} s, block bootstrap over {BLOCK_S:g} s blocks (uvsim.fitting.guard)")
-    if exclude:
-        method += ("; attitude, rates and accelerations of runs whose free simulation amplifies the "
-                   "uncertainty of its start left out (not_compared, uvsim.fitting.sensitivity)")
-
-    def fit_pct(evs):
-        mets = []
-        for m, e in zip(ms, evs):
-            met = measurement_metrics(m, e["pred"])
-            drop = set(exclude.get(m.name, ()))
-            mets.append({**met, "channels": {c: v for c, v in met["channels"].items() if c not in drop}})
-        return pooled_fit_percent(mets)
-
-    return {"ok": g["ok"], "worse": g["worse"], "channels": g["groups"], "why": why, "split": split,
-            "method": method, "not_compared": not_compared, "unstable_fit": unstable_fit,
-            "fit_percent": fit_pct(after["results"]), "initial_fit_percent": fit_pct(before["results"])}
+    v = compare([meas[r.name] for r in sel], [initial[r.name]["pred"] for r in sel],
+                [fitted[r.name]["pred"] for r in sel], names=("the starting model", "the fitted model"))
+    v["split"] = split
+    if split == "train":
+        v["message"] += " (no validation runs: compared on the training runs, which the fit has seen)"
+    return v
 
 
 def pooled(evals: dict, runs, split: str) -> tuple[dict, dict]:
@@ -292,8 +217,7 @@ def build_report(cal, ds, runs, problems, ga, bounds_of, t0, t_ga, t_ref) -> dic
         "initial_validation_rmse": val0, "initial_validation_fit_percent": val0_fit,
         "initial_training_rmse": tr0,
         "per_run": per_run,
-        "never_worse": never_worse(ds.runs, fitted, initial, cal.evaluation_["meas"],
-                                   (cal.initial_vehicle_, cal.vehicle_), initial_velocity=cal.initial_velocity),
+        "verdict": calibration_verdict(ds.runs, fitted, initial, cal.evaluation_["meas"]),
         "identifiability": cal.identifiability_,
         "refinement": {} if res is None else {"stages": res.stages, "cost": res.cost,
                                               "n_residuals": res.n_residuals},

@@ -20,8 +20,9 @@ from pathlib import Path
 
 from uvsim.commands import lag_option, parse_pairs
 from uvsim.commands.checks import (add_allow_argument, add_progress_arguments, calibration_problems, check_outputs,
-                                   check_runs_at_door, fail_if, say, want_progress)
+                                   check_runs_at_door, say, want_progress)
 from uvsim.errors import UvsimError
+from uvsim.fitting.verdict import EXIT_CODES
 
 ADDED_MASS_ROWS = ("X_udot", "Y_vdot", "Z_wdot", "K_pdot", "M_qdot", "N_rdot")
 
@@ -109,11 +110,11 @@ def register(sub) -> None:
     p.add_argument("--out", required=True, help="fitted vehicle YAML (complete, loadable by every command)")
     p.add_argument("--json", default=None, help="report JSON")
     p.add_argument("--keep-worse", action="store_true",
-                   help="write the fitted vehicle and report even when the result check refuses it (a fit that "
-                        "validates worse than the starting model in some channel, or one stopped at the iteration "
-                        "limit); the exit status stays 2 and report.json says status.ok: false")
+                   help="write the fitted vehicle also when the verdict is 'worse' (not better than the starting "
+                        "model, or a fit that failed a sanity check such as the iteration limit); the exit status "
+                        "stays 2 and report.json says status.verdict: worse")
     p.add_argument("--plots", default=None, help="directory for plots (measured vs simulated, error boxplots, "
-                                                 "GA convergence)")
+                                                 "GA convergence); written whatever the verdict")
     add_allow_argument(p)
     add_progress_arguments(p)
     p.set_defaults(func=_run)
@@ -337,12 +338,6 @@ def print_summary(cal, out=None) -> None:
     say(f"validation RMSE {jsonable(rep['validation_rmse'])} (initial {jsonable(rep['initial_validation_rmse'])})")
     if rep["validation_fit_percent"]:
         say("validation Fit %: " + ", ".join(f"{c} {v:.1f}" for c, v in rep["validation_fit_percent"].items()))
-    nw = rep.get("never_worse") or {}
-    for name, d in (nw.get("not_compared") or {}).items():
-        say(f"note: {name}: a 0.02 m/s / 0.02 rad/s change of the start grows {d['growth_start']:.3g}x in the "
-            f"start model's free simulation and {d['growth_fitted']:.3g}x in the fitted model's (more than 2x: "
-            f"unstable), so the never-worse check leaves its {', '.join(d['channels'])} out (docs/calibration.md, "
-            "'The result check')")
 
 
 def _run(args) -> int:
@@ -394,33 +389,52 @@ def _run(args) -> int:
             logger.removeHandler(handler)
     rep = cal.report_
     rep["input_notes"] = notes
+    status = finish_calibration(cal, ds, out, args.json, args.plots, keep_worse=args.keep_worse)
+    return EXIT_CODES[status]
+
+
+def outcome(rep, ds) -> tuple[str, str, list[str]]:
+    """(status, why, problems) of a calibration report: the verdict's status ("better",
+    "trade-off", "worse") and message, or "worse" when a sanity check fails
+    (:func:`calibration_problems`: a diverged or exploding simulation, an unfinished fit, every
+    parameter of a DOF on a bound), ``problems`` then saying which."""
     problems = calibration_problems(rep, ds)
-    if problems and getattr(args, "keep_worse", False):
-        rep["status"] = {"ok": False, "problems": problems, "kept": True}
+    v = rep.get("verdict")
+    if problems:
+        return "worse", "worse: " + "; ".join(problems), problems
+    if v is None:
+        return "better", "no runs to compare with the starting model", []
+    return v["status"], v["message"], []
+
+
+def record_outcome(cal, ds, *, keep_worse: bool = False) -> tuple[str, str, bool]:
+    """(status, why, keep) of a fitted Calibrator (:func:`outcome`), also written into its
+    report's ``status``; ``keep``: whether the fitted vehicle may be written (*better* or
+    *trade-off*, and *worse* only with ``keep_worse``)."""
+    rep = cal.report_
+    status, why, problems = outcome(rep, ds)
+    keep = status in ("better", "trade-off") or keep_worse
+    rep["status"] = {"ok": status == "better", "verdict": status, "exit_code": EXIT_CODES[status], "why": why,
+                     "problems": problems, "vehicle_written": bool(keep)}
+    return status, why, keep
+
+
+def finish_calibration(cal, ds, out, json_path=None, plots=None, *, keep_worse: bool = False) -> str:
+    """Write what a calibration's outcome allows and print it (docs/calibration.md, "The verdict"):
+    report.json and the plots always; the fitted vehicle when the verdict is *better* or a
+    *trade-off*, and for *worse* only with ``keep_worse``.  Returns the status."""
+    rep = cal.report_
+    status, why, keep = record_outcome(cal, ds, keep_worse=keep_worse)
+    if keep:
         out.parent.mkdir(parents=True, exist_ok=True)
         save_fitted_vehicle(cal, out)
-        if args.json:
-            Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-            Path(args.json).write_text(json.dumps(jsonable(rep), indent=2))
-        print_summary(cal)
-        fail_if(problems, "calibrate", f"Kept anyway (--keep-worse): {out}" + (f", {args.json}" if args.json else ""))
-    if problems:
-        if args.json:
-            rep["status"] = {"ok": False, "problems": problems}
-            Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-            Path(args.json).write_text(json.dumps(jsonable(rep), indent=2))
-        fail_if(problems, "calibrate", f"Nothing was written to {out}" + (f"; the report is in {args.json}."
-                                                                        if args.json else "."))
-    rep["status"] = {"ok": True, "problems": []}
-    out.parent.mkdir(parents=True, exist_ok=True)
-    save_fitted_vehicle(cal, out)
-    if args.json:
-        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps(jsonable(rep), indent=2))
-    if args.plots:
+    if json_path:
+        Path(json_path).parent.mkdir(parents=True, exist_ok=True)
+        Path(json_path).write_text(json.dumps(jsonable(rep), indent=2))
+    if plots:
         from uvsim.plotting.calibration import plot_calibration
 
-        plot_calibration(cal, ds, args.plots)
+        plot_calibration(cal, ds, plots)
     stages = "; ".join(f"{s['horizon_s'] or 'whole-run'} s windows: {s['iterations']} iterations, {s['message']}"
                        for s in rep["refinement"].get("stages", []))
     print(f"calibrated {rep['vehicle']} on {len(rep['training_runs'])} training runs: "
@@ -429,8 +443,28 @@ def _run(args) -> int:
           + (f"joint fit of {len(rep['free_parameters'])} parameters in {rep['refine_seconds']:.1f} s ({stages})"
              if rep["free_parameters"] else "no joint fit"))
     print_summary(cal)
-    print(f"-> {out}" + (f", {args.json}" if args.json else "") + (f", plots in {args.plots}" if args.plots else ""))
-    return 0
+    print_verdict(rep, status, why)
+    if status != "better":
+        say("calibrate", f"verdict {why}")
+    written = [str(out)] if keep else []
+    written += [str(json_path)] if json_path else []
+    written += [f"plots in {plots}"] if plots else []
+    print("-> " + (", ".join(written) if written else "nothing written")
+          + ("" if keep else f" (the fitted vehicle is not written to {out}: keep it with --keep-worse)"))
+    return status
+
+
+def print_verdict(rep, status: str, why: str, out=None) -> None:
+    """The verdict's per-channel table and its one-paragraph message ``why`` (:func:`outcome`)."""
+    from uvsim.fitting.verdict import table
+
+    out = sys.stdout if out is None else out
+    v = rep.get("verdict")
+    if v is not None:
+        print(f"verdict on the {v['split']} runs (free simulations, every logged channel):", file=out)
+        for line in table(v):
+            print("  " + line, file=out)
+    print(f"VERDICT (exit {EXIT_CODES[status]}) {why}", file=out)
 
 
 def _say_resume(ckpt) -> None:

@@ -118,16 +118,13 @@ def fail_if(problems: Iterable[str], command: str, hint: str) -> None:
 
 
 def calibration_problems(rep: Mapping, ds) -> list[str]:
-    """Sanity problems of a calibration report (``Calibrator.report_``)."""
+    """Sanity problems of a calibration report (``Calibrator.report_``), beside its verdict
+    (:mod:`uvsim.fitting.verdict`, which judges the fitted model against the start)."""
     from uvsim.calibration.params import DOF_PARAMETERS
 
     probs = rmse_problems(rep["training_rmse"], [r for r in ds.runs if r.split == "train"], "training RMSE")
     probs += rmse_problems(rep["validation_rmse"], [r for r in ds.runs if r.split == "validation"],
                            "validation RMSE")
-    nw = rep.get("never_worse")
-    if nw is not None and not nw["ok"]:
-        probs.append(nw["why"] + f" (per channel, open loop, on the {nw.get('split', 'validation')} runs); keep it "
-                     "anyway with --keep-worse")
     stages = (rep.get("refinement") or {}).get("stages") or []
     if stages and str(stages[-1].get("message", "")).startswith("maximum number of iterations"):
         probs.append(f"unfinished: the joint fit's last stage stopped at the iteration limit "

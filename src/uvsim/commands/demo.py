@@ -28,20 +28,21 @@ def shipped_dataset_path() -> Path:
 
 
 def simulate_dataset_report(dataset, vehicles: dict) -> tuple[dict, dict]:
-    """Simulate every run with each vehicle (one batched call per vehicle; initial state
-    estimated over the first 0.5 s, :func:`uvsim.simulate.initial_state_from_run`).
-    Returns (sims[label][run name] -> states (n, n_y), rmse[label][dof] -> pooled RMSEs)."""
-    from uvsim.calibration.batching import simulate_dataset
-    from uvsim.metrics import pooled_rmse, signals_from_run
+    """Simulate every run with each vehicle (its free simulation as every verdict sees it,
+    :func:`uvsim.fitting.evaluate.open_loop`: batched, initial state estimated over the first
+    0.5 s, position aligned over the first 3 s).  Returns (sims[label][run name] -> states
+    (n, n_y), rmse[label][dof] -> pooled group RMSEs, :mod:`uvsim.metrics`)."""
+    from uvsim.fitting.evaluate import open_loop
+    from uvsim.metrics import pooled_group_rmse
 
     sims, rows = {}, {}
     for label, veh in vehicles.items():
         sims[label] = {}
-        pairs_by_dof: dict = {}
-        for run, pred in zip(dataset.runs, simulate_dataset(veh, dataset.runs)):
-            sims[label][run.name] = pred["states"]
-            pairs_by_dof.setdefault(run.dof, []).append((signals_from_run(run), pred))
-        rows[label] = {dof: pooled_rmse(pairs) for dof, pairs in pairs_by_dof.items()}
+        by_dof: dict = {}
+        for run, ev in zip(dataset.runs, open_loop(veh, dataset.runs)):
+            sims[label][run.name] = ev["states"]
+            by_dof.setdefault(run.dof, []).append(ev["metrics"])
+        rows[label] = {dof: pooled_group_rmse(ms) for dof, ms in by_dof.items()}
     return sims, rows
 
 
@@ -82,12 +83,15 @@ def _run(args) -> int:
         by_dof.setdefault(r.dof, []).append(r)
     p = tank_runs(by_dof, sims, out / "tank_runs.png", title="BlueROV2 Heavy tank runs: measured vs simulated")
     print(f"plot: {p}")
+    status = "better"
     if not args.skip_calibration:
         from uvsim.calibration.demo import run as calibration_demo
 
         print()
         from uvsim.commands.checks import want_progress
 
-        calibration_demo(out, ds, settings={"progress": want_progress(args)})
+        status = calibration_demo(out, ds, settings={"progress": want_progress(args)})
     print(f"\ndone in {time.perf_counter() - t0:.1f} s; outputs in {out}/")
-    return 0
+    from uvsim.fitting.verdict import EXIT_CODES
+
+    return EXIT_CODES[status]  # the calibration's verdict (docs/calibration.md, "The verdict")

@@ -11,7 +11,9 @@ import json
 from pathlib import Path
 
 from uvsim.commands import lag_option, parse_pairs
-from uvsim.commands.checks import add_allow_argument, check_outputs, check_runs_at_door, diagnosis_problems, fail_if, say
+from uvsim.commands.checks import add_allow_argument, check_outputs, check_runs_at_door, diagnosis_problems, say
+from uvsim.fitting.verdict import EXIT_CODES
+from uvsim.fitting.verdict import table as verdict_table
 
 
 def register(subparsers) -> None:
@@ -93,6 +95,9 @@ def format_table(report: dict) -> str:
             lines.append(f"    {k} = {d['value']:.5g}{std} {d['unit']}")
     for k, d in report.get("retuned", {}).items():
         lines.append(f"  re-tuned {k}: {d['before']:.5g} -> {d['value']:.5g}")
+    rv = report.get("retune_verdict")
+    if rv is not None and not rv["kept"]:
+        lines.append(f"  re-tune of {', '.join(rv['retune'])} not kept: {rv['message']}")
     lines.append(report["message"])
     for n in report.get("not_observable") or []:
         lines.append(f"not observable: {n['effect']} ({n['variants']}): {n['why']}")
@@ -101,9 +106,14 @@ def format_table(report: dict) -> str:
         lines.append(f"verdict: {v['status']}; what to check:")
         lines += [f"  - {c}" for c in v["check"]]
     lines.append("")
-    lines.append(f"{'validation RMSE (open loop)':28s} {'before':>12s} {'after':>12s}")
-    for k in report["rmse_before"]:
-        lines.append(f"{k:28s} {report['rmse_before'][k]:12.5g} {report['rmse_after'].get(k, float('nan')):12.5g}")
+    mv = report.get("model_verdict")
+    if mv is not None:  # the one measure, as calibrate prints it (uvsim.fitting.verdict)
+        lines.append("verdict on the validation runs (free simulations, every logged channel):")
+        lines += ["  " + line for line in verdict_table(mv)]
+    else:
+        lines.append(f"{'validation RMSE (open loop)':28s} {'given model (unchanged)':>24s}")
+        for k, v in report["rmse_before"].items():
+            lines.append(f"{k:28s} {v:24.5g}")
     lines.append(f"{report['fits']} fits in {report['seconds']:.1f} s")
     return "\n".join(lines)
 
@@ -155,21 +165,28 @@ def run(args) -> int:
         say("diagnose", f"attitude filter lag {rep['attitude_lag']['tau']:.3f} s ({rep['attitude_lag']['source']})")
     rep["input_notes"] = notes
     problems = diagnosis_problems(rep, diag.validation)
-    rep["status"] = {"ok": not problems, "problems": problems}
+    mv = rep.get("model_verdict")
+    status = "worse" if problems else (mv["status"] if mv is not None else "better")
+    keep = status in ("better", "trade-off")
+    why = "; ".join(problems) if problems else (mv["message"] if mv is not None else "the model is unchanged")
+    rep["status"] = {"ok": status == "better", "verdict": status, "exit_code": EXIT_CODES[status], "why": why,
+                     "problems": problems, "vehicle_written": bool(keep and args.out)}
     if args.json_out:
         Path(args.json_out).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json_out).write_text(json.dumps(rep, indent=2, default=float))
-    fail_if(problems, "diagnose", "No corrected vehicle was written" + (f"; the report is in {args.json_out}."
-                                                                        if args.json_out else "."))
     print(format_table(rep))
     if args.json_out:
         print(f"report: {args.json_out}")
-    if args.out:
-        save_fixed_vehicle(diag, args.out)
-        print(f"corrected vehicle: {args.out}")
     if args.plots:
         from uvsim.plotting.diagnosis import plot_diagnosis
 
         files = plot_diagnosis(diag, args.plots)
         print(f"plots: {', '.join(str(f) for f in files)}")
-    return 0
+    if args.out and keep:
+        save_fixed_vehicle(diag, args.out)
+        print(f"corrected vehicle: {args.out}")
+    print(f"VERDICT (exit {EXIT_CODES[status]}) {why if problems else (mv['message'] if mv else why)}")
+    if status != "better":
+        say("diagnose", f"verdict {status}: {why}" + ("" if keep or not args.out else
+                                                      f"; no corrected vehicle was written to {args.out}"))
+    return EXIT_CODES[status]

@@ -37,13 +37,14 @@ import numpy as np
 from uvsim.checkpoint import Checkpoint, fingerprint
 from uvsim.diagnosis.candidates import BASE_MODEL, EFFECTS, Candidate
 from uvsim.diagnosis.decision import (LEVEL, MIN_RELATIVE, VAL_LEVEL, WALD_P, alternative_challenger,
-                                      inertia_challenger, parsimonious, richer_challenger, simplest_sufficient,
-                                      still_needed)
+                                      inertia_challenger, open_loop_verdict, parsimonious, richer_challenger,
+                                      simplest_sufficient, still_needed)
 from uvsim.diagnosis.residual import concentration, verdict
 from uvsim.diagnosis.selector import VARIANT_SHARE, Selector
 from uvsim.estimation.lag import attitude_lag_setting
 from uvsim.errors import CalibrationError, UvsimError
 from uvsim.fitting.evaluate import open_loop, pooled
+from uvsim.fitting.verdict import compare as compare_models
 from uvsim.forces import make_term
 from uvsim.latency import runs_for
 from uvsim.logs import Dataset, read_dataset
@@ -179,6 +180,15 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     say("validation cost of the baseline")
     val_given = sel.validation(veh, {})
     val_cur = sel.validation(veh, values) if values else val_given
+    retune_verdict, asked_retune = None, list(sel.retune)
+    if values:
+        # the re-tune is a change of the model like an effect: the baseline keeps it only when the
+        # verdict on the validation runs' free simulations calls it better than the given model.
+        # The effects' fits still free it beside each effect, and the verdict judges the two together.
+        retune_verdict = open_loop_verdict(val_given["open_loop"], val_cur["open_loop"])
+        if not retune_verdict["ok"]:
+            say(f"the re-tune of {', '.join(sel.retune)} alone is not kept: {retune_verdict['message']}")
+            values, val_cur = {}, val_given
     accepted: list = []
     accepted_values: list = []
     steps = []
@@ -260,6 +270,12 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     say("open-loop validation before / after")
     ol_before = open_loop(veh, val, meas=sel.meas_va)
     ol_after = open_loop(veh_after, val, meas=sel.meas_va)
+    # the corrected model against the given one, as calibration judges a fit (None: unchanged)
+    changed = bool(accepted) or bool(values)
+    model_verdict = None
+    if changed:
+        model_verdict = compare_models(sel.meas_va, [o["pred"] for o in ol_before], [o["pred"] for o in ol_after],
+                                       names=("the given model", "the corrected model"))
     final = accepted_values[-1] if accepted_values else None
     effects_rep, base_rep = [], None
     for c in accepted:
@@ -293,6 +309,9 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
             + ("The model is at the noise level." if at_noise else
                "The cost is above the noise level: an effect outside the catalogue, or base coefficients to "
                "calibrate (uvsim calibrate, or --retune)."))
+    if retune_verdict is not None and not retune_verdict["ok"]:
+        msg += (f" The re-tune of {', '.join(asked_retune)} alone was not kept (its verdict against the given model: "
+                f"{retune_verdict['message']})" + (", only beside the effects named." if names else "."))
     for r in backward:
         if not r["kept"]:
             msg += (f" {r['effect']}:{r['variant']}, chosen first, was dropped: beside the later effect it is "
@@ -309,7 +328,12 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         "effect": names[0] if len(names) == 1 else ("none" if not names else "+".join(names)),
         "confidence": confidence,
         "message": msg,
-        "retuned": {n: {"value": values.get(n), "before": veh.parameters()[n]} for n in sel.retune},
+        "retuned": {n: {"value": values[n], "before": veh.parameters()[n]} for n in sel.retune if n in values},
+        "retune_verdict": None if retune_verdict is None else {"retune": asked_retune,
+                                                               "status": retune_verdict["status"],
+                                                               "kept": bool(retune_verdict["ok"]),
+                                                               "message": retune_verdict["message"]},
+        "model_verdict": model_verdict,
         "steps": steps,
         "backward": backward,
         "rmse_before": pooled(ol_before),

@@ -29,7 +29,7 @@ from scipy.stats import chi2
 from uvsim.diagnosis.candidates import BASE_MODEL, inertia_start, search_bound_hits
 from uvsim.errors import UvsimError
 from uvsim.fitting.compare import bootstrap_improvement
-from uvsim.fitting.guard import compare_open_loop
+from uvsim.fitting import verdict
 
 #: One-sided confidence level of "significantly better" (block bootstrap), used to compare
 #: variants; the acceptance of an effect uses VAL_LEVEL together with the Wald test.
@@ -49,15 +49,15 @@ MIN_RELATIVE = 0.05
 #: windowed cost restarts every window from node states estimated on the data, so it hides
 #: what an effect does over a whole run: a current's or a tether's drift (benchmark seed 85:
 #: a 1.3 cm/s current removes 3.4 % of the windowed validation cost and 98.5 % of the
-#: open-loop position error).  An effect is then accepted when, beside the guard (no logged
-#: group worse), some logged group's open-loop validation error (noise-normalized sum of
-#: squares) falls by at least OPEN_LOOP_GAIN with the fall confirmed in OPEN_LOOP_LEVEL of
-#: the block-bootstrap resamples, the windowed validation cost falls too (confirmed at
-#: VAL_LEVEL, any size), and the training fit's robust Wald test gives p < OPEN_LOOP_WALD_P
-#: (the conventional 1 % level: the held-out free simulation is the stronger, independent
-#: piece of evidence, so the in-sample test need not carry the 1e-4 of the windowed path).
+#: open-loop position error).  An effect is then accepted when the verdict on the free
+#: simulations (:func:`open_loop_verdict`) is *better* and some logged channel's open-loop
+#: mean squared error falls by at least OPEN_LOOP_GAIN with the fall's upper bound at the
+#: verdict's level below 1 (the channel is better beyond the noise), the windowed validation
+#: cost falls too (confirmed at VAL_LEVEL, any size), and the training fit's robust Wald test
+#: gives p < OPEN_LOOP_WALD_P (the conventional 1 % level: the held-out free simulation is
+#: the stronger, independent piece of evidence, so the in-sample test need not carry the
+#: 1e-4 of the windowed path).
 OPEN_LOOP_GAIN = 0.5
-OPEN_LOOP_LEVEL = 0.99
 OPEN_LOOP_WALD_P = 1e-2
 #: Simpler variants of a winning effect are fitted and compared on validation only when
 #: their screening reduction is at least this share of the winner's.
@@ -80,16 +80,25 @@ def wald(res, c) -> dict:
     return {"W": W, "k": len(idx), "p": float(chi2.sf(W, len(idx)))}
 
 
+def open_loop_verdict(before: dict, after: dict) -> dict:
+    """The verdict (:func:`uvsim.fitting.verdict.compare`, the one calibration gives) on the model
+    ``after`` against ``before``, from their :meth:`Selector.open_loop_blocks
+    <uvsim.diagnosis.selector.Selector.open_loop_blocks>`, with ``ok`` (the verdict is *better*:
+    pooled error lower beyond the noise and no channel worse) and ``why`` (its message)."""
+    v = verdict.compare(before["meas"], before["preds"], after["preds"], names=("the current model", "the candidate"))
+    return {**v, "why": v["message"]}
+
+
 def compare(before: dict, after: dict, fit, c) -> dict:
     """The evidence for effect ``c`` in the model ``after`` against the model ``before``
     (each :meth:`Selector.validation <uvsim.diagnosis.selector.Selector.validation>`):
     the block bootstrap of their validation windows, the robust Wald test of ``c`` in
-    ``fit`` (the training fit that has it), and the open-loop guard (no logged group worse,
-    :func:`uvsim.fitting.guard.compare_open_loop`) when ``before`` has open-loop blocks."""
+    ``fit`` (the training fit that has it), and the verdict on the free simulations of the
+    validation runs (``guard``, :func:`open_loop_verdict`) when ``before`` has them."""
     cmp = bootstrap_improvement(before["windows"], after["windows"], level=LEVEL)
     cmp["wald"] = wald(fit, c)
     if "open_loop" in before:
-        cmp["guard"] = compare_open_loop(before["open_loop"], after["open_loop"])
+        cmp["guard"] = open_loop_verdict(before["open_loop"], after["open_loop"])
     return cmp
 
 
@@ -100,8 +109,10 @@ def judge(row, val_cur) -> tuple[bool, str]:
     test of the effect being off at :data:`WALD_P`, and on the validation runs a
     reduction of the cost by at least :data:`MIN_RELATIVE` that the block bootstrap over
     windows confirms at :data:`VAL_LEVEL` (one-sided); or, in place of the last three, the
-    free simulation's evidence of :func:`open_loop_evidence`.  The open-loop guard holds in
-    both cases."""
+    free simulation's evidence of :func:`open_loop_evidence`.  In both cases the verdict on the
+    validation runs' free simulations (:func:`open_loop_verdict`, the calibration's) must be
+    *better*: a candidate that trades one channel for another, or does not lower the pooled
+    error beyond the noise, is not accepted."""
     if "compare" not in row:
         return False, row.get("why", "not fitted")
     cmp = row["compare"]
@@ -140,29 +151,29 @@ def judge(row, val_cur) -> tuple[bool, str]:
         return False, g["why"]
     return True, (f"significant: Wald p = {w.get('p', float('nan')):.1g} in training, validation cost "
                   f"-{100 * cmp['relative']:.1f} % (better in {100 * cmp['p_better']:.1f} % of resamples); "
-                  + (g["why"] if g is not None else "open-loop guard not run"))
+                  + (g["why"] if g is not None else "open-loop verdict not run"))
 
 
 def open_loop_evidence(cmp) -> str | None:
     """The reason to accept an effect on the free simulation of the validation runs
-    (:data:`OPEN_LOOP_GAIN`), or None when that evidence is missing: the guard passed,
-    some group's open-loop error fell by OPEN_LOOP_GAIN in at least OPEN_LOOP_LEVEL of
-    the resamples, the windowed validation cost fell (confirmed at VAL_LEVEL) and the
-    training Wald test gives p < OPEN_LOOP_WALD_P.  ``cmp``: a fitted row's ``compare``
-    (windowed ``relative`` and ``p_better``, ``wald``, ``guard``)."""
+    (:data:`OPEN_LOOP_GAIN`), or None when that evidence is missing: the verdict is *better*,
+    some channel's open-loop mean squared error fell by OPEN_LOOP_GAIN and is better beyond
+    the noise, the windowed validation cost fell (confirmed at VAL_LEVEL) and the training
+    Wald test gives p < OPEN_LOOP_WALD_P.  ``cmp``: a fitted row's ``compare`` (windowed
+    ``relative`` and ``p_better``, ``wald``, ``guard``)."""
     g, w = cmp.get("guard"), cmp.get("wald") or {}
     if g is None or not g["ok"] or w.get("p") is None or not w["p"] < OPEN_LOOP_WALD_P:
         return None
     if not (cmp["relative"] > 0.0 and cmp["p_better"] >= VAL_LEVEL):
         return None
-    gained = {k: v for k, v in (g.get("groups") or {}).items()
-              if v["relative"] <= -OPEN_LOOP_GAIN and 1.0 - v["p_worse"] >= OPEN_LOOP_LEVEL}
+    gained = {k: v for k, v in (g.get("channels") or {}).items()
+              if v["mse_ratio"] <= 1.0 - OPEN_LOOP_GAIN and v["better"]}
     if not gained:
         return None
-    parts = ", ".join(f"{k} {100 * v['relative']:+.0f} %" for k, v in gained.items())
-    return (f"significant in the free simulation of the validation runs: open-loop error {parts} (better in "
-            f">= {100 * OPEN_LOOP_LEVEL:.0f} % of resamples), windowed validation cost -{100 * cmp['relative']:.1f} % "
-            f"(better in {100 * cmp['p_better']:.1f} % of resamples), Wald p = {w['p']:.1g} in training; {g['why']}")
+    parts = ", ".join(f"{k} {100 * v['rmse_change']:+.0f} %" for k, v in gained.items())
+    return (f"significant in the free simulation of the validation runs: open-loop RMSE {parts}, windowed "
+            f"validation cost -{100 * cmp['relative']:.1f} % (better in {100 * cmp['p_better']:.1f} % of "
+            f"resamples), Wald p = {w['p']:.1g} in training; {g['why']}")
 
 
 def still_needed(sel, accepted: list, values: dict, val_cur: dict, joint) -> tuple[list, dict, dict, object, list]:
@@ -303,8 +314,8 @@ def alternative_challenger(sel, best, st, val_cur, *, blocked: bool = False):
     if blocked:
         win["why"] += f"; the alternative to {c.variant}, which the open-loop guard refused"
         return win
-    win["why"] += (f"; lower open-loop validation cost than {c.variant} "
-                   f"({win['open_loop_cost']:.4g} against {best['open_loop_cost']:.4g})")
+    win["why"] += (f"; lower open-loop validation error than {c.variant} (pooled score "
+                   f"{win['open_loop_cost']:.4g} against {best['open_loop_cost']:.4g})")
     return win
 
 
@@ -358,13 +369,13 @@ def inertia_challenger(sel, best, st, val_cur):
     if not rows:
         return None
     win = min(rows, key=lambda r: r["open_loop_cost"])
-    cost, cost_best = win["open_loop_cost"], best["open_loop_cost"]
-    if not (np.isfinite(cost) and cost <= (1.0 - MIN_RELATIVE) * cost_best):
-        win["why"] += (f"; open-loop validation cost {cost:.4g} not {100 * MIN_RELATIVE:.0f} % "
-                       f"below {c.variant}'s {cost_best:.4g}")
+    # the pooled scores are mean log MSEs: their difference is the log of the (geometric-mean) MSE ratio
+    ratio = float(np.exp(win["open_loop_cost"] - best["open_loop_cost"]))
+    if not (np.isfinite(win["open_loop_cost"]) and ratio <= 1.0 - MIN_RELATIVE):
+        win["why"] += (f"; open-loop validation MSE {100 * (ratio - 1):+.1f} % against {c.variant}'s "
+                       f"(needs {100 * MIN_RELATIVE:.0f} % lower)")
         return None
-    win["why"] += (f"; open-loop validation cost {100 * (1 - cost / cost_best):.0f} % "
-                   f"below {c.variant}'s ({cost:.4g} against {cost_best:.4g})")
+    win["why"] += f"; open-loop validation MSE {100 * (1 - ratio):.0f} % below {c.variant}'s"
     return win
 
 

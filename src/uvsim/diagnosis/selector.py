@@ -20,13 +20,12 @@ from uvsim.diagnosis.candidates import (Candidate, catalogue, coupled_candidate,
 from uvsim.diagnosis.decision import compare, judge
 from uvsim.diagnosis.regression import BaseBlock, ls_step, stepwise
 from uvsim.diagnosis.starts import SLACK_GN_ITERATIONS, candidate_starts, slack_starts
-from uvsim.fitting.guard import block_costs, start_aligned
 from uvsim.errors import CalibrationError, UvsimError, VehicleError
 from uvsim.fitting import fit
 from uvsim.fitting.equation_error import EquationError, measured_motion
 from uvsim.fitting.evaluate import open_loop
 from uvsim.fitting.parameters import FreeParameter, ParameterSpace, default_bounds
-from uvsim.fitting.sensitivity import initial_state_growth
+from uvsim.fitting.verdict import score
 from uvsim.forces import make_term
 from uvsim.measurements import measurements_for
 
@@ -138,32 +137,20 @@ class Selector:
         vc["open_loop"] = self.open_loop_blocks(vehicle, values)
         return vc
 
-    def open_loop_blocks(self, vehicle, values: Mapping, *, stability: bool = True) -> dict:
+    def open_loop_blocks(self, vehicle, values: Mapping) -> dict:
         """Free simulations of the validation runs from their logged starts
-        (:func:`uvsim.fitting.evaluate.open_loop`, the report's before/after RMSE), position
-        and depth aligned over the start (:func:`uvsim.fitting.guard.start_aligned`), as
-        noise-normalized errors per signal group and block (:func:`uvsim.fitting.guard.block_costs`);
-        ``total`` is inf when a simulation diverges.  ``stability``: also the runs whose free
-        simulation amplifies its start (``unstable``, for :func:`compare_open_loop`; two more
-        simulations of every run)."""
+        (:func:`uvsim.fitting.evaluate.open_loop`, the report's before/after RMSE): ``meas``,
+        ``preds`` (what :func:`uvsim.fitting.verdict.compare` compares) and ``score`` (the pooled
+        score, :func:`uvsim.fitting.verdict.score`; inf when a simulation diverges)."""
         known = vehicle.parameters()
         over = {k: v for k, v in values.items() if k in known}
-        ol = open_loop(vehicle, self.val, overrides=over, meas=self.meas_va)
-        # position and depth aligned over each run's start: the noisy first samples offset every
-        # model's simulation alike and could favour one by luck (uvsim.fitting.guard.start_aligned)
-        out = block_costs(self.meas_va, [start_aligned(m, o) for m, o in zip(self.meas_va, ol)])
-        if not stability:
-            return out
-        # runs whose free simulation amplifies its uncertain start (uvsim.fitting.sensitivity):
-        # compare_open_loop leaves their attitude, rates and accelerations out
-        growth = initial_state_growth(vehicle, self.val, self.meas_va, ol, overrides=over)
-        out["unstable"] = {k: g["channels"] for k, g in growth.items() if g["unstable"]}
-        return out
+        preds = [o["pred"] for o in open_loop(vehicle, self.val, overrides=over, meas=self.meas_va)]
+        return {"meas": self.meas_va, "preds": preds, "score": score(self.meas_va, preds)}
 
     def open_loop_cost(self, vehicle, values: Mapping) -> float:
-        """Noise-normalized sum of squares of the free simulations of the validation runs
-        (:meth:`open_loop_blocks`); inf when a simulation diverges."""
-        return self.open_loop_blocks(vehicle, values, stability=False)["total"]
+        """The pooled score of the free simulations of the validation runs (:meth:`open_loop_blocks`);
+        lower is better, inf when a simulation diverges."""
+        return self.open_loop_blocks(vehicle, values)["score"]
 
     def seed_retune(self, vehicle) -> dict:
         """Equation-error estimate of the re-tuned base coefficients (the start of the
@@ -473,6 +460,6 @@ class Selector:
         cmp = compare(val_cur, vc, best, c)
         row.update(result=best, values={k: best.values[k] for k in c.free}, std={k: best.std.get(k) for k in c.free},
                    train_cost=best.cost, val=vc, compare=cmp, problem=problem,
-                   open_loop_cost=vc["open_loop"]["total"],
+                   open_loop_cost=vc["open_loop"]["score"],
                    at_bounds=[n for n in best.at_bounds if n in c.free], vehicle=veh, all_values=vals)
         return row

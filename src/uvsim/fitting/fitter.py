@@ -144,7 +144,7 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
         initial_velocity: str = "zero",
         z0=None, progress=None, workers: int = 1, ftol: float = 1e-6, checkpoint=None,
         on_iteration=None, prior_mean=None, prior_sd=None, loss: str = "linear",
-        continuity: Sequence = DEFAULT_CONTINUITY) -> FitResult:
+        continuity: Sequence = DEFAULT_CONTINUITY, stage_meas=None) -> FitResult:
     """Fit ``space``'s free parameters of ``vehicle`` to ``runs`` (module docstring).
 
     Parameters
@@ -183,6 +183,11 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
     loss : "linear" (least squares) or "huber": the measurement residuals beyond
         :data:`uvsim.fitting.objective.HUBER_SCALE` noise sigmas cost linearly (outliers,
         dropouts, bursts of model error; :func:`uvsim.fitting.objective.robust_residuals`).
+    stage_meas : optional ``stage_meas(horizon, z) -> meas or None``, called at the start of every
+        stage with its horizon and start parameters: the measurement models that stage uses (None:
+        ``meas``).  The calibration's whole-run stage scales each channel by its own RMS error
+        there (:func:`uvsim.fitting.evaluate.judged_scales`).  It must depend on ``z`` only, so
+        that a resumed fit rebuilds the same stage.
     """
     runs = list(runs)
     if not runs:
@@ -205,8 +210,14 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
         z = np.array(saved["z"], float)
     res = None
     problems = []
+
+    def meas_of(H, z_start):
+        got = None if stage_meas is None else stage_meas(H, z_start)
+        return meas if got is None else got
+
     if saved is not None and first == len(plan):  # every stage finished: the final linearization only
-        problems, order = build_problems(vehicle, runs, meas, space, plan[-1][0], np.array(saved["z_start"]),
+        z_start = np.array(saved["z_start"])
+        problems, order = build_problems(vehicle, runs, meas_of(plan[-1][0], z_start), space, plan[-1][0], z_start,
                                          gyro_bias=gyro_bias, attitude_bias=attitude_bias, acc_bias=acc_bias,
                                          initial_velocity=initial_velocity, loss=loss, continuity=plan[-1][1])
         res = solve(problems, z, saved["nus"], max_iter=0, workers=workers, prior=prior)
@@ -218,7 +229,7 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
             continue
         t0 = time.perf_counter()
         z_start = z
-        problems, order = build_problems(vehicle, runs, meas, space, H, z, gyro_bias=gyro_bias,
+        problems, order = build_problems(vehicle, runs, meas_of(H, z), space, H, z, gyro_bias=gyro_bias,
                                          attitude_bias=attitude_bias, acc_bias=acc_bias,
                                          initial_velocity=initial_velocity, loss=loss, continuity=cont)
         label = ("whole runs" if H is None else f"{H:g} s windows") + ("" if cont == 1 else f", continuity {cont:g}")

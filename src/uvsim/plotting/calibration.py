@@ -18,8 +18,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt  # the package __init__ selects the Agg backend
 import numpy as np  # noqa: E402
 
-from uvsim.kinematics import quat_to_euler, unwrap_angles  # noqa: E402
-from uvsim.measurements import UNITS  # noqa: E402
+from uvsim.metrics import channel_series  # noqa: E402
 
 LINEAR = ("surge", "sway", "heave")
 ROTATIONAL = ("roll", "pitch", "yaw")
@@ -29,23 +28,12 @@ OWN_CHANNEL = {"surge": ("x",), "sway": ("y",), "heave": ("z", "depth"), "roll":
 
 
 def _series(meas, pred) -> list:
-    """[(channel, unit, valid (n,), measured (n,), predicted (n,), error (n,), sigma)]
-    of every logged channel (angles unwrapped, the prediction on the measured branch)."""
-    out = []
-    res = meas.residuals(pred)
-    for g, grp in meas.groups.items():
-        y = np.asarray(grp.values, float)
-        if g == "attitude":
-            y = quat_to_euler(y) if grp.mode == "quaternion" else y
-            y = unwrap_angles(np.where(grp.valid, y, np.nan))
-        for j, c in enumerate(grp.channels):
-            if not grp.logged[j]:
-                continue
-            e = res[g][:, j]
-            if g == "attitude" and grp.mode == "quaternion":  # rotation-vector component
-                e = np.where(grp.valid[:, j], e, np.nan)
-            out.append((c, UNITS[g], grp.valid[:, j], y[:, j], y[:, j] - e, e, float(grp.sigma[j])))
-    return out
+    """[(channel, unit, valid (n,), measured (n,), predicted (n,), error (n,), sigma)] of every
+    logged channel, from the one measure (:func:`uvsim.metrics.channel_series`): the predicted
+    curve is the model's free simulation through the measurement model (angles on the measured
+    value's branch), never the measurement minus a residual of another kind."""
+    return [(c, s["unit"], s["valid"], s["y"], s["y_hat"], s["e"], s["sigma"])
+            for c, s in channel_series(meas, pred).items()]
 
 
 def plot_runs(runs, meas, fitted, initial, out_dir) -> list[Path]:
@@ -59,8 +47,8 @@ def plot_runs(runs, meas, fitted, initial, out_dir) -> list[Path]:
         fig, axes = plt.subplots(len(fit), 1, figsize=(7, 1.7 * len(fit) + 0.6), sharex=True, squeeze=False)
         for ax, (c, unit, ok, y, yf, _, _), (_, _, _, _, yi, _, _) in zip(axes[:, 0], fit, ini):
             ax.plot(run.t[ok], y[ok], ".", ms=2, color="0.4", label="measured")
-            ax.plot(run.t[ok], yi[ok], "--", lw=1, color="tab:orange", label="initial model")
-            ax.plot(run.t[ok], yf[ok], "-", lw=1.2, color="tab:blue", label="fitted model")
+            ax.plot(run.t[ok], yi[ok], "--", lw=1, color="tab:orange", label="initial model (free simulation)")
+            ax.plot(run.t[ok], yf[ok], "-", lw=1.2, color="tab:blue", label="fitted model (free simulation)")
             ax.set_ylabel(f"{c} ({unit})")
         axes[0, 0].set_title(f"{run.name} ({run.dof or 'no dof'}, {run.split})")
         axes[0, 0].legend(fontsize=7, loc="best")

@@ -24,18 +24,19 @@ GROUP_ERR = {"position": "position error [m]", "depth": "depth error [m]", "atti
 
 
 def _series(res, meas, group):
-    """(measured (n, k), predicted (n, k), channel names) on the channel scale."""
-    from uvsim.kinematics import quat_to_euler, unwrap_angles
+    """(measured (n, k), predicted (n, k), channel names, their columns) of ``group`` from the one
+    measure (:func:`uvsim.metrics.channel_series`): the prediction is the free simulation through
+    the measurement model (angles on the measured value's branch); NaN where not a sample."""
+    from uvsim.metrics import channel_series
 
     grp = meas.groups[group]
-    p = np.asarray(res["pred"][group])
-    if group == "attitude" and grp.mode == "quaternion":
-        m, p = unwrap_angles(quat_to_euler(grp.values)), unwrap_angles(quat_to_euler(p))
-    elif group == "attitude":
-        m, p = unwrap_angles(np.array(grp.values, float)), unwrap_angles(p)
-    else:
-        m = np.array(grp.values, float)
-    m = np.where(grp.valid, m, np.nan)
+    ser = channel_series(meas, res["pred"])
+    n, k = meas.n, len(grp.channels)
+    m, p = np.full((n, k), np.nan), np.full((n, k), np.nan)
+    for j, c in enumerate(grp.channels):
+        if c in ser:
+            m[:, j] = np.where(ser[c]["measured"], ser[c]["y"], np.nan)
+            p[:, j] = ser[c]["y_hat"]
     return m, p, [c for c, on in zip(grp.channels, grp.logged) if on], np.flatnonzero(grp.logged)
 
 
