@@ -34,6 +34,13 @@ DIAG = ["--only", "current", "--max-iter", "3", "--max-effects", "1", "--quiet"]
 
 
 # ----------------------------------------------------------------------------- builders
+def _z_only(tmp: Path, *extra, at="[-0.15, 0, 0]") -> list:
+    """``simulate`` of a run logging z (no x, y) with a vehicle that declares a pressure sensor ``at``."""
+    veh = vehicle_file(tmp, ("effects: []", f"effects: []\nsensors: {{pressure: {{position: {at}}}}}"))
+    run = run_file(tmp, lambda d: d.drop(columns=["x", "y"]))
+    return ["simulate", "--vehicle", str(veh), "--run", str(run), "--out", str(tmp / "sim.csv"), *extra]
+
+
 def vehicle_file(tmp: Path, *edits, name="veh.yaml", text=None) -> Path:
     """The shipped bluerov2_heavy.yaml with (old, new) text replacements."""
     text = shipped_vehicle_text() if text is None else text
@@ -245,8 +252,9 @@ CASES = [
          ("run.csv", "column 't'", "milliseconds", "sample-interval")),
     Case("run-every-10s", lambda t: sim(run_file(t, every_n(500), seconds=60.0), t), "error",
          ("run.csv", "column 't'", "sample interval")),
-    Case("run-gap-100s", lambda t: sim(run_file(t, gap(100, 100.0)), t), "error",
-         ("run.csv", "column 't'", "row 100", "gap of 100")),
+    # a gap is cut out (uvsim.gaps): each segment simulated from its own first measured state, and said
+    Case("run-gap-100s", lambda t: sim(run_file(t, gap(100, 100.0)), t), "ok",
+         ("note:", "run.csv", "gap without measurements of 100 s", "no rows between row 99", "split into 2 segments")),
     Case("run-position-mm", lambda t: sim(run_file(t, scale(["x", "y", "z"], 1000.0)), t), "error",
          ("run.csv", "column 'x'", "millimetres", "--allow speed")),
     Case("run-position-mm-allowed", lambda t: sim(run_file(t, scale(["x", "y", "z"], 1000.0)), t, "--allow", "speed"),
@@ -265,6 +273,18 @@ CASES = [
          ("run.csv", "column 'pwm_3'", "row 12", "1050", "1100..1900")),
     Case("run-pwm-outside-curve-allow", lambda t: sim(run_file(t, set_cell("pwm_3", 12, 1050.0)), t, "--allow",
                                                       "pwm-range"), "error", ("--allow", "cannot be allowed")),
+    # a depth sensor's reading in the body origin's column z beside a declared pressure sensor
+    Case("run-z-beside-pressure-sensor", lambda t: _z_only(t), "error",
+         ("run.csv logs z without x and y", "pressure sensor at [-0.15, 0, 0]", "belongs in the `depth` column",
+          "--allow z-as-depth")),
+    Case("run-z-beside-pressure-sensor-allowed", lambda t: _z_only(t, "--allow", "z-as-depth"), "ok",
+         ("warning (allowed z-as-depth)", "run.csv logs z without x and y")),
+    Case("run-z-beside-sensor-at-origin", lambda t: _z_only(t, at="[0, 0, 0]"), "ok", ("",)),
+    # columns under another tool's names are refused; columns outside the format are said
+    Case("run-accelerometer-ax", lambda t: sim(run_file(t, lambda d: d.assign(ax=0.0, ay=0.0, az=-9.81)), t), "error",
+         ("run.csv", "'ax', 'ay', 'az'", "did you mean acc_x, acc_y, acc_z?")),
+    Case("run-extra-column-said", lambda t: sim(run_file(t, lambda d: d.assign(mag_x=0.2, mag_y=0.1)), t), "ok",
+         ("note:", "run.csv", "columns not in the log format, not used: mag_x, mag_y")),
     Case("run-allow-typo", lambda t: sim(run_file(t), t, "--allow", "sped"), "error",
          ("--allow", "'sped'", "did you mean 'speed'")),
     Case("run-pwm-zero", lambda t: sim(run_file(t, set_cell("pwm_1", 3, 0.0)), t), "error",
@@ -329,16 +349,17 @@ CASES = [
          ("surge_01.csv", "column 'x'", "millimetres")),
     Case("calibrate-time-ms", lambda t: calibrate(dataset(t, scale(["t"], 1000.0)), t), "error",
          ("surge_01.csv", "column 't'", "milliseconds")),
-    Case("calibrate-gap-100s", lambda t: calibrate(dataset(t, gap(100, 100.0)), t), "error",
-         ("surge_01.csv", "column 't'", "row 100", "gap")),
+    Case("calibrate-gap-100s", lambda t: calibrate(dataset(t, gap(100, 100.0)), t), "ok",
+         ("note:", "surge_01.csv", "gap without measurements of 100 s",
+          "split into 2 segments surge_01[1], surge_01[2]")),
     Case("calibrate-pwm-outside-curve", lambda t: calibrate(dataset(t, set_cell("pwm_5", 40, 1950.0)), t), "error",
          ("surge_01.csv", "column 'pwm_5'", "row 40", "1100..1900")),
     Case("diagnose-position-mm", lambda t: diagnose(dataset(t, scale(["x", "y", "z"], 1000.0))), "error",
          ("surge_01.csv", "column 'x'", "millimetres")),
     Case("diagnose-time-ms", lambda t: diagnose(dataset(t, scale(["t"], 1000.0))), "error",
          ("surge_01.csv", "column 't'", "milliseconds")),
-    Case("diagnose-gap-100s", lambda t: diagnose(dataset(t, gap(100, 100.0))), "error",
-         ("surge_01.csv", "column 't'", "gap")),
+    Case("diagnose-gap-100s", lambda t: diagnose(dataset(t, gap(100, 100.0))), "ok",
+         ("note:", "surge_01.csv", "gap without measurements of 100 s", "split into 2 segments")),
     Case("calibrate-no-refine", lambda t: calibrate(dataset(t), t, "--json", str(t / "out" / "r.json")), "ok", ("",),
          check=lambda t, out, err: _fitted_loadable(t)),
     Case("calibrate-bad-resume", lambda t: calibrate(dataset(t), t, "--resume", str(_text(t / "x.ckpt", "junk"))),
@@ -472,9 +493,10 @@ API_CASES = {
         population=4, generations=1, allow=["time-gap"]).fit(dataset(t, scale(["x"], 1000.0)),
                                                              "bluerov2_heavy_initial"),
         uvsim.errors.PlausibilityError, ("surge_01.csv", "column 'x'", "--allow speed")),
-    "diagnose-gap": (lambda t: __import__("uvsim.diagnosis").diagnosis.diagnose(
-        dataset(t, gap(100, 100.0)), "bluerov2_heavy", only=["current"], max_iter=3),
-        uvsim.errors.PlausibilityError, ("surge_01.csv", "column 't'", "row 100", "gap")),
+    # a run read alone is not cut (datasets and the commands cut theirs): the gap check still guards the API
+    "check-runs-gap": (lambda t: __import__("uvsim.plausibility").plausibility.check_runs(
+        [uvsim.logs.read_run(run_file(t, gap(100, 100.0)))], uvsim.load_vehicle("bluerov2_heavy")),
+        uvsim.errors.PlausibilityError, ("run.csv", "column 't'", "row 100", "gap", "uvsim.gaps.split_run")),
     "check-runs-mm": (lambda t: __import__("uvsim.plausibility").plausibility.check_runs(
         [uvsim.logs.read_run(run_file(t, scale(["x"], 1000.0)))], uvsim.load_vehicle("bluerov2_heavy")),
         uvsim.errors.PlausibilityError, ("run.csv", "column 'x'")),

@@ -4,13 +4,13 @@ Each *mutation operator* changes the shipped run, vehicle file or manifest in on
 with random details drawn from a seeded generator (``VARIANTS`` draws per operator), and
 states what must happen:
 
-* ``same``: the change means nothing (column order, extra columns, line endings, comments,
-  free-form metadata): the command succeeds and its output is identical to that of the
-  unmutated file - a mutation that changed the result would be a silent change;
+* ``same``: the change means nothing (column order, line endings, comments, free-form
+  metadata): the command succeeds and its output is identical to that of the unmutated
+  file - a mutation that changed the result would be a silent change;
 * ``ok``: the command succeeds (a representation change, e.g. Euler angles instead of
   quaternions, that alters the numbers in the last bits);
 * ``note``: the command succeeds and prints a note naming the file (the reader changed the
-  data, e.g. renormalized quaternions);
+  data, e.g. renormalized quaternions, or did not use some of it: an extra column, a gap);
 * ``error``: exit status 2 and one ``uvsim CMD: error:`` line naming the file and the
   fragments the operator lists (column, row, key) - never a traceback.
 
@@ -34,6 +34,7 @@ import uvsim
 from contract_data import shipped_run, shipped_vehicle_text, write_tiny_dataset
 from uvsim.cli import main
 from uvsim.errors import UvsimError
+from uvsim.gaps import split_run
 from uvsim.logs import read_dataset, read_run
 from uvsim.plausibility import check_runs
 from uvsim.simulate import simulate_run
@@ -79,7 +80,8 @@ def reorder_columns(rng, df):
 
 @op(RUN_OPS)
 def extra_numeric_column(rng, df):
-    return Mutant(csv(df.assign(mag_x=rng.normal(size=len(df)))), "same")
+    # kept and not used, which the commands say (test_logs.py checks the result is unchanged)
+    return Mutant(csv(df.assign(mag_x=rng.normal(size=len(df)))), "note", ("mag_x",))
 
 
 @op(RUN_OPS)
@@ -125,7 +127,8 @@ def time_in_ms_or_us(rng, df):
 def gap_in_time(rng, df):
     d, i = df.copy(), _row(rng, df)
     d.loc[i:, "t"] += float(rng.uniform(5.0, 500.0))
-    return Mutant(csv(d), "error", ("column 't'", f"row {i}", "gap"))
+    # cut into segments at the gap (uvsim.gaps), each simulated from its own start, and said
+    return Mutant(csv(d), "note", ("gap without measurements", f"row {i - 1}"))
 
 
 @op(RUN_OPS)
@@ -486,6 +489,8 @@ def _expect_cli(m: Mutant, rc, err, file_name, cmd):
         assert rc == 0 or (cmd == "calibrate" and rc in (2, 3) and "uvsim calibrate: verdict " in err), err
         if m.expect == "note":
             assert "note:" in err and file_name in err, err
+            for f in m.frags:
+                assert f in err, f"{f!r} not in {err!r}"
 
 
 def _expect_api(m: Mutant, call, file_name):
@@ -526,10 +531,10 @@ def test_fuzz_run_file(name, variant, base_run, baseline, tmp_path, capsys):
         assert (tmp_path / "o.csv").read_text() == baseline["sim_csv"]
     veh = uvsim.load_vehicle("bluerov2_heavy")
 
-    def api():
-        run = read_run(path)
-        check_runs([run], veh)
-        return run, simulate_run(veh, run)
+    def api():  # as `uvsim simulate`: the run cut at its gaps (none but in gap_in_time)
+        runs = split_run(read_run(path))
+        check_runs(runs, veh)
+        return runs[0], simulate_run(veh, runs[0])
 
     res = _expect_api(m, api, "run.csv")
     if res is not None:

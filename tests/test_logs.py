@@ -160,9 +160,81 @@ def test_entirely_empty_column_counts_as_absent(tmp_path):
 
 
 def test_extra_columns_are_kept(tmp_path):
-    run = read_run(save(tmp_path, frame(ax=np.ones(N))))
-    assert run.extra_columns == ["ax"]
-    np.testing.assert_array_equal(run.data["ax"], 1.0)
+    run = read_run(save(tmp_path, frame(mag_x=np.ones(N))))
+    assert run.extra_columns == ["mag_x"]
+    np.testing.assert_array_equal(run.data["mag_x"], 1.0)
+
+
+@pytest.mark.parametrize("names, suggested", [
+    (("ax", "ay", "az"), "acc_x, acc_y, acc_z"),           # what some converters write
+    (("accel_x", "accel_y", "accel_z"), "acc_x, acc_y, acc_z"),
+    (("acc_x_mps2", "acc_y_mps2", "acc_z_mps2"), "acc_x, acc_y, acc_z"),   # a unit suffix
+    (("ACC_X", "ACC_Y", "ACC_Z"), "acc_x, acc_y, acc_z"),   # case
+    (("gx", "gy", "gz"), "p, q, r"), (("gyro_x",), "p"), (("wz",), "r"),
+    (("phi", "theta", "psi"), "roll, pitch, yaw"), (("roll_deg",), "roll"),
+    (("quat_w", "quat_x", "quat_y", "quat_z"), "qw, qx, qy, qz"), (("q0", "q1", "q2", "q3"), "qw, qx, qy, qz"),
+    (("vx", "vy", "vz"), "u, v, w"),
+    (("depth_m",), "depth"), (("pressure_depth",), "depth"),
+])
+def test_a_format_column_under_another_name_is_refused_with_the_format_name(tmp_path, names, suggested):
+    """No silent loss: before, such columns were kept as extras and every method ran without them."""
+    cols = {n: np.full(N, -9.81 if n.endswith("z") else 0.01) for n in names}
+    p = save(tmp_path, frame(roll=None, pitch=None, yaw=None, **cols))  # the format's own columns absent
+    listed = ", ".join(repr(n) for n in names)
+    with raises(p, "run.csv", listed, "not in the log format", f"did you mean {suggested}?"):
+        read_run(p)
+
+
+def test_accelerometer_as_ax_names_acc_x_and_what_it_holds(tmp_path):
+    acc = {"ax": np.zeros(N), "ay": np.zeros(N), "az": np.full(N, -9.81)}
+    p = save(tmp_path, frame(**acc))
+    with raises(p, "run.csv", "columns 'ax', 'ay', 'az'", "did you mean acc_x, acc_y, acc_z?",
+                "m/s^2, accelerometer specific force in body axes"):
+        read_run(p)
+    with raises(p, "run 'r'", "'ax'"):   # write_run validates the same way
+        Run("r", None, frame(**acc))
+
+
+def test_velocity_alias_says_u_v_w_are_body_frame(tmp_path):
+    p = save(tmp_path, frame(vx=np.zeros(N)))
+    with raises(p, "'vx'", "did you mean u?", "body-frame velocity; a velocity in NED has no column"):
+        read_run(p)
+
+
+@pytest.mark.parametrize("name, suggested", [
+    ("thrust1", "thrust_1"), ("pwm1", "pwm_1"), ("motor_1", "pwm_1 or thrust_1"), ("PWM_1", "pwm_1"),
+    ("time", "t"), ("timestamp", "t")])
+def test_actuator_and_time_aliases(tmp_path, name, suggested):
+    if name in ("time", "timestamp"):
+        cols = {"t": None, name: np.arange(N) * 0.1}
+    else:
+        cols = no_force(**{name: np.full(N, 1500.0)})
+    p = save(tmp_path, frame(**cols))
+    with raises(p, "run.csv", repr(name), f"did you mean {suggested}?"):
+        read_run(p)
+
+
+def test_an_alias_beside_its_format_column_or_empty_is_an_extra_column(tmp_path):
+    """Conservative: ``timestamp`` beside ``t`` (a second clock) is kept, and an entirely empty
+    ``ax`` counts as absent."""
+    run = read_run(save(tmp_path, frame(timestamp=1.7e9 + np.arange(N), ax=np.full(N, np.nan))))
+    assert run.extra_columns == ["timestamp"] and run.empty_columns == ["ax"]
+
+
+def test_columns_outside_the_format_are_kept_and_said(tmp_path):
+    """Not aliases (magnetometer, a raw ADC value, a temperature): kept, not used, and a note
+    (:attr:`Run.notes`, printed by every command) names them."""
+    extra = {"mag_x": np.ones(N), "mag_y": np.ones(N), "voltage_raw": np.full(N, 812.0), "temperature": np.full(N, 9.0)}
+    run = read_run(save(tmp_path, frame(**extra)))
+    assert run.extra_columns == list(extra)
+    assert run.notes == [f"{tmp_path / 'run.csv'}: columns not in the log format, not used: "
+                         "mag_x, mag_y, voltage_raw, temperature"]
+    plain = read_run(save(tmp_path, frame(), name="plain.csv"))
+    assert plain.notes == [] and plain.extra_columns == []
+    import uvsim
+
+    veh = uvsim.load_vehicle("bluerov2_heavy")
+    np.testing.assert_array_equal(uvsim.simulate_run(veh, run).y, uvsim.simulate_run(veh, plain).y)
 
 
 def test_dataset_round_trip(tmp_path):

@@ -13,6 +13,7 @@ import pandas as pd
 
 from uvsim.errors import LogFormatError
 from uvsim.kinematics import attitude_error_angle, euler_to_quat
+from uvsim.log_aliases import check_aliases
 
 INPUT_KINDS = ("force", "thrust", "pwm")
 FORCE_COLUMNS = ("X", "Y", "Z", "K", "M", "N")
@@ -48,8 +49,12 @@ QUAT_NOTE_TOL = 1e-3
 #: Largest disagreement (rad) allowed between quaternion and Euler columns
 #: when a run logs both.
 ATTITUDE_CONSISTENCY_TOL = 1e-2
+#: The format's own names (exact, case-sensitive) besides ``thrust_i`` / ``pwm_i``.
+FORMAT_COLUMNS = ("t", VOLTAGE_COLUMN) + MEASURED_COLUMNS + FORCE_COLUMNS
 _ACTUATOR_RE = re.compile(r"^(thrust|pwm)_([1-9][0-9]*)$")
-_ACTUATOR_LIKE_RE = re.compile(r"^(thrust|pwm|thruster)\D*\d+$", re.IGNORECASE)
+# a thruster name and a number, nothing between but a separator (``pwm_0``, ``thruster-3``);
+# ``thrust_lag_1`` (a simulation's term state) is another quantity and an extra column
+_ACTUATOR_LIKE_RE = re.compile(r"^(thrust|pwm|thruster)[\s_-]*\d+$", re.IGNORECASE)
 
 
 def _row(i: int, source: str) -> str:
@@ -144,6 +149,7 @@ def _actuator_columns(cols, source: str) -> tuple[str | None, list[str]]:
 def _validate(df: pd.DataFrame, source: str) -> tuple[pd.DataFrame, list[str], str, list[str]]:
     """Check a run frame against the contract; returns (clean frame, empty
     columns, input kind, input columns)."""
+    check_aliases(df, FORMAT_COLUMNS, source)  # ax, time, phi, ...: named so that they are read
     df, empty = _clean(df, source)
     cols = list(df.columns)
     if "t" not in cols:
@@ -234,6 +240,17 @@ def _check_voltage_column(v: np.ndarray, source: str) -> None:
         raise LogFormatError(
             f"{source}: column 'voltage', {_row(i, source)}: {float(v[i])!r} V is not a positive battery voltage"
         )
+
+
+def _extra_column_notes(df: pd.DataFrame, input_columns, source: str) -> list[str]:
+    """A note naming the columns that are not part of the log format: they are kept in the
+    run's table (:attr:`uvsim.logs.Run.extra_columns`) and no method uses them, which the
+    commands say (docs/log_format.md)."""
+    known = set(FORMAT_COLUMNS) | set(input_columns)
+    extra = [c for c in df.columns if c not in known]
+    if not extra:
+        return []
+    return [f"{source}: column{'s' if len(extra) > 1 else ''} not in the log format, not used: {', '.join(extra)}"]
 
 
 def _quaternion_notes(df: pd.DataFrame, source: str) -> list[str]:

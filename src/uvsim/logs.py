@@ -23,11 +23,12 @@ import yaml
 
 from uvsim.errors import LogFormatError
 from uvsim.files import load_yaml
+from uvsim.gaps import split_runs
 from uvsim.kinematics import euler_to_quat, quat_to_euler
 from uvsim.log_columns import (  # noqa: F401  (the column names are part of this module's interface)
     ACCEL_COLUMNS, ATTITUDE_CONSISTENCY_TOL, DEPTH_COLUMN, EULER_COLUMNS, FORCE_COLUMNS, INPUT_KINDS,
     MEASURED_COLUMNS, POSITION_COLUMNS, PWM_RANGE_US, QUAT_COLUMNS, QUAT_NORM_TOL, QUAT_NOTE_TOL, RATE_COLUMNS,
-    VELOCITY_COLUMNS, VOLTAGE_COLUMN, _quaternion_notes, _validate)
+    VELOCITY_COLUMNS, VOLTAGE_COLUMN, FORMAT_COLUMNS, _extra_column_notes, _quaternion_notes, _validate)
 from uvsim.schema import check_keys, require_mapping
 
 DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw", "mixed")
@@ -72,9 +73,16 @@ class Run:
     weight: float = 1.0
     split: str = "train"
     empty_columns: list[str] = field(init=False, default_factory=list)
-    #: What the reader changed in the data beyond the float64 conversion (e.g. quaternions
-    #: renormalized by more than :data:`QUAT_NOTE_TOL`); commands print these.
+    #: What the reader changed in the data beyond the float64 conversion or did not use (e.g.
+    #: quaternions renormalized by more than :data:`QUAT_NOTE_TOL`, columns not in the format,
+    #: a run split at a gap: :mod:`uvsim.gaps`); commands print these.
     notes: list[str] = field(init=False, default_factory=list)
+    #: Row 0 of this table is row ``row_offset`` of the file (a segment of a run split at a
+    #: gap, :mod:`uvsim.gaps`), so that messages name the file's rows.
+    row_offset: int = field(init=False, default=0)
+    #: The name of the run this one was cut from at a gap (:mod:`uvsim.gaps`); None for a
+    #: run as read.
+    segment_of: str | None = field(init=False, default=None)
     #: How much later than their time stamps the inputs act in this copy of the run, s
     #: (:func:`uvsim.latency.delay_inputs`; 0: as logged), and the run as logged.
     input_delay: float = field(init=False, default=0.0)
@@ -89,7 +97,7 @@ class Run:
         self.split = _check_choice(self.split, SPLITS, "split", src, none_ok=False)
         self.weight = _check_weight(self.weight, src)
         self.data, self.empty_columns, self._kind, self._input_columns = _validate(self.data, src)
-        self.notes = _quaternion_notes(self.data, src)
+        self.notes = _quaternion_notes(self.data, src) + _extra_column_notes(self.data, self._input_columns, src)
 
     def derived(self, data: pd.DataFrame, *, name: str | None = None) -> "Run":
         """A copy of this run with ``data`` in place of its table, not validated again: for
@@ -267,21 +275,28 @@ class Run:
 
     @property
     def extra_columns(self) -> list[str]:
-        """Columns that are not part of the log format (kept in ``data``)."""
-        known = set(("t", VOLTAGE_COLUMN) + MEASURED_COLUMNS) | set(self._input_columns)
+        """Columns that are not part of the log format (kept in ``data``, named in :attr:`notes`)."""
+        known = set(FORMAT_COLUMNS) | set(self._input_columns)
         return [c for c in self.data.columns if c not in known]
 
 
 @dataclass
 class Dataset:
     """A directory of runs described by ``manifest.yaml``.  ``meta`` holds any
-    manifest keys other than vehicle/description/runs."""
+    manifest keys other than vehicle/description/runs.
+
+    ``runs`` are the runs cut at their gaps (:func:`uvsim.gaps.split_run`): a run with a
+    stretch without measurements is here as its segments ``NAME[1]``, ``NAME[2]``, ..., each
+    with a note saying so, so that every method that takes a dataset sees the same segments."""
 
     path: Path
     vehicle: str | None
     description: str
     runs: list[Run]
     meta: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        self.runs = split_runs(self.runs)
 
     @property
     def train(self) -> list[Run]:

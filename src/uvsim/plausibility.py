@@ -36,6 +36,10 @@ Checks (name: what is flagged):
 ``accel-units``
     The median magnitude of the accelerometer specific force is not near ``g`` (a
     vehicle at rest reads (0, 0, -g)): accelerations logged in g.
+``z-as-depth``
+    The run logs ``z`` but neither ``x`` nor ``y`` (nor ``depth``) while the vehicle file
+    declares a pressure sensor off the body origin: a depth sensor's reading written in the
+    body origin's column, whose lever arm every method would then ignore.
 ``pwm-range`` (cannot be allowed)
     A PWM command outside the range of the vehicle's thrust curve: the curve has no
     value there and nothing is clipped (docs/thrusters.md).
@@ -90,6 +94,7 @@ CHECKS = {
     "angle-range": "roll outside [-pi, pi] or pitch outside [-pi/2, pi/2] (degrees?)",
     "position-range": f"z or depth below {MAX_DEPTH:g} m (millimetres?)",
     "accel-units": "median accelerometer magnitude far from g (logged in g?)",
+    "z-as-depth": "z without x and y beside a declared pressure sensor (its reading belongs in depth)",
     "pwm-range": "PWM outside the vehicle's thrust-curve range (cannot be allowed)",
     "input-columns": "thrust/PWM columns that do not match the vehicle's thrusters (cannot be allowed)",
 }
@@ -156,7 +161,7 @@ def _src(run) -> str:
 def _row(run, i: int) -> str:
     from uvsim.log_columns import _row as row
 
-    return row(int(i), _src(run))
+    return row(int(i) + getattr(run, "row_offset", 0), _src(run))  # a segment's rows are the file's from row_offset on
 
 
 def _lag(t: np.ndarray) -> int:
@@ -204,7 +209,7 @@ def _check_time(run, vehicle, tau, what) -> list[Finding]:
             f"{_src(run)}: column 't', {_row(run, i)}: gap of {d[i - 1]:.4g} s after t = {t[i - 1]:.6g} s "
             f"(median interval {med:.4g} s); the inputs are held and one RK4 step spans the gap (expected no "
             f"interval above {limit:.3g} s = max({GAP_FACTOR:g} median intervals, the shortest time constant "
-            f"{tau:.3g} s); split the run at the gap")))
+            f"{tau:.3g} s); split the run at the gap (uvsim.gaps.split_run, as datasets and the commands do)")))
     return out
 
 
@@ -305,6 +310,21 @@ def _check_accel(run, vehicle) -> list[Finding]:
         f"{lo:g}..{hi:g} g (accelerations logged in g?)"))]
 
 
+def _check_z_as_depth(run, vehicle) -> list[Finding]:
+    """``z`` alone beside a pressure sensor declared off the body origin (module docstring).
+    A sensor at the origin reads the origin's depth, so ``z`` is then right either way."""
+    cols = run.data.columns
+    r_p = np.asarray(vehicle.sensors.get("pressure", np.zeros(3)), float)
+    if "z" not in cols or "x" in cols or "y" in cols or "depth" in cols or not np.any(r_p != 0):
+        return []
+    at = "[" + ", ".join(f"{v:g}" for v in r_p) + "]"
+    return [Finding("z-as-depth", (
+        f"run {_src(run)} logs z without x and y while the vehicle declares a pressure sensor at {at} m "
+        f"({vehicle.source}: sensors.pressure.position): a pressure sensor's reading belongs in the `depth` column "
+        "(z is the NED position of the body origin, e.g. motion capture); rename the column, or --allow "
+        "z-as-depth if z really is the body origin's"))]
+
+
 def _check_inputs(run, vehicle) -> list[Finding]:
     kind = run.input_kind
     if kind == "force":
@@ -346,7 +366,7 @@ def check_run(run, vehicle) -> list[Finding]:
     ``vehicle`` (a :class:`uvsim.vehicle.Vehicle`), in the order of the module docstring."""
     tau, what = shortest_time_constant(vehicle)
     return (_check_inputs(run, vehicle) + _check_time(run, vehicle, tau, what) + _check_translation(run)
-            + _check_rotation(run) + _check_accel(run, vehicle))
+            + _check_rotation(run) + _check_accel(run, vehicle) + _check_z_as_depth(run, vehicle))
 
 
 def parse_allow(text: str | Iterable[str] | None, option: str = "--allow") -> set[str]:

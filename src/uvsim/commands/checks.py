@@ -64,7 +64,8 @@ def check_runs_at_door(command: str, runs, vehicle, allow_text: str | None) -> l
 
     allow = parse_allow(allow_text)
     lines = [f"warning (allowed {f.check}): {f.message}" for f in check_runs(runs, vehicle, allow)]
-    lines += [f"note: {n}" for r in runs for n in r.notes]
+    # the segments of a run cut at a gap share its notes (uvsim.gaps): each is said once
+    lines += [f"note: {n}" for n in dict.fromkeys(n for r in runs for n in r.notes)]
     for line in lines:
         say(command, line)
     return lines

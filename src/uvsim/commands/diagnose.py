@@ -65,6 +65,7 @@ def format_table(report: dict) -> str:
         what = " (the base model: thrust curve)" if st["step"] == 0 else ""
         lines.append(f"step {st['step']}{what}: validation cost {st['before_cost_per_entry']:.3f} (squared noise "
                      f"sigmas per residual) with {st.get('model', 'the given model')}")
+        lines += _screening_lines(st.get("screening") or {})
         lines.append(f"  {'candidate':30s} {'screen':>7s} {'Wald p':>8s} {'val cost':>9s} {'change':>8s} {'P(better)':>9s}  "
                      "accepted  why")
         screen = {(s["effect"], s["variant"]): s["screening_reduction"] for s in st["screened"]}
@@ -116,6 +117,18 @@ def format_table(report: dict) -> str:
             lines.append(f"{k:28s} {v:24.5g}")
     lines.append(f"{report['fits']} fits in {report['seconds']:.1f} s")
     return "\n".join(lines)
+
+
+def _screening_lines(info: dict) -> list[str]:
+    """What the equation-error screening of a step could not use (nothing when it used every
+    training run): the runs left out and why, or that it was off."""
+    skipped = info.get("not_used") or {}
+    if not skipped:
+        return []
+    used = info.get("runs") or []
+    head = (f"  screening by equation error on {len(used)} of {len(used) + len(skipped)} training run(s)"
+            if used else "  no screening by equation error (no training run allows it)")
+    return [head + "; not used:"] + [f"    {why}" for why in skipped.values()]
 
 
 def _pct(x):

@@ -61,7 +61,12 @@ def _check(veh, args, text) -> int:
         print("replaying the standard 60 s maneuver (uvsim.export.replay.standard_maneuver, generalized forces)")
         res = replay_check(veh, t, U, input_kind="force", target=args.to, physics_step=h, text=text)
     else:
-        res = replay_check(veh, args.check, target=args.to, physics_step=h, text=text)
+        from uvsim.logs import read_run
+
+        run = read_run(args.check)  # only its inputs are replayed; what the reader noted is said
+        for n in run.notes:
+            print(f"uvsim export: note: {n}", file=sys.stderr)
+        res = replay_check(veh, run, target=args.to, physics_step=h, text=text)
     print(res.summary())
     mode = "fluid" if args.to == "gz-sim" and (args.added_mass or "fluid") == "fluid" else "plugin"
     st = stable_step(veh, added_mass=mode, target=args.to)

@@ -62,6 +62,7 @@ def _vehicle_for(args):
 
 
 def _run(args) -> int:
+    from uvsim.gaps import split_run
     from uvsim.latency import delay_inputs
     from uvsim.logs import read_run, write_run
     from uvsim.simulate import simulate_run
@@ -73,21 +74,27 @@ def _run(args) -> int:
     check_outputs({"--out": args.out, "--plot": args.plot})
     veh = load_vehicle(_vehicle_for(args))
     run = read_run(args.run)
-    check_runs_at_door("simulate", [run], veh, args.allow)
-    run = delay_inputs(run, veh.sensor_latency)  # as simulate_run applies them (and --compare's forces)
-    res = simulate_run(veh, run, current=current, method=args.method, substeps=args.substeps,
-                       initial_window_s=args.initial_window)
+    segments = split_run(run)  # a run with gaps: each segment from its own first measured state (uvsim.gaps)
+    check_runs_at_door("simulate", segments, veh, args.allow)
+    pieces = []
+    for seg in segments:
+        seg = delay_inputs(seg, veh.sensor_latency)  # as simulate_run applies them (and --compare's forces)
+        pieces.append((seg, simulate_run(veh, seg, current=current, method=args.method, substeps=args.substeps,
+                                         initial_window_s=args.initial_window)))
     if veh.sensor_latency:
         print(f"inputs applied {veh.sensor_latency * 1000:.1f} ms late (the vehicle's sensors.latency)")
     if args.out:
-        df = res.to_pandas()
+        import pandas as pd
+
+        df = pd.concat([res.to_pandas() for _, res in pieces], ignore_index=True)
         cols = ["t", "x", "y", "z", "qw", "qx", "qy", "qz", "roll", "pitch", "yaw", "u", "v", "w", "p", "q", "r"]
         extra = [c for c in df.columns if c not in cols]
         df = df[cols + extra]
         write_run(args.out, df)
-        print(f"simulated {run.name}: {len(df)} samples, {df.t.iloc[-1] - df.t.iloc[0]:.2f} s -> {args.out}")
+        per = f" in {len(pieces)} segments, each from its own first measured state" if len(pieces) > 1 else ""
+        print(f"simulated {run.name}{per}: {len(df)} samples, {df.t.iloc[-1] - df.t.iloc[0]:.2f} s -> {args.out}")
     if args.compare:
-        _compare(args, veh, run, res, current)
+        _compare(args, veh, run, pieces, current)
     return 0
 
 
@@ -168,25 +175,65 @@ def channel_metrics(channels: list[dict]) -> list[dict]:
     return rows
 
 
-def _compare(args, veh, run, res, current) -> None:
-    from uvsim.plotting.compare import compare_run
+def _joined(per_segment: list[list[dict]], lengths: list[int]) -> list[dict]:
+    """The channels of several segments (:func:`compare_channels` of each) end to end: a
+    channel a segment does not log is NaN there."""
+    names = list(dict.fromkeys(c["name"] for chans in per_segment for c in chans))
+    out = []
+    for name in names:
+        parts = [next((c for c in chans if c["name"] == name), None) for chans in per_segment]
+        unit = next(c["unit"] for c in parts if c is not None)
+        cat = {k: np.concatenate([c[k] if c is not None else np.full(n, np.nan) for c, n in zip(parts, lengths)])
+               for k in ("measured", "simulated")}
+        out.append({"name": name, "unit": unit, **cat})
+    return out
 
-    chans = compare_channels(veh, run, res, current)
-    rows = channel_metrics(chans)
-    print(f"{run.name} vs {veh.name}: {len(run.t)} samples, {run.t[-1] - run.t[0]:.2f} s")
-    print(f"{'channel':>8} {'unit':>6} {'n':>6} {'RMSE':>11} {'NRMSE %':>9} {'Fit %':>9}")
-    for r in rows:
-        print(f"{r['name']:>8} {r['unit']:>6} {r['n']:>6d} {r['rmse']:>11.4g} {r['nrmse_percent']:>9.2f} "
-              f"{r['fit_percent']:>9.2f}")
+
+def _measured_track(run) -> np.ndarray:
+    """Measured NED position for the 3-D view (display only): depth on the z axis of a
+    depth-only log, and each axis held between its samples so that x, y and depth logged by
+    different sensors at different times form one track."""
     import pandas as pd
 
     meas = run.position.copy()
     if run.has_depth and np.isnan(meas[:, 2]).all():
         meas[:, 2] = run.depth
-    # display only: hold each measured axis between its samples so that x, y and depth
-    # logged by different sensors at different times form one 3-D track
-    meas = pd.DataFrame(meas).ffill().to_numpy()
+    return pd.DataFrame(meas).ffill().to_numpy()
+
+
+def _with_breaks(pieces, chans: list[dict], lengths: list[int]):
+    """The figure's times, simulated and measured tracks and channels, with one NaN sample
+    in each gap between segments so that no line is drawn across it (display only)."""
+    ends = np.cumsum(lengths)[:-1]
+    gap_t = [0.5 * (a.t[-1] + b.t[0]) for (a, _), (b, _) in zip(pieces[:-1], pieces[1:])]
+
+    def brk(x, fill=np.nan):
+        return np.insert(x, ends, fill, axis=0)
+
+    t = brk(np.concatenate([seg.t for seg, _ in pieces]), gap_t)
+    sim = brk(np.concatenate([res.y[:, 0:3] for _, res in pieces]))
+    meas = brk(np.concatenate([_measured_track(seg) for seg, _ in pieces]))
+    chans = [{**c, "measured": brk(c["measured"]), "simulated": brk(c["simulated"])} for c in chans]
+    return t, sim, meas, chans
+
+
+def _compare(args, veh, run, pieces, current) -> None:
+    """Print the per-channel table and write the figure for the simulated ``pieces``
+    ((segment, result) pairs: the run itself, or its segments when it has gaps)."""
+    from uvsim.plotting.compare import compare_run
+
+    lengths = [len(seg.t) for seg, _ in pieces]
+    chans = _joined([compare_channels(veh, seg, res, current) for seg, res in pieces], lengths)
+    rows = channel_metrics(chans)
+    span = sum(seg.t[-1] - seg.t[0] for seg, _ in pieces)
+    per = f" in {len(pieces)} segments (gaps left out)" if len(pieces) > 1 else ""
+    print(f"{run.name} vs {veh.name}: {sum(lengths)} samples, {span:.2f} s{per}")
+    print(f"{'channel':>8} {'unit':>6} {'n':>6} {'RMSE':>11} {'NRMSE %':>9} {'Fit %':>9}")
+    for r in rows:
+        print(f"{r['name']:>8} {r['unit']:>6} {r['n']:>6d} {r['rmse']:>11.4g} {r['nrmse_percent']:>9.2f} "
+              f"{r['fit_percent']:>9.2f}")
+    t, sim, meas, chans = _with_breaks(pieces, chans, lengths)
     base = Path(args.out) if args.out else Path(args.run)
     plot = Path(args.plot) if args.plot else base.with_name(base.stem + "_compare.png")
-    compare_run(run.t, chans, res.y[:, 0:3], meas, plot, title=f"{run.name}: measured vs {veh.name}")
+    compare_run(t, chans, sim, meas, plot, title=f"{run.name}: measured vs {veh.name}")
     print(f"plot -> {plot}")

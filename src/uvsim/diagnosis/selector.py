@@ -22,7 +22,7 @@ from uvsim.diagnosis.regression import BaseBlock, ls_step, stepwise
 from uvsim.diagnosis.starts import SLACK_GN_ITERATIONS, candidate_starts, slack_starts
 from uvsim.errors import CalibrationError, UvsimError, VehicleError
 from uvsim.fitting import fit
-from uvsim.fitting.equation_error import EquationError, measured_motion
+from uvsim.fitting.equation_error import EquationError, motion_or_why
 from uvsim.fitting.evaluate import open_loop
 from uvsim.fitting.parameters import FreeParameter, ParameterSpace, default_bounds
 from uvsim.fitting.verdict import score
@@ -72,7 +72,11 @@ class Selector:
                                          attitude_lag=attitude_lag) for r in train]
         self.meas_va = [measurements_for(r, vehicle, noise=noise, weights=weights, run_weight=1.0,
                                          attitude_lag=attitude_lag) for r in val]
-        self.motions = [measured_motion(r) for r in train]
+        # the equation error of every training run it can use; the others are named, with why
+        motions = [motion_or_why(r) for r in train]
+        self.motions = [m for m, _ in motions]
+        self.motion_why = {r.name: why for r, (m, why) in zip(train, motions) if m is None}
+        self._say_unscreened()
         self.retune = list(retune or [])
         p = vehicle.parameters()
         unknown = [n for n in self.retune if n not in p]
@@ -83,6 +87,17 @@ class Selector:
         self.not_observable: list = []
         self.store = {} if store is None else store
         self.on_fit = on_fit
+
+    def _say_unscreened(self) -> None:
+        """Say which training runs the equation-error screening cannot use, and why (it is in
+        every step's report too, ``screening.not_used``)."""
+        if not self.motion_why:
+            return
+        used = len(self.train) - len(self.motion_why)
+        self.say(f"equation-error screening on {used} of {len(self.train)} training run(s); not used: "
+                 + "; ".join(self.motion_why.values())
+                 + ("" if used else "; the screening is off: each effect's simplest variant is fitted through "
+                                    "the simulator"))
 
     # ---------------------------------------------------------------- models
     def vehicle_for(self, accepted: Sequence[Candidate], extra: Candidate | None = None):
@@ -171,7 +186,7 @@ class Selector:
         the current model's free parameters (``cur``: vehicle, values, free, bounds), and the
         coupled-damping pick; returns (candidates with their screening numbers, info)."""
         motions = [m for m in self.motions if m is not None]
-        info = {"available": bool(motions)}
+        info = {"available": bool(motions), "runs": [m.name for m in motions], "not_used": dict(self.motion_why)}
         if not motions:
             return [(c, None) for c in cands], info
         veh0, vals0 = cur["vehicle"], dict(cur["values"])
@@ -306,7 +321,11 @@ class Selector:
         # error cannot separate a piece's mass from the re-tuned added mass (decision.inertia_challenger)
         held = [c for c in cands if c.tags.get("open_loop")]
         cands = [c for c in cands if not c.tags.get("open_loop")]
-        self.say(f"step {k_step}: screening {len(cands) + 1} candidate variant(s) by equation error")
+        if any(m is not None for m in self.motions):
+            self.say(f"step {k_step}: screening {len(cands) + 1} candidate variant(s) by equation error")
+        else:  # said at the start too (Selector._say_unscreened): the choice below is by simplicity alone
+            self.say(f"step {k_step}: no equation-error screening (no training run allows it): the simplest variant "
+                     "of each effect is fitted through the simulator")
         want_coupled = "coupled_damping" not in exclude and (only is None or "coupled_damping" in only)
         screened, ee_info = (self.screen(cur, cands, coupled=want_coupled) if cands
                              else ([], {"available": False}))

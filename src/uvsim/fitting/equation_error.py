@@ -109,23 +109,38 @@ def _sg_coeffs(win: int, deriv: int, dt: float) -> np.ndarray:
 
 def measured_motion(run, *, window_s: float = WINDOW_S) -> Motion | None:
     """The :class:`Motion` of ``run``, or None when the log allows no DOF (non-uniform
-    time, gaps, too short, or neither full velocities nor full rates)."""
+    time, gaps, too short, or neither full velocities nor full rates); why:
+    :func:`motion_or_why`."""
+    return motion_or_why(run, window_s=window_s)[0]
+
+
+def motion_or_why(run, *, window_s: float = WINDOW_S) -> tuple[Motion | None, str | None]:
+    """``(Motion, None)`` for ``run``, or ``(None, why)`` naming what the log lacks for the
+    equation error, so that a caller that leaves the run out can say why.
+
+    Parameters
+    ----------
+    run : :class:`uvsim.logs.Run`.
+    window_s : Savitzky-Golay window of the differentiation, s.
+    """
     try:
         nu = body_velocity(run, window_s=window_s)
         nud = body_acceleration(run, nu, window_s=window_s)
-    except CalibrationError:
-        return None
+    except CalibrationError as exc:
+        return None, str(exc)
     have = np.isfinite(nu).all(axis=0) & np.isfinite(nud).all(axis=0)
     have = np.array([have[:3].all()] * 3 + [have[3:].all()] * 3)
     if not have.any():
-        return None
+        return None, (f"{run.name}: neither complete body velocities (u, v, w, or x, y, z with the attitude to "
+                      "differentiate) nor complete rates (p, q, r, or the whole attitude to differentiate)")
     t = run.t
     n = t.size
     dt = float(np.median(np.diff(t)))
     win = int(round(window_s / dt)) | 1
     win = max(win, POLYORDER + 2 + (POLYORDER + 1) % 2)
     if win > n // 2:
-        return None
+        return None, (f"{run.name}: {n} samples ({t[-1] - t[0]:.3g} s); the equation error needs {2 * win}, twice "
+                      f"its {window_s:g} s Savitzky-Golay window")
     y = np.zeros((n, 13))
     pos = run.position
     for j in range(3):
@@ -141,7 +156,7 @@ def measured_motion(run, *, window_s: float = WINDOW_S) -> Motion | None:
     valid[:half] = False
     valid[n - half:] = False
     return Motion(run.name, t, run.inputs, run.input_kind, y, np.where(np.isfinite(nud), nud, 0.0), have, valid, win,
-                  run.voltage)
+                  run.voltage), None
 
 
 class EquationError:

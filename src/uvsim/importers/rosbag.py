@@ -54,6 +54,8 @@ from uvsim.importers.build import build_runs
 from uvsim.importers.segments import Segment, load_segments, write_imported_dataset
 from uvsim.importers.timeline import MERGE_TOL_S, Stream
 from uvsim.kinematics import quat_multiply
+from uvsim.log_aliases import format_name
+from uvsim.log_columns import FORMAT_COLUMNS
 
 TYPES = ("pose", "odometry", "imu", "pressure", "depth", "pwm", "thrust", "voltage", "fields")
 FRAMES = ("enu_flu", "ned_frd")
@@ -205,6 +207,12 @@ def _check_spec(name: str, spec, where: str) -> dict:
                 raise LogFormatError(f"{w}: '{k}' must be a positive number (Pa, kg/m^3)")
     if spec["type"] == "fields" and not isinstance(spec.get("fields"), dict):
         raise LogFormatError(f"{w}: 'fields' must map columns to field paths")
+    for col in (spec["fields"] if spec["type"] == "fields" else {}):
+        # a column under another tool's name would be written, then refused by the reader (uvsim.log_aliases)
+        target = format_name(str(col), FORMAT_COLUMNS)
+        if target is not None:
+            raise LogFormatError(f"{w}: fields: column {col!r} is not in the log format; did you mean {target}? "
+                                 "(docs/log_format.md; other names are kept as extra columns, not used)")
     if spec.get("frame") not in (None, *FRAMES):
         raise LogFormatError(f"{w}: frame {spec['frame']!r} is not one of {', '.join(FRAMES)}")
     return spec
