@@ -43,6 +43,7 @@ from uvsim.calibration.selection import check_bounds, effective_inertia_start, e
 from uvsim.calibration import supply_voltage as supply
 from uvsim.errors import CalibrationError
 from uvsim.estimation.lag import attitude_lag_setting
+from uvsim.fitting.evaluate import judged_scales
 from uvsim.fitting.objective import check_loss, continuity_factors
 from uvsim.fitting.parameters import default_bounds, physical_bounds
 from uvsim.latency import runs_for
@@ -50,7 +51,12 @@ from uvsim.measurements import check_sample_weighting, measurements_for
 from uvsim.plausibility import check_runs, parse_allow
 
 log = logging.getLogger("uvsim")
-DEFAULT_HORIZONS = (2.0,)
+#: Window lengths of the joint stage's continuation: 2 s windows (the cost close to quadratic,
+#: robust to a start far off), then whole runs, the free simulation the verdict judges
+#: (:mod:`uvsim.fitting.verdict`), with each channel scaled by its own RMS error
+#: (:func:`uvsim.fitting.evaluate.judged_scales`) so that the last stage minimizes the verdict's
+#: score (docs/calibration.md, "The joint stage ends on the verdict's measure").
+DEFAULT_HORIZONS = (2.0, None)
 #: Continuity factors of the joint stage's last horizon (:func:`uvsim.fitting.fit`): the
 #: continuity defects' sd is DEFECT_SIGMA x 0.05 (0.25 mm, 0.5 mrad/s ...), so that what the
 #: fit improves is close to the free simulation the result check compares (docs/calibration.md,
@@ -103,7 +109,9 @@ class Calibrator:
     low_speed_exponent : GA run weight = manifest weight x (amplitude / median
         amplitude) ** -low_speed_exponent; 0 (default): the manifest weights.
     refine : run the joint stage (default True).
-    horizons : window lengths of the joint stage's continuation, s (None: whole runs).
+    horizons : window lengths of the joint stage's continuation, s (None: whole runs); default
+        :data:`DEFAULT_HORIZONS`, 2 s windows then whole runs.  A whole-run stage scales each
+        channel by its own RMS error of the free simulation (the verdict's measure).
     continuity : factors of the joint stage's continuity-defect sd at its last horizon, one
         stage each (:func:`uvsim.fitting.fit`); default :data:`DEFAULT_CONTINUITY`.  1 is
         diagnosis' softer setting, under which windows restart more freely.
@@ -483,6 +491,14 @@ class Calibrator:
         if ck_path is not None or self.resume is not None:  # (tag: the refit with an estimated latency)
             ck = JointCheckpoint(None if ck_path is None else joint_checkpoint_path(f"{ck_path}{tag}"), key,
                                  resume=None if self.resume is None else joint_checkpoint_path(f"{self.resume}{tag}"))
+        iv = self.initial_velocity
+
+        def judged(H, values):  # the whole-run stage: each channel scaled by its own RMS error
+            if H is not None:
+                return None
+            sc = judged_scales(start_veh, runs, meas, overrides=values, initial_velocity=iv)
+            return [m.with_sigma(sc) for m in meas]
+
         return run_joint(start_veh, runs, meas, params, keep=keep, screen=screen,
                          bounds={k: bounds_of(k) for k in names}, horizons=horizons,
                          continuity=continuity, ftol=JOINT_FTOL, max_iter=int(self.max_iter),
@@ -490,7 +506,7 @@ class Calibrator:
                          acc_bias=bool(self.acc_bias), initial_velocity=self.initial_velocity,
                          workers=self._workers(), checkpoint=ck, progress=self.progress,
                          prior_mean=(prior_mean or self.initial_vehicle_.parameters()) if self.prior else None,
-                         prior_sd=self.initial_vehicle_.uncertainty, loss=self.loss)
+                         prior_sd=self.initial_vehicle_.uncertainty, loss=self.loss, stage_meas=judged)
 
     # ------------------------------------------------------------------ results
     def predict(self, runs) -> dict:

@@ -88,7 +88,7 @@ def run_joint(vehicle, runs, meas, params, *, keep, screen, bounds, horizons, ma
               attitude_bias: bool = False, acc_bias: bool = False, initial_velocity: str = "zero", workers: int = 1,
               checkpoint: JointCheckpoint | None = None,
               progress: bool = False, prior_mean=None, prior_sd=None, loss: str = "linear",
-              continuity=(1.0,), ftol: float = 1e-6):
+              continuity=(1.0,), ftol: float = 1e-6, stage_meas=None):
     """Screen and fit (module docstring).
 
     Parameters
@@ -105,6 +105,7 @@ def run_joint(vehicle, runs, meas, params, *, keep, screen, bounds, horizons, ma
     loss : "linear" or "huber" (:func:`uvsim.fitting.fit`).
     continuity : continuity factors of the last horizon's stages (:func:`uvsim.fitting.fit`).
     ftol : relative cost decrease below which a stage stops (:func:`uvsim.fitting.fit`).
+    stage_meas : the measurement models of each stage (:func:`uvsim.fitting.fit`).
 
     Returns
     -------
@@ -144,7 +145,7 @@ def run_joint(vehicle, runs, meas, params, *, keep, screen, bounds, horizons, ma
                   attitude_bias=attitude_bias, acc_bias=acc_bias, initial_velocity=initial_velocity, workers=workers,
                   checkpoint=checkpoint, on_iteration=on_it,
                   progress=lambda msg: log.debug(msg), prior_mean=prior_mean, prior_sd=prior_sd,
-                  loss=loss, continuity=continuity, ftol=ftol)
+                  loss=loss, continuity=continuity, ftol=ftol, stage_meas=stage_meas)
     finally:
         if bar is not None:
             bar.n = bar.total

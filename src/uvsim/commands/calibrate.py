@@ -52,7 +52,9 @@ def register(sub) -> None:
     p.add_argument("--noise", default=None, metavar="NAME=SIGMA,...",
                    help="1-sigma noise level by group or channel (default: estimated from each run)")
     p.add_argument("--horizons", default=None, metavar="H1,H2,...",
-                   help="window lengths (s) of the joint fit's continuation, 'whole' for whole runs (default 2)")
+                   help="window lengths (s) of the joint fit's continuation, 'whole' for whole runs (default 2,whole: "
+                        "2 s windows, then whole runs with each channel scaled by its own error, the verdict's "
+                        "measure)")
     p.add_argument("--continuity", default=None, metavar="C1,C2,...",
                    help="factors of the continuity defects' sd at the last horizon, one stage each (default 0.05: "
                         "windows restart little, so the fit improves the free simulation; 1 is diagnosis' softer "
@@ -138,9 +140,11 @@ def parse_bounds(text: str | None) -> dict | None:
 
 
 def parse_horizons(text: str | None):
-    """``"2,6"`` -> ``(2.0, 6.0)``; ``whole`` -> None (whole runs)."""
+    """``"2,6"`` -> ``(2.0, 6.0)``; ``whole`` -> None (whole runs); None -> the Calibrator's default."""
+    from uvsim.calibration.calibrator import DEFAULT_HORIZONS
+
     if not text:
-        return (2.0,)
+        return DEFAULT_HORIZONS
     out = []
     for item in text.split(","):
         item = item.strip()
@@ -435,8 +439,8 @@ def finish_calibration(cal, ds, out, json_path=None, plots=None, *, keep_worse: 
         from uvsim.plotting.calibration import plot_calibration
 
         plot_calibration(cal, ds, plots)
-    stages = "; ".join(f"{s['horizon_s'] or 'whole-run'} s windows: {s['iterations']} iterations, {s['message']}"
-                       for s in rep["refinement"].get("stages", []))
+    stages = "; ".join(f"{'whole runs' if s['horizon_s'] is None else format(s['horizon_s'], 'g') + ' s windows'}: "
+                       f"{s['iterations']} iterations, {s['message']}" for s in rep["refinement"].get("stages", []))
     print(f"calibrated {rep['vehicle']} on {len(rep['training_runs'])} training runs: "
           + (f"GA ({', '.join(rep['dofs'])}) {rep['evaluations']} evaluations in {rep['ga_seconds']:.1f} s; "
              if rep["dofs"] else "no GA (no run marked with a DOF); ")

@@ -183,11 +183,11 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
     loss : "linear" (least squares) or "huber": the measurement residuals beyond
         :data:`uvsim.fitting.objective.HUBER_SCALE` noise sigmas cost linearly (outliers,
         dropouts, bursts of model error; :func:`uvsim.fitting.objective.robust_residuals`).
-    stage_meas : optional ``stage_meas(horizon, z) -> meas or None``, called at the start of every
-        stage with its horizon and start parameters: the measurement models that stage uses (None:
-        ``meas``).  The calibration's whole-run stage scales each channel by its own RMS error
-        there (:func:`uvsim.fitting.evaluate.judged_scales`).  It must depend on ``z`` only, so
-        that a resumed fit rebuilds the same stage.
+    stage_meas : optional ``stage_meas(horizon, values) -> meas or None``, called at the start of
+        every stage with its horizon and start values ({name: value} of the free parameters): the
+        measurement models that stage uses (None: ``meas``).  The calibration's whole-run stage
+        scales each channel by its own RMS error there (:func:`uvsim.fitting.evaluate.judged_scales`).
+        It must depend on the values only, so that a resumed fit rebuilds the same stage.
     """
     runs = list(runs)
     if not runs:
@@ -212,7 +212,7 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
     problems = []
 
     def meas_of(H, z_start):
-        got = None if stage_meas is None else stage_meas(H, z_start)
+        got = None if stage_meas is None else stage_meas(H, space.as_dict(z_start))
         return meas if got is None else got
 
     if saved is not None and first == len(plan):  # every stage finished: the final linearization only
