@@ -75,9 +75,10 @@ def test_a_lead_piece_is_named_with_its_position_and_mass(tmp_path):
     assert _main_rmse(rep, "rmse_after") <= 0.5 * _main_rmse(rep, "rmse_before")
     step1 = next(st for st in rep["steps"] if st["step"] == 1)  # step 0 is the base model's
     chosen = [c for c in step1["candidates"] if c["chosen"]]
-    assert chosen[0]["variant"] == "xyz_mass" and "open-loop validation cost" in chosen[0]["why"]
-    assert chosen[0]["open_loop_cost"] < 0.95 * next(c["open_loop_cost"] for c in step1["candidates"]
-                                                      if c["variant"] in ("xy", "xyz") and "open_loop_cost" in c)
+    assert chosen[0]["variant"] == "xyz_mass" and "open-loop validation MSE" in chosen[0]["why"]
+    # the pooled scores are mean log MSEs: at least 5 % lower in MSE
+    assert np.exp(chosen[0]["open_loop_cost"] - next(c["open_loop_cost"] for c in step1["candidates"]
+                                                     if c["variant"] in ("xy", "xyz") and "open_loop_cost" in c)) < 0.95
 
 
 def test_names_the_weak_thruster(tmp_path):
@@ -145,7 +146,7 @@ def test_cli_writes_report_corrected_vehicle_and_plots(tmp_path, capsys):
                "--out", str(veh), "--plots", str(plots), "--quiet"])
     text = capsys.readouterr().out
     assert rc == 0, text
-    assert "effects: current" in text and "validation RMSE (open loop)" in text
+    assert "effects: current" in text and "verdict on the validation runs" in text and "VERDICT (exit 0) better" in text
     doc = json.loads(rep.read_text())
     assert doc["status"]["ok"] and doc["effect"] == "current"
     for key in ("steps", "rmse_before", "rmse_after", "validation_cost_per_entry", "criterion", "noise"):
@@ -386,7 +387,8 @@ def _row(cand, cost, *, p=1e-9, relative=0.5, p_better=1.0, n=40, seed=0):
 
 class _StubSelector:
     """fit_candidate returns the prepared row of a candidate and counts the fits;
-    open_loop_cost reads the row's ``ol`` (its stand-in vehicle)."""
+    open_loop_cost reads the row's stand-in vehicle as an open-loop MSE and returns the pooled
+    score, its log (uvsim.fitting.verdict.score)."""
 
     def __init__(self, rows):
         self.rows, self.fitted = rows, []
@@ -396,7 +398,7 @@ class _StubSelector:
         return dict(self.rows[c.label])
 
     def open_loop_cost(self, vehicle, values):
-        return vehicle
+        return float(np.log(vehicle))
 
 
 def test_lag_start_alternative_is_fitted_and_the_lower_open_loop_cost_wins():
@@ -450,7 +452,7 @@ def test_an_alternative_of_a_variant_the_guard_refused_can_win_but_never_the_ref
     sel = _StubSelector({"thruster_lag:from_rest": good})
     new = alternative_challenger(sel, blocked, st, None, blocked=True)
     assert sel.fitted == ["thruster_lag:from_rest"] and new["candidate"] is rest
-    assert "guard refused" in new["why"] and new["open_loop_cost"] == 5.0
+    assert "verdict refused" in new["why"] and new["open_loop_cost"] == pytest.approx(np.log(5.0))
     # an alternative that is refused itself (here by its guard) does not win
     refused = with_ol(_row(rest, 100.0), 5.0)
     refused["compare"] = {**refused["compare"], "guard": {"ok": False, "why": "position +50 %"}}

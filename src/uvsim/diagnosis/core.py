@@ -208,9 +208,9 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         winners = [row for row in st["fitted"] if row.get("accepted")]
         best = parsimonious(winners)
         if best is None:
-            # a candidate that passed everything but the open-loop guard: its richer variants (a
+            # a candidate that passed everything but the open-loop verdict: its richer variants (a
             # ballast piece's own mass, a richer tether) and its alternatives (a lag from rest) get
-            # their chance, judged with the guard too
+            # their chance, judged by the verdict too
             for row in sorted([r for r in st["fitted"] if r.get("guard_blocked")], key=lambda r: r["val"]["cost"]):
                 best = (inertia_challenger(sel, row, st, val_cur) or richer_challenger(sel, row, st, val_cur)
                         or alternative_challenger(sel, row, st, val_cur, blocked=True))

@@ -16,7 +16,7 @@
 * :func:`alternative_challenger` -- a variant that is an alternative to the winner with as
   many parameters (a thrust lag that starts at rest rather than at the command) is fitted
   too, and the lower open-loop validation cost wins (the runs' starts are what differ); also
-  for a variant the open-loop guard alone refused.
+  for a variant the open-loop verdict alone refused.
 
 The thresholds are module constants, stated with the reason for each; docs/diagnose.md
 gives the method and its references.
@@ -146,7 +146,7 @@ def judge(row, val_cur) -> tuple[bool, str]:
                        f"the bootstrap over windows finds it better in only {100 * cmp['p_better']:.0f} % of "
                        f"resamples (needs {100 * VAL_LEVEL:.0f} %)")
     if g is not None and not g["ok"]:
-        # everything but the guard passed: a richer variant (a piece's own mass) may still pass it
+        # everything but the verdict passed: a richer variant (a piece's own mass) may still pass it
         row["guard_blocked"] = True
         return False, g["why"]
     return True, (f"significant: Wald p = {w.get('p', float('nan')):.1g} in training, validation cost "
@@ -187,7 +187,7 @@ def still_needed(sel, accepted: list, values: dict, val_cur: dict, joint) -> tup
     depth scenario 30007: a tether from a 3-D attachment point took up a foam piece's
     buoyancy in step 1, the piece entered in step 2, and the tether stayed, Wald p = 0.11
     beside it).  The open-loop guard, which the effect passed when it entered, does not
-    drop it here: the joint model passed the guard against the model before the later
+    drop it here: the joint model passed the verdict against the model before the later
     effect, and a guard-only refusal removed a real thruster lag beside a weak thruster
     (benchmark seed 118, significant in training and on the windowed validation; the
     later effect's own re-fit without it simulated the position better).  The base-model
@@ -217,7 +217,7 @@ def still_needed(sel, accepted: list, values: dict, val_cur: dict, joint) -> tup
                "at_bounds": [n for n in joint.at_bounds if n in c.free]}
         ok, why = judge(row, vc)
         if not ok and row.get("guard_blocked"):
-            ok, why = True, f"still significant beside the later effect; the open-loop guard ({why}) is the entry rule"
+            ok, why = True, f"still significant beside the later effect; the open-loop verdict ({why}) is the entry rule"
         rows.append({"effect": c.effect, "variant": c.variant, "kept": bool(ok), "why": why, "compare": cmp,
                      "validation_cost_per_entry_without": vc["per_entry"]})
         if not ok:
@@ -280,7 +280,7 @@ def alternative_challenger(sel, best, st, val_cur, *, blocked: bool = False):
     same tag value and as many parameters, e.g. the two starts of a thrust lag), fitted;
     among the accepted ones the lowest open-loop validation cost (free simulations of the
     validation runs from their logged starts, :meth:`Selector.open_loop_cost`) wins.
-    ``blocked``: ``best`` was refused by the open-loop guard alone (``guard_blocked``), so
+    ``blocked``: ``best`` was refused by the open-loop verdict alone (``guard_blocked``), so
     only an accepted alternative can win; what the guard refused may be the start of the
     runs, which is exactly where the alternatives differ (benchmark pair 118: a lag from
     rest beside a weak thruster, fitted as ``steady``, removes 93 % of the windowed
@@ -312,7 +312,7 @@ def alternative_challenger(sel, best, st, val_cur, *, blocked: bool = False):
     if win is best:
         return None
     if blocked:
-        win["why"] += f"; the alternative to {c.variant}, which the open-loop guard refused"
+        win["why"] += f"; the alternative to {c.variant}, which the open-loop verdict refused"
         return win
     win["why"] += (f"; lower open-loop validation error than {c.variant} (pooled score "
                    f"{win['open_loop_cost']:.4g} against {best['open_loop_cost']:.4g})")

@@ -278,6 +278,10 @@ def message(v: dict) -> str:
         text = f"worse: {b}'s free simulation diverges where {a}'s does not ({t})"
     elif v["status"] == "better":
         text = f"better: {pooled}; no channel worse beyond the comparison's noise"
+        loose = [c for c, d in ch.items() if d["rmse_change"] >= MATERIAL and not d["worse"]]
+        if loose:  # said, not hidden: a loss the validation runs are too short to confirm
+            text += (f" (higher but within the noise: {listed(loose)}; longer or more validation runs would "
+                     "tell)")
     elif v["status"] == "trade-off":
         text = (f"trade-off: {pooled}, but worse beyond the comparison's noise in {listed(v['worse'])}: "
                 f"{b} buys its gain with these channels (look for what the model lacks there: a sensor "
