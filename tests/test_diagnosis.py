@@ -571,3 +571,29 @@ def test_a_ballast_piece_mass_is_fitted_from_the_winner_and_kept_on_a_lower_open
                     z_max=None, only=["current"])[0]
     sel = Sel({})
     assert inertia_challenger(sel, {**_row(cur, 100.0), "values": {}}, st, None) is None and sel.fitted == []
+
+
+def test_a_variant_the_verdict_refused_gets_a_simpler_one_tried():
+    """The foreign suite's kind of case b, in stubs: a 3-D tether with its attachment free is
+    refused by the open-loop verdict (a trade-off: position bought with depth), nothing else is
+    accepted, and the horizontal variant (simpler, half the screening reduction or more) is fitted
+    and accepted: the fallback tries simpler variants as it tries richer ones and alternatives."""
+    from uvsim.diagnosis.decision import blocked_fallback
+
+    cands = {c.variant: c for c in catalogue(input_kind="force", n_thrusters=8, dt=0.02, p_ref=np.zeros(3),
+                                             has_position=True, z_max=None, only=["tether"])}
+    rich, simple = cands["lumped_attach"], cands["horizontal_lumped"]
+    assert simple.complexity < rich.complexity
+    blocked = {**_row(rich, 72.7), "accepted": False, "guard_blocked": True, "why": "trade-off: z +202 %",
+               "vehicle": 1.0, "all_values": {}}
+    st = {"all_screened": [(rich, {"reduction": 0.70}), (simple, {"reduction": 0.49})], "cur": {}, "fitted": [blocked],
+          "held": []}
+    good = {**_row(simple, 1.0), "vehicle": 1.0, "all_values": {}}
+    sel = _StubSelector({simple.label: good})
+    win = blocked_fallback(sel, st, None)
+    assert win is not None and win["candidate"] is simple and sel.fitted == [simple.label]
+    assert "simplest variant" in win["why"]
+    # refused by the verdict itself, the simpler variant does not win either
+    bad = {**good, "compare": {**good["compare"], "guard": {"ok": False, "why": "trade-off: x +30 %"}}}
+    st["fitted"] = [blocked]
+    assert blocked_fallback(_StubSelector({simple.label: bad}), st, None) is None

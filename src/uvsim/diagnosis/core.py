@@ -37,8 +37,8 @@ import numpy as np
 from uvsim.checkpoint import Checkpoint, fingerprint
 from uvsim.diagnosis.candidates import BASE_MODEL, EFFECTS, Candidate
 from uvsim.diagnosis.decision import (LEVEL, MIN_RELATIVE, VAL_LEVEL, WALD_P, alternative_challenger,
-                                      inertia_challenger, open_loop_verdict, parsimonious, richer_challenger,
-                                      simplest_sufficient, still_needed)
+                                      blocked_fallback, inertia_challenger, open_loop_verdict, parsimonious,
+                                      richer_challenger, simplest_sufficient, still_needed)
 from uvsim.diagnosis.residual import concentration, verdict
 from uvsim.diagnosis.selector import VARIANT_SHARE, Selector
 from uvsim.estimation.lag import attitude_lag_setting
@@ -208,14 +208,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         winners = [row for row in st["fitted"] if row.get("accepted")]
         best = parsimonious(winners)
         if best is None:
-            # a candidate that passed everything but the open-loop verdict: its richer variants (a
-            # ballast piece's own mass, a richer tether) and its alternatives (a lag from rest) get
-            # their chance, judged by the verdict too
-            for row in sorted([r for r in st["fitted"] if r.get("guard_blocked")], key=lambda r: r["val"]["cost"]):
-                best = (inertia_challenger(sel, row, st, val_cur) or richer_challenger(sel, row, st, val_cur)
-                        or alternative_challenger(sel, row, st, val_cur, blocked=True))
-                if best is not None:
-                    break
+            best = blocked_fallback(sel, st, val_cur)
         if best is not None:
             best = richer_challenger(sel, best, st, val_cur) or best
             best = simplest_sufficient(sel, best, st, val_cur) or best

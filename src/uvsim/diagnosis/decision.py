@@ -350,6 +350,23 @@ def simplest_sufficient(sel, best, st, val_cur):
     return None
 
 
+def blocked_fallback(sel, st, val_cur):
+    """When no candidate of a step is accepted: for each one that passed every test but the
+    open-loop verdict (``guard_blocked``, lowest windowed validation cost first), its richer
+    variants (a ballast piece's own mass: :func:`inertia_challenger`; a richer tether:
+    :func:`richer_challenger`), its simpler ones (:func:`simplest_sufficient`: a horizontal pull
+    where a 3-D one traded depth for position, the foreign suite's case b) and its alternatives
+    (a lag from rest: :func:`alternative_challenger`) get their chance, each judged by the verdict
+    too.  Returns the first accepted one, or None."""
+    for row in sorted([r for r in st["fitted"] if r.get("guard_blocked")], key=lambda r: r["val"]["cost"]):
+        best = (inertia_challenger(sel, row, st, val_cur) or richer_challenger(sel, row, st, val_cur)
+                or simplest_sufficient(sel, row, st, val_cur)
+                or alternative_challenger(sel, row, st, val_cur, blocked=True))
+        if best is not None:
+            return best
+    return None
+
+
 def inertia_challenger(sel, best, st, val_cur):
     """The winner's richer variant whose extra parameters act through inertia (tagged
     ``open_loop``: a ballast piece's own mass), fitted from the winner's values; it wins

@@ -20,6 +20,8 @@ from typing import Sequence
 
 import numpy as np
 
+from uvsim.fitting.verdict import HINTS  # noqa: F401  (what to check per channel; re-exported)
+
 #: Validation cost per residual (squared noise sigmas) above which the residual is "not
 #: explained": the model's own error is then at least as large as the noise (cost 1 is
 #: the noise alone; core.AT_NOISE = 1.5 is "at the noise level").
@@ -29,21 +31,6 @@ UNEXPLAINED = 2.0
 SHARE = 0.15
 TOP = 3
 
-#: What to check when a channel's open-loop error dominates (physics each channel
-#: responds to; docs/diagnose.md "Not explained").
-HINTS = {
-    "depth": "net buoyancy (B - W), the depth sensor's position and offset, a vertical pull (tether, payload)",
-    "z": "net buoyancy (B - W), a vertical pull (tether, payload), the heave damping",
-    "x": "a current, a horizontal pull (tether), the surge thrust curve and damping",
-    "y": "a current, a horizontal pull (tether), the sway thrust curve and damping",
-    "roll": "the roll restoring moment (CG/CB height, an off-centre payload or float)",
-    "pitch": "the pitch restoring moment (CG/CB, an off-centre payload or float), the heave-pitch coupling",
-    "yaw": "thruster alignment and asymmetry, a yaw moment from a tether or current, the yaw damping",
-    "p": "the roll damping and restoring moment, gyro bias", "q": "the pitch damping and restoring moment, gyro bias",
-    "r": "the yaw damping, thruster asymmetry, gyro bias",
-    "u": "the surge damping and thrust curve, a current", "v": "the sway damping and thrust curve, a current",
-    "w": "the heave damping and thrust curve, buoyancy",
-}
 PART_HINTS = {
     "start": "errors concentrated at the start point to the initial state or to thrust already acting when the "
              "log starts (steps from t = 0)",

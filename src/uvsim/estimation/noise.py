@@ -75,8 +75,10 @@ class SampleKind:
     def describe(self, name: str) -> str:
         if self.kind in ("native", "empty"):
             return f"{name}: {self.kind}"
-        return (f"{name}: {self.kind} at {1.0 / self.native_interval_s:.3g} Hz in a "
-                f"{1.0 / self.log_interval_s:.3g} Hz log; {int(self.native.sum())} of "
+        rate, log_rate = 1.0 / self.native_interval_s, 1.0 / self.log_interval_s
+        # irregular native samples whose median interval is the log's: the rate says nothing
+        at = ("between irregular samples" if abs(rate - log_rate) < 0.05 * log_rate else f"at {rate:.3g} Hz")
+        return (f"{name}: {self.kind} {at} in a {log_rate:.3g} Hz log; {int(self.native.sum())} of "
                 f"{self.native.size} rows used as measurements")
 
 

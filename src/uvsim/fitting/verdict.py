@@ -74,6 +74,25 @@ EQUIVALENCE = 0.02
 #: division makes the change count (module docstring).
 MATERIAL = 0.10
 N_BOOT = 2000
+#: What to check when a channel's open-loop error dominates (physics each channel
+#: responds to; docs/diagnose.md "Not explained"); a trade-off's message names them for its worse channels.
+HINTS = {
+    "depth": "net buoyancy (B - W), the depth sensor's position and offset, a vertical pull (tether, payload)",
+    "z": "net buoyancy (B - W), a vertical pull (tether, payload), the heave damping",
+    "x": "a current, a horizontal pull (tether), the surge thrust curve and damping",
+    "y": "a current, a horizontal pull (tether), the sway thrust curve and damping",
+    "roll": "the roll restoring moment (CG/CB height, an off-centre payload or float)",
+    "pitch": "the pitch restoring moment (CG/CB, an off-centre payload or float), the heave-pitch coupling",
+    "yaw": "thruster alignment and asymmetry, a yaw moment from a tether or current, the yaw damping",
+    "p": "the roll damping and restoring moment, gyro bias", "q": "the pitch damping and restoring moment, gyro bias",
+    "r": "the yaw damping, thruster asymmetry, gyro bias",
+    "u": "the surge damping and thrust curve, a current", "v": "the sway damping and thrust curve, a current",
+    "w": "the heave damping and thrust curve, buoyancy",
+    # an accelerometer reads the motion's acceleration plus gravity tilted by the attitude
+    "acc_x": "the surge thrust and damping, the pitch attitude (gravity along x), the IMU's position and offset",
+    "acc_y": "the sway thrust and damping, the roll attitude (gravity along y), the IMU's position and offset",
+    "acc_z": "the heave thrust and damping, net buoyancy, the IMU's position and offset",
+}
 #: Exit status of each outcome (the commands; docs/calibration.md).
 EXIT_CODES = {"better": 0, "trade-off": 3, "worse": 2}
 
@@ -283,9 +302,10 @@ def message(v: dict) -> str:
             text += (f" (higher but within the noise: {listed(loose)}; longer or more validation runs would "
                      "tell)")
     elif v["status"] == "trade-off":
+        check = "; ".join(f"{c}: {HINTS[c]}" for c in v["worse"] if c in HINTS)
         text = (f"trade-off: {pooled}, but worse beyond the comparison's noise in {listed(v['worse'])}: "
-                f"{b} buys its gain with these channels (look for what the model lacks there: a sensor "
-                "position, a restoring moment, the thrust model) rather than taking it as a result")
+                f"{b} buys its gain with these channels, a finding to look into rather than a result (what "
+                f"the model may lack there: {check or 'the sensor positions, the restoring moments, the thrust model'})")
     elif p["change"] > 0 and p["p_better"] <= 1.0 - v["level"]:
         text = f"worse: {pooled}" + (f"; worse in {listed(v['worse'])}" if v["worse"] else "")
     else:
