@@ -20,7 +20,7 @@ from pathlib import Path
 
 from uvsim.calibration import Calibrator
 from uvsim.calibration.demo import format_table5
-from uvsim.commands.calibrate import jsonable, print_verdict, record_outcome, save_fitted_vehicle
+from uvsim.commands.calibration_output import jsonable, print_verdict, record_outcome, save_fitted_vehicle
 from uvsim.fitting.verdict import EXIT_CODES
 from uvsim.commands.demo import shipped_dataset_path
 from uvsim.logs import read_dataset

@@ -90,7 +90,7 @@ def test_surge_and_sway_not_excited_stay_fixed(cli_run):
 
 def test_summary_table(cli_run, capsys):
     # the module fixture ran before this test's capture: print the table again
-    from uvsim.commands.calibrate import print_summary
+    from uvsim.commands.calibration_output import print_summary
 
     class Fake:
         pass

@@ -10,7 +10,7 @@ from uvsim.diagnosis import diagnose
 from uvsim.diagnosis.candidates import catalogue, observability, search_bound_hits
 from uvsim.diagnosis.decision import judge
 from uvsim.fitting.verdict import score
-from verdict_data import CHANNELS, errors, logged_run, model, prediction
+from verdict_data import errors, logged_run, model, prediction
 from uvsim.diagnosis.residual import UNEXPLAINED, verdict
 from uvsim.scenarios import generate, load_truth, sample_scenario
 

@@ -61,7 +61,7 @@ from uvsim.errors import CalibrationError
 from uvsim.estimation.lag import first_order_lag, lag_time_constant
 from uvsim.estimation.noise import SampleKind, noise_sigma, sample_kind
 from uvsim.accelerometer import _components, _specific_force, specific_force  # noqa: F401  (specific_force: re-exported)
-from uvsim.kinematics import (cross_components, down_axis_components, euler_to_quat, quat_to_euler,  # noqa: F401
+from uvsim.kinematics import (cross_components, down_axis_components, quat_to_euler,  # noqa: F401
                               rotation_vector_error, unwrap_angles, wrap)  # (rotation_vector_error: re-exported)
 from uvsim.logs import ACCEL_COLUMNS, DEPTH_COLUMN, EULER_COLUMNS, POSITION_COLUMNS, RATE_COLUMNS, VELOCITY_COLUMNS
 

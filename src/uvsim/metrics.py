@@ -78,7 +78,9 @@ def fit_percent(y: np.ndarray, y_hat: np.ndarray) -> float:
     return float(100.0 * (1.0 - np.linalg.norm(y - y_hat) / den))
 
 
-def _fit(sse: float, sst: float) -> float:
+def fit_from_sums(sse: float, sst: float) -> float:
+    """Fit % from a channel's sum of squared errors and its measured sum of squares about the
+    run means (module docstring); NaN for a constant channel, -inf for a diverged prediction."""
     if not sst > 0:
         return float("nan")
     return float(100.0 * (1.0 - np.sqrt(sse / sst))) if np.isfinite(sse) else float("-inf")
@@ -151,7 +153,7 @@ def measurement_metrics(meas, pred, rows: np.ndarray | None = None) -> dict:
         d = _sums(s)
         r = float(np.sqrt(d["sse"] / d["n"])) if d["n"] else float("nan")
         channels[c] = {"rmse": r, "nrmse": r / d["span"] if d["n"] and d["span"] > 0 else float("nan"),
-                       "fit_percent": _fit(d["sse"], d["sst"]), "n": d["n"], "unit": s["unit"],
+                       "fit_percent": fit_from_sums(d["sse"], d["sst"]), "n": d["n"], "unit": s["unit"],
                        "group": s["group"], "sse": d["sse"], "sst": d["sst"]}
     return _with_groups({"channels": channels})
 
@@ -169,7 +171,7 @@ def _with_groups(m: dict) -> dict:
     out = {"channels": m["channels"], "groups": {}}
     for g, d in groups.items():
         r = float(np.sqrt(d["mse"]))
-        out["groups"][g] = {"rmse": r, "fit_percent": _fit(d["sse"], d["sst"]), "n": d["n"]}
+        out["groups"][g] = {"rmse": r, "fit_percent": fit_from_sums(d["sse"], d["sst"]), "n": d["n"]}
         out[f"{g}_{UNIT_SUFFIX[g]}"] = r
     return out
 
@@ -185,7 +187,7 @@ def pooled_metrics(metrics_list: Iterable[Mapping]) -> dict:
             a["sst"] += d["sst"]
             a["n"] += d["n"]
     channels = {c: {"rmse": float(np.sqrt(a["sse"] / a["n"])) if a["n"] else float("nan"),
-                    "fit_percent": _fit(a["sse"], a["sst"]), **a} for c, a in acc.items()}
+                    "fit_percent": fit_from_sums(a["sse"], a["sst"]), **a} for c, a in acc.items()}
     return _with_groups({"channels": channels})
 
 

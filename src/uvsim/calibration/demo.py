@@ -78,7 +78,7 @@ def run(out_dir, dataset, settings: dict | None = None) -> str:
     calibration_report.json, the plots and (unless the verdict is worse) fitted.yaml into
     ``out_dir``.  Returns the verdict's status (:mod:`uvsim.fitting.verdict`)."""
     from uvsim.calibration import Calibrator
-    from uvsim.commands.calibrate import jsonable, print_verdict, record_outcome, save_fitted_vehicle
+    from uvsim.commands.calibration_output import jsonable, print_verdict, record_outcome, save_fitted_vehicle
 
     s = {**DEMO_SETTINGS, **(settings or {})}
     out = Path(out_dir)

@@ -20,6 +20,7 @@ import numpy as np
 
 from uvsim.calibration.selection import EXCITATION_REL_SIGMA, excitation, information
 from uvsim.checkpoint import Checkpoint
+from uvsim.errors import CalibrationError
 from uvsim.fitting import fit, make_space
 from uvsim.fitting.fitter import build_problems
 

@@ -24,12 +24,17 @@ def register(subparsers) -> None:
         "diagnose", help="trace the residual of a model to missing effects, fit them, report before/after",
         description="Forward selection of catalogue effects (" + ", ".join(EFFECTS) + "): every candidate is "
                     "screened by equation error, the best are fitted through the simulator (windowed prediction "
-                    "error on the training runs) and one is kept only if it improves the validation runs "
-                    "significantly (block bootstrap over windows); repeat with the rest.  See docs/diagnose.md.")
+                    "error on the training runs) and one is kept only if the verdict on the validation runs' free "
+                    "simulations calls it better (docs/calibration.md 'The verdict'); repeat with the rest.  See "
+                    "docs/diagnose.md.",
+        epilog="Exit status: 0 the corrected model is 'better' than the given one (or nothing changed); 3 a "
+               "'trade-off' (corrected vehicle written, the worse channels named); 2 'worse' or an error (report "
+               "and plots written, no corrected vehicle).")
     p.add_argument("--data", required=True, help="dataset directory (manifest.yaml + runs, docs/log_format.md)")
     p.add_argument("--vehicle", help="built-in vehicle name or vehicle YAML (default: the manifest's vehicle)")
     p.add_argument("--json", dest="json_out", help="write the report as JSON to this file")
-    p.add_argument("--plots", help="directory for plots (validation runs before/after, steps)")
+    p.add_argument("--plots", help="directory for plots (validation runs before/after, steps); written whatever "
+                                   "the verdict")
     p.add_argument("--out", help="write the corrected vehicle YAML here")
     p.add_argument("--retune", help="comma-separated base coefficients re-fitted with every model (e.g. X_uu,N_rr)")
     p.add_argument("--only", help="comma-separated catalogue effects to try (default: all)")

@@ -60,7 +60,7 @@ from typing import Sequence
 
 import numpy as np
 
-from uvsim.metrics import channel_series
+from uvsim.metrics import channel_series, fit_from_sums
 
 #: Block length of the bootstrap, s: a few of an ROV's velocity time constants, so that
 #: neighbouring blocks of a free simulation's error are only weakly dependent.
@@ -191,7 +191,7 @@ def compare(meas: Sequence, pred_a: Sequence[dict], pred_b: Sequence[dict], *, n
          for c in blocks}
     B = {c: np.concatenate([blocks[c][r][1] if r in blocks[c] else np.zeros(nb) for r, nb in enumerate(n_blocks)])
          for c in blocks}
-    out = _judge(A, B, sums, names, level, equivalence, n_boot, seed)
+    out = _judge(A, B, sums, level, equivalence, n_boot, seed)
     out.update(horizon=horizon, diverged=diverged, block_s=block_s, level=level, equivalence=equivalence,
                n_boot=n_boot, runs=[m.name for m in meas], models=list(names))
     if diverged:
@@ -201,7 +201,7 @@ def compare(meas: Sequence, pred_a: Sequence[dict], pred_b: Sequence[dict], *, n
     return out
 
 
-def _judge(A, B, sums, names, level, equivalence, n_boot, seed) -> dict:
+def _judge(A, B, sums, level, equivalence, n_boot, seed) -> dict:
     """Point estimates, bootstrap and status from the per-channel block sums ``A``, ``B``
     (channel -> (blocks,) sums of squared errors of each model, on one common block axis)."""
     chans = [c for c in sums if sums[c]["sse_a"] > 0 or sums[c]["sse_b"] > 0]
@@ -232,7 +232,7 @@ def _judge(A, B, sums, names, level, equivalence, n_boot, seed) -> dict:
         is_b = p_b >= ch_level or (point[j] <= -material and p_b >= level)
         ra, rb = math.sqrt(s["sse_a"] / s["n"]), math.sqrt(s["sse_b"] / s["n"])
         channels[c] = {"unit": s["unit"], "group": s["group"], "rmse_a": ra, "rmse_b": rb,
-                       "fit_a": _fit(s["sse_a"], s["sst"]), "fit_b": _fit(s["sse_b"], s["sst"]),
+                       "fit_a": fit_from_sums(s["sse_a"], s["sst"]), "fit_b": fit_from_sums(s["sse_b"], s["sst"]),
                        "mse_ratio": float(math.exp(point[j])), "rmse_change": float(math.exp(point[j] / 2) - 1),
                        "mse_ratio_upper": float(math.exp(np.quantile(logs[:, j], level))),
                        "p_worse": p_w, "p_better": p_b, "worse": bool(is_w), "better": bool(is_b),
@@ -270,10 +270,6 @@ def score(meas: Sequence, preds: Sequence[dict]) -> float:
     with np.errstate(divide="ignore"):
         return float(sum(sec[c] * math.log(max(sse[c] / n[c], 1e-300)) if np.isfinite(sse[c]) else math.inf
                          for c in sse) / w)
-
-
-def _fit(sse: float, sst: float) -> float:
-    return float(100.0 * (1.0 - math.sqrt(sse / sst))) if sst > 0 else float("nan")
 
 
 def _pct(x: float) -> str:
