@@ -45,6 +45,21 @@ def test_clean_scenario_needs_no_effect(tmp_path):
     assert d.report["validation_cost_per_entry"]["final"] < 1.5  # at the noise level
 
 
+def test_a_retune_that_does_not_validate_better_is_not_kept(tmp_path):
+    """Issue 45: `--retune` of every base coefficient on clean data whose base model is exact was
+    kept whatever it did to the validation runs (the issue's field logs: attitude 62 -> 84 mrad
+    with no effect named).  The re-tune is a change of the model like an effect: the verdict
+    against the given model must call it better, or the corrected model is the given one."""
+    out, truth = _scenario(tmp_path, 4, n_effects=0, perturbation=0.0)
+    assert truth["effects"] == []
+    rep = diagnose(out, retune=list(BASE_RETUNE)).report
+    assert rep["rmse_after"] == rep["rmse_before"]          # the given model, unchanged
+    assert rep["effect"] == "none" and rep["retuned"] == {} and rep["model_verdict"] is None
+    rv = rep["retune_verdict"]
+    assert not rv["kept"] and rv["status"] != "better" and rv["retune"] == list(BASE_RETUNE)
+    assert "not kept" in rep["message"]
+
+
 def test_names_a_current_estimates_it_and_halves_the_validation_error(tmp_path):
     out, truth = _scenario(tmp_path, 1, effects=[{"type": "current", "magnitude": 0.05}])
     d = diagnose(out, retune=list(BASE_RETUNE))

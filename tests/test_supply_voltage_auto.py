@@ -12,10 +12,13 @@ from uvsim.scenarios import generate, sample_scenario
 from uvsim.vehicle import load_vehicle, vehicle_from_dict
 
 
-def test_the_rule_keeps_the_refit_only_when_the_training_verdict_is_better():
-    assert supply.choose({"status": "better"})
-    assert not supply.choose({"status": "trade-off"})             # a channel worse: the first fit stands
-    assert not supply.choose({"status": "worse"})
+def test_the_rule_keeps_the_refit_only_when_the_training_verdict_is_better_in_every_channel():
+    lower, higher = {"rmse_change": -0.2}, {"rmse_change": 0.004}
+    assert supply.choose({"status": "better", "channels": {"depth": lower, "r": lower}})
+    # better pooled, one channel a little higher within the noise: one more parameter in-sample is not enough
+    assert not supply.choose({"status": "better", "channels": {"depth": lower, "r": higher}})
+    assert not supply.choose({"status": "trade-off", "channels": {"depth": lower}})   # a channel worse
+    assert not supply.choose({"status": "worse", "channels": {"depth": lower}})
 
 
 def test_the_family_vehicle_keeps_every_value_and_adds_the_file_s_voltage():

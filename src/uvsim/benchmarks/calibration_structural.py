@@ -87,7 +87,7 @@ REAL_LOG_FREE = "z_b,thruster_gain_*,thruster_reverse_*"
 REAL_LOG_LATENCY = "auto"
 #: The real-log command's ``--supply-voltage`` (docs/calibration.md, "Supply voltage"): a second
 #: joint fit with the thrusters on the T200 voltage family, kept when the verdict on the training
-#: runs calls it better than the first fit.  ``supply`` of :func:`run_one`: False none, True freed from the start, "auto".
+#: runs calls it better than the first fit in every channel.  ``supply`` of :func:`run_one`: False none, True freed from the start, "auto".
 REAL_LOG_SUPPLY = "auto"
 #: Scenario size: a few runs of 15-25 s at 100 Hz (a real session's order) and two validation runs.
 SIZE = dict(n_runs=3, n_validation=2, duration=[15, 25], rate_hz=100.0)
