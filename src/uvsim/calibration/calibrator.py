@@ -378,7 +378,7 @@ class Calibrator:
                     veh, dict(params), start_veh, fit_res, runs, meas, joint_bounds, margin=float(self.margin),
                     prior_mean=self.initial_vehicle_.parameters(), initial_velocity=self.initial_velocity)
                 if kept is not None:
-                    log.info("supply voltage %.2f V: higher training Fit %% in every channel; keeping that fit",
+                    log.info("supply voltage %.2f V: better on the training runs, in every channel; keeping that fit",
                              self.supply_voltage_["value"])
                     fit_res, start_veh, veh, joint_bounds = kept
         t_ref = time.perf_counter()

@@ -183,24 +183,23 @@ def _calibrate_structural(args) -> int:
     if out is None:
         return 0
     for mode, d in out["summary"].items():
-        print(f"{mode}: {d['n']} fits ({d['errors']} refused before a result); no worse than the start in every "
-              f"channel (> {WORSE_POINTS:g} Fit % points) {d['no_worse']}/{d['n']} ({100 * d['no_worse_rate']:.0f} %); "
-              f"worse {d['worse']}, of which reported not ok {d['worse_reported_not_ok']}; reported ok "
-              f"{d['ok_reported']}; fits with a parameter on a bound {d['fits_with_a_bound_hit']}; seconds median "
-              f"{d['seconds_median']:.1f}, max {d['seconds_max']:.1f}")
-        print(f"  seeds with a validation run whose free simulation amplifies its start (its attitude, rates "
-              f"and accelerations not compared): {d['seeds_with_runs_not_compared']}; no worse by the earlier judge "
-              f"(mean of each run's Fit %, every channel of every run): {d['no_worse_run_mean_judge']}/{d['n']}")
+        print(f"{mode}: {d['n']} fits ({d['errors']} refused before a result); verdict better {d['better']}/{d['n']} "
+              f"({100 * d['better_rate']:.0f} %), trade-off {d['trade-off']}, worse {d['worse']}; better but a channel "
+              f"more than {WORSE_POINTS:g} Fit % point lower (within the noise) "
+              f"{d['better_but_a_channel_loses_points']}; median pooled error change "
+              f"{100 * (d['median_pooled_rmse_change'] or 0):+.0f} %; fits with a parameter on a bound "
+              f"{d['fits_with_a_bound_hit']}; seeds compared over a shorter horizon (a diverged simulation) "
+              f"{d['seeds_compared_over_a_shorter_horizon']}; seconds median {d['seconds_median']:.1f}, "
+              f"max {d['seconds_max']:.1f}")
         print(f"  against the generator's noise-free truth: closer or as close in every state channel "
               f"{d['closer_to_truth_everywhere']}/{d['n']}; farther in some channel {d['farther_from_truth']}, of which "
-              f"reported not ok {d['farther_reported_not_ok']}; refused though closer everywhere "
-              f"{d['refused_though_closer_to_truth']}")
+              f"not better {d['farther_not_better']}; not better though closer everywhere "
+              f"{d['not_better_though_closer_to_truth']}")
         for name, what in (("truth", "the truth as a vehicle file states it"),
                            ("truth_coefficients", "the start model with the truth's coefficients")):
             if d[f"{name}_n"]:
-                print(f"  judged like a fit, {what} ({d[f'{name}_n']} seeds): no worse than the start "
-                      f"{d[f'{name}_no_worse']}, refused by the check {d[f'{name}_refused']}; worse fits where it is "
-                      f"worse too {d[f'worse_fits_whose_{name}_is_worse_too']}")
+                print(f"  judged like a fit, {what} ({d[f'{name}_n']} seeds): better {d[f'{name}_better']}; fits not "
+                      f"better where it is not better either {d[f'fits_not_better_whose_{name}_is_not_better_either']}")
         print("  median validation Fit % gain per channel (points): "
               + ", ".join(f"{c} {g:+.1f}" for c, g in d["median_gain_points"].items()))
     return 0
