@@ -183,7 +183,7 @@ def test_joint_stage_checkpoint_kill_and_resume(mixed, tmp_path):
     res = subprocess.run(cmd + ["--resume", str(ck), "--json", str(tmp_path / "resumed.json")], env=env,
                          capture_output=True, text=True)
     assert res.returncode == code, res.stderr
-    assert re.search(rf"resuming from {re.escape(str(joint))}: the joint stage, stage 1 of 2 \(2 s windows, continuity 0\.05\), "
+    assert re.search(rf"resuming from {re.escape(str(joint))}: the joint stage, stage 1 of 1 \(2 s windows, continuity 0\.05\), "
                      r"iteration \d+", res.stderr), res.stderr
     a, b = json.loads(ref.read_text()), json.loads((tmp_path / "resumed.json").read_text())
     assert a["parameters"] == b["parameters"]

@@ -51,12 +51,13 @@ from uvsim.measurements import check_sample_weighting, measurements_for
 from uvsim.plausibility import check_runs, parse_allow
 
 log = logging.getLogger("uvsim")
-#: Window lengths of the joint stage's continuation: 2 s windows (the cost close to quadratic,
-#: robust to a start far off), then whole runs, the free simulation the verdict judges
-#: (:mod:`uvsim.fitting.verdict`), with each channel scaled by its own RMS error
-#: (:func:`uvsim.fitting.evaluate.judged_scales`) so that the last stage minimizes the verdict's
-#: score (docs/calibration.md, "The joint stage ends on the verdict's measure").
-DEFAULT_HORIZONS = (2.0, None)
+#: Window lengths of the joint stage's continuation: 2 s windows, held nearly continuous by
+#: DEFAULT_CONTINUITY.  ``(2.0, None)`` adds a whole-run stage with each channel scaled by its own
+#: RMS error (:func:`uvsim.fitting.evaluate.judged_scales`), the least-squares form of the
+#: verdict's score; measured on the structural benchmark it called fewer fits better (44 of 50
+#: against 46) and took 1.7 times as long, so it is an option, not the default
+#: (docs/calibration.md, "A whole-run stage on the verdict's measure").
+DEFAULT_HORIZONS = (2.0,)
 #: Continuity factors of the joint stage's last horizon (:func:`uvsim.fitting.fit`): the
 #: continuity defects' sd is DEFECT_SIGMA x 0.05 (0.25 mm, 0.5 mrad/s ...), so that what the
 #: fit improves is close to the free simulation the result check compares (docs/calibration.md,
@@ -110,8 +111,8 @@ class Calibrator:
         amplitude) ** -low_speed_exponent; 0 (default): the manifest weights.
     refine : run the joint stage (default True).
     horizons : window lengths of the joint stage's continuation, s (None: whole runs); default
-        :data:`DEFAULT_HORIZONS`, 2 s windows then whole runs.  A whole-run stage scales each
-        channel by its own RMS error of the free simulation (the verdict's measure).
+        :data:`DEFAULT_HORIZONS`, 2 s windows.  A whole-run stage scales each channel by its own RMS
+        error of the free simulation (the verdict's measure).
     continuity : factors of the joint stage's continuity-defect sd at its last horizon, one
         stage each (:func:`uvsim.fitting.fit`); default :data:`DEFAULT_CONTINUITY`.  1 is
         diagnosis' softer setting, under which windows restart more freely.

@@ -54,9 +54,8 @@ def register(sub) -> None:
     p.add_argument("--noise", default=None, metavar="NAME=SIGMA,...",
                    help="1-sigma noise level by group or channel (default: estimated from each run)")
     p.add_argument("--horizons", default=None, metavar="H1,H2,...",
-                   help="window lengths (s) of the joint fit's continuation, 'whole' for whole runs (default 2,whole: "
-                        "2 s windows, then whole runs with each channel scaled by its own error, the verdict's "
-                        "measure)")
+                   help="window lengths (s) of the joint fit's continuation, 'whole' for whole runs, each channel "
+                        "then scaled by its own error, the verdict's measure (default 2)")
     p.add_argument("--continuity", default=None, metavar="C1,C2,...",
                    help="factors of the continuity defects' sd at the last horizon, one stage each (default 0.05: "
                         "windows restart little, so the fit improves the free simulation; 1 is diagnosis' softer "
