@@ -127,7 +127,7 @@ def judge(rep: dict) -> dict:
             if d["fit_a"] is not None and d["fit_b"] is not None and np.isfinite(d["fit_a"]) and np.isfinite(d["fit_b"])}
     stages = (rep.get("refinement") or {}).get("stages") or []
     unfinished = bool(stages) and str(stages[-1].get("message", "")).startswith("maximum number of iterations")
-    status = "worse" if unfinished else v.get("status", "worse")
+    status = v.get("status", "worse")   # an unfinished fit is judged like any other (commands.checks)
     return {"status": status, "pooled_rmse_change": (v.get("pooled") or {}).get("rmse_change"),
             "gain": gain, "worse": list(v.get("worse") or []),
             "worse_points": sorted(c for c, g in gain.items() if g < -WORSE_POINTS),

@@ -117,7 +117,8 @@ class Calibrator:
         stage each (:func:`uvsim.fitting.fit`); default :data:`DEFAULT_CONTINUITY`.  1 is
         diagnosis' softer setting, under which windows restart more freely.
     max_iter : Levenberg-Marquardt iterations per continuation stage (80). A last stage that
-        stops there is not converged: the result check reports it as unfinished.
+        stops there is not converged: the report's ``status.caveats`` says it is unfinished,
+        beside the verdict on the model it reached.
     attitude_bias : fit a constant roll and pitch offset per run whose roll and pitch come
         from an attitude filter beside a gyro (joint stage; prior sd
         :data:`uvsim.fitting.objective.ATTITUDE_BIAS_SIGMA`, 0.01 rad; a fitted offset beyond

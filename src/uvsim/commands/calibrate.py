@@ -61,8 +61,8 @@ def register(sub) -> None:
                         "windows restart little, so the fit improves the free simulation; 1 is diagnosis' softer "
                         "setting)")
     p.add_argument("--max-iter", type=int, default=80,
-                   help="Levenberg-Marquardt iterations per horizon; a last stage that stops there is reported as "
-                        "unfinished (exit 2) unless --keep-worse")
+                   help="Levenberg-Marquardt iterations per horizon (default 80); a last stage that stops there "
+                        "is reported as unfinished beside the verdict, which judges the model it reached")
     p.add_argument("--no-gyro-bias", action="store_true", help="do not fit a gyro bias per run")
     p.add_argument("--no-acc-bias", action="store_true",
                    help="do not fit an accelerometer offset per run (runs logging acc_x, acc_y, acc_z)")

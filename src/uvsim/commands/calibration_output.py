@@ -8,7 +8,7 @@ import math
 import sys
 from pathlib import Path
 
-from uvsim.commands.checks import calibration_problems
+from uvsim.commands.checks import calibration_caveats, calibration_problems
 from uvsim.fitting.verdict import EXIT_CODES
 
 ADDED_MASS_ROWS = ("X_udot", "Y_vdot", "Z_wdot", "K_pdot", "M_qdot", "N_rdot")
@@ -190,15 +190,23 @@ def print_summary(cal, out=None) -> None:
 def outcome(rep, ds) -> tuple[str, str, list[str]]:
     """(status, why, problems) of a calibration report: the verdict's status ("better",
     "trade-off", "worse") and message, or "worse" when a sanity check fails
-    (:func:`calibration_problems`: a diverged or exploding simulation, an unfinished fit, every
-    parameter of a DOF on a bound), ``problems`` then saying which."""
+    (:func:`calibration_problems`: a simulation that diverges or explodes where the starting
+    model's does not, every parameter of a DOF on a bound), ``problems`` then saying which.
+    ``why`` ends with the caveats that do not change the status (:func:`calibration_caveats`:
+    an unfinished fit, simulations of both models that leave the data)."""
     problems = calibration_problems(rep, ds)
+    caveats = calibration_caveats(rep, ds)
     v = rep.get("verdict")
     if problems:
-        return "worse", "worse: " + "; ".join(problems), problems
-    if v is None:
-        return "better", "no runs to compare with the starting model", []
-    return v["status"], v["message"], []
+        status, why = "worse", "worse: " + "; ".join(problems)
+    elif v is None:
+        status, why = "better", "no runs to compare with the starting model"
+    else:
+        status, why = v["status"], v["message"]
+    for c in caveats:
+        if c not in why:
+            why += f"; {c}"
+    return status, why, problems
 
 
 def record_outcome(cal, ds, *, keep_worse: bool = False) -> tuple[str, str, bool]:
@@ -209,7 +217,7 @@ def record_outcome(cal, ds, *, keep_worse: bool = False) -> tuple[str, str, bool
     status, why, problems = outcome(rep, ds)
     keep = status in ("better", "trade-off") or keep_worse
     rep["status"] = {"ok": status == "better", "verdict": status, "exit_code": EXIT_CODES[status], "why": why,
-                     "problems": problems, "vehicle_written": bool(keep)}
+                     "problems": problems, "caveats": calibration_caveats(rep, ds), "vehicle_written": bool(keep)}
     return status, why, keep
 
 

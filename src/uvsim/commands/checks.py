@@ -4,8 +4,8 @@ Before: every output path can be written (:mod:`uvsim.files`), the runs make phy
 sense for the vehicle (:mod:`uvsim.plausibility`, ``--allow NAME``), and what the
 readers changed in the data (:attr:`uvsim.logs.Run.notes`) is printed.
 After: a fit's result is sane before it is reported as a success (finite RMSE, not an
-order of magnitude beyond the measured signals, not every parameter of a DOF on a search
-bound), otherwise :class:`uvsim.errors.ResultCheckError` (exit status 2) says why.
+order of magnitude beyond the measured signals where the starting model's is not, not every
+parameter of a DOF on a search bound), otherwise :class:`uvsim.errors.ResultCheckError` (exit status 2) says why.
 """
 from __future__ import annotations
 
@@ -98,16 +98,32 @@ def _spread(runs) -> dict[str, float]:
     return {f"{g}_{UNIT_SUFFIX[g]}": float(np.sqrt(ss[g] / nn[g])) for g in ss if nn[g] and g in UNIT_SUFFIX}
 
 
-def rmse_problems(rmse: Mapping[str, float], runs, what: str) -> list[str]:
-    """Non-finite RMSEs and RMSEs beyond EXPLODE_FACTOR x the measured spread."""
-    out = []
+def _exploded(rmse: Mapping[str, float], spread: Mapping[str, float]) -> set[str]:
+    """The keys of ``rmse`` not finite or beyond EXPLODE_FACTOR x the measured ``spread``."""
+    return {k for k, v in rmse.items()
+            if v is None or not math.isfinite(v) or (spread.get(k, 0) > 0 and v > EXPLODE_FACTOR * spread[k])}
+
+
+def rmse_problems(rmse: Mapping[str, float], runs, what: str,
+                  start: Mapping[str, float] | None = None) -> list[str]:
+    """Non-finite RMSEs and RMSEs beyond EXPLODE_FACTOR x the measured spread.
+
+    With ``start`` (the same RMSEs of the model the user started from), a channel counts only
+    where the start model's simulation stays finite and within the factor: a fit is not refused
+    for what the start model does on the same runs (an open-loop unstable vehicle flown in
+    closed loop); the verdict compares the two over the horizon both stay finite, and
+    :func:`calibration_caveats` says where both leave the data."""
     spread = _spread(runs)
-    for k, v in rmse.items():
+    bad = _exploded(rmse, spread) - (_exploded(start, spread) if start is not None else set())
+    unlike_start = "" if start is None else " where the starting model's did not"
+    out = []
+    for k in (k for k in rmse if k in bad):
+        v = rmse[k]
         if v is None or not math.isfinite(v):
-            out.append(f"{what} {k} is not finite (the simulation diverged)")
-        elif k in spread and spread[k] > 0 and v > EXPLODE_FACTOR * spread[k]:
+            out.append(f"{what} {k} is not finite (the simulation diverged{unlike_start})")
+        else:
             out.append(f"{what} {k} = {v:.4g} is {v / spread[k]:.3g} times the spread of the measured signal "
-                       f"({spread[k]:.4g}); expected at most {EXPLODE_FACTOR:g} times (the simulation diverged)")
+                       f"({spread[k]:.4g}); expected at most {EXPLODE_FACTOR:g} times (the simulation diverged{unlike_start})")
     return out
 
 
@@ -123,14 +139,10 @@ def calibration_problems(rep: Mapping, ds) -> list[str]:
     (:mod:`uvsim.fitting.verdict`, which judges the fitted model against the start)."""
     from uvsim.calibration.params import DOF_PARAMETERS
 
-    probs = rmse_problems(rep["training_rmse"], [r for r in ds.runs if r.split == "train"], "training RMSE")
+    probs = rmse_problems(rep["training_rmse"], [r for r in ds.runs if r.split == "train"], "training RMSE",
+                          rep.get("initial_training_rmse"))
     probs += rmse_problems(rep["validation_rmse"], [r for r in ds.runs if r.split == "validation"],
-                           "validation RMSE")
-    stages = (rep.get("refinement") or {}).get("stages") or []
-    if stages and str(stages[-1].get("message", "")).startswith("maximum number of iterations"):
-        probs.append(f"unfinished: the joint fit's last stage stopped at the iteration limit "
-                     f"({stages[-1].get('iterations')} iterations) before converging; raise --max-iter, or keep the "
-                     "result anyway with --keep-worse")
+                           "validation RMSE", rep.get("initial_validation_rmse"))
     hits = bound_hits(rep)
     for d in rep["dofs"]:
         names = [k for k in DOF_PARAMETERS.get(d, ()) if k in rep["parameters"]]
@@ -138,6 +150,29 @@ def calibration_problems(rep: Mapping, ds) -> list[str]:
             probs.append(f"every fitted {d} parameter ({', '.join(names)}) ended on a search bound, so the data "
                          "do not determine them (wrong units, or a starting vehicle far off: widen --margin)")
     return probs
+
+
+def calibration_caveats(rep: Mapping, ds) -> list[str]:
+    """What a user should know about a calibration that does not change its verdict: a joint fit
+    stopped at the iteration limit (*unfinished*) is judged like any other fit, by how its model
+    compares with the start (issue 45: no heuristic refuses a fit whose validation is better),
+    and a fitted model whose simulation leaves the data as the starting model's does (RMSE beyond
+    EXPLODE_FACTOR x the signal's spread in both) predicts those channels no better in absolute
+    terms, whatever the verdict says about the two."""
+    out = []
+    stages = (rep.get("refinement") or {}).get("stages") or []
+    if stages and str(stages[-1].get("message", "")).startswith("maximum number of iterations"):
+        out.append(f"unfinished: the joint fit's last stage stopped at the iteration limit "
+                   f"({stages[-1].get('iterations')} iterations) before converging; the verdict judges the model "
+                   "it reached, and raising --max-iter may move it")
+    for split, key in (("train", "training_rmse"), ("validation", "validation_rmse")):
+        spread = _spread([r for r in ds.runs if r.split == split])
+        names = sorted(_exploded(rep.get(key) or {}, spread) & _exploded(rep.get("initial_" + key) or {}, spread))
+        if names:
+            out.append(f"on the {split} runs the simulations of both models leave the data ({', '.join(names)} "
+                       f"beyond {EXPLODE_FACTOR:g} times the measured spread): better than the start there is "
+                       "not yet a model that predicts them")
+    return out
 
 
 #: A fitted value within this fraction of its search range from a bound is "on the bound"
@@ -161,7 +196,7 @@ def bound_hits(rep: Mapping) -> dict[str, str]:
 def diagnosis_problems(rep: Mapping, val_runs) -> list[str]:
     """Sanity problems of a diagnosis report."""
     probs = rmse_problems(rep["rmse_before"], val_runs, "validation RMSE of the given model")
-    probs += rmse_problems(rep["rmse_after"], val_runs, "validation RMSE after the fit")
+    probs += rmse_problems(rep["rmse_after"], val_runs, "validation RMSE after the fit", rep["rmse_before"])
     for step in rep.get("steps", []):
         chosen = next((c for c in step["candidates"] if c.get("chosen")), None)
         if chosen is not None and chosen.get("free") and set(chosen["free"]) <= set(chosen.get("at_bounds", ())):
