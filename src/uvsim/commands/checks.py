@@ -123,7 +123,8 @@ def rmse_problems(rmse: Mapping[str, float], runs, what: str,
             out.append(f"{what} {k} is not finite (the simulation diverged{unlike_start})")
         else:
             out.append(f"{what} {k} = {v:.4g} is {v / spread[k]:.3g} times the spread of the measured signal "
-                       f"({spread[k]:.4g}); expected at most {EXPLODE_FACTOR:g} times (the simulation diverged{unlike_start})")
+                       f"({spread[k]:.4g}); expected at most {EXPLODE_FACTOR:g} times "
+                       f"(the simulation diverged{unlike_start})")
     return out
 
 
