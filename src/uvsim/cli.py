@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import logging
+import os
 import signal
 import sys
 import threading
@@ -75,6 +76,13 @@ def main(argv: list[str] | None = None) -> int:
         text = " ".join(line.strip() for line in str(exc).splitlines())  # one line
         print(f"uvsim {args.command}: error: {text}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # the reader of stdout left (``uvsim vehicle show X | head``): stop quietly
+        try:  # Python docs, "Note on SIGPIPE": point stdout at devnull so the exit's flush is silent
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+        except (OSError, ValueError):  # no file descriptor (stdout replaced in-process)
+            pass
+        return 141  # 128 + SIGPIPE, what a shell reports for a pipe its reader closed
     except OSError as exc:  # e.g. disk full while writing an output
         where = f"{exc.filename}: " if exc.filename else ""
         print(f"uvsim {args.command}: error: {where}{exc.strerror or exc}", file=sys.stderr)

@@ -13,3 +13,9 @@ RHO_SEA = 1025.0
 
 #: Kinematic viscosity of water at 20 degC, m^2/s (ITTC 2011 fresh-water tables).
 NU_WATER = 1.0e-6
+
+#: Largest water current accepted, m/s (``--current``, a vehicle file's ``current_ned``).
+#: Open-ocean currents stay below about 2.5 m/s (the Gulf Stream's core); the fastest tidal
+#: races reach 8-11 m/s (Pentland Firth 16 kn, Saltstraumen 22 kn), where no ROV or AUV is
+#: flown. Beyond 5 m/s a value is a unit slip (knots, km/h) or a typo, not a current.
+MAX_CURRENT_SPEED = 5.0

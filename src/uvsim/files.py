@@ -54,14 +54,38 @@ def read_text(path, *, error: type = UvsimError, what: str = "file") -> str:
                     "in UTF-8 text") from None
 
 
+def _unique_key_loader():
+    """A ``yaml.SafeLoader`` that refuses a mapping with the same key twice (YAML 1.2 requires
+    unique keys, sec. 3.2.1.1; PyYAML silently keeps the last one)."""
+    import yaml
+
+    class UniqueKeyLoader(yaml.SafeLoader):
+        def construct_mapping(self, node, deep=False):
+            seen = {}
+            for key_node, _ in node.value:
+                key = self.construct_object(key_node, deep=True)
+                try:
+                    first = seen.setdefault(key, key_node.start_mark.line)
+                except TypeError:  # an unhashable key: PyYAML's own error follows
+                    break
+                if first != key_node.start_mark.line:
+                    raise yaml.constructor.ConstructorError(
+                        None, None, f"duplicate key {key!r} (first at line {first + 1}); YAML keeps only the last "
+                        "one, so uvsim refuses the file: remove one of them", key_node.start_mark)
+            return super().construct_mapping(node, deep=deep)
+
+    return UniqueKeyLoader
+
+
 def load_yaml(path, *, error: type = UvsimError, what: str = "YAML file"):
-    """Read and parse a YAML file (:func:`read_text`, ``yaml.safe_load``); a syntax error
-    raises ``error`` in one line with the file, line and column."""
+    """Read and parse a YAML file (:func:`read_text`; ``yaml.safe_load``'s rules, and a key twice
+    in one mapping is refused); a syntax error raises ``error`` in one line with the file, line
+    and column."""
     import yaml
 
     text = read_text(path, error=error, what=what)
     try:
-        return yaml.safe_load(text)
+        return yaml.load(text, Loader=_unique_key_loader())  # noqa: S506 (a SafeLoader subclass)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" line {mark.line + 1}, column {mark.column + 1}:" if mark is not None else ""
@@ -136,6 +160,22 @@ def check_output_file(path, option: str) -> Path:
         return p
     _probe_writable(base, option, p)
     return p
+
+
+def check_not_an_input(path, option: str, inputs) -> None:
+    """Refuse an output ``path`` that is one of the ``inputs`` ({option: path}) under another
+    name (the same file through ``./``, another relative path or a symbolic link): writing it
+    would destroy the data the command reads."""
+    if path is None:
+        return
+    out = Path(path)
+    for in_option, in_path in dict(inputs).items():
+        if in_path is None or not Path(in_path).exists():
+            continue
+        same = out.exists() and os.path.samefile(out, in_path)
+        if same or os.path.realpath(out) == os.path.realpath(in_path):
+            raise OutputPathError(f"{option} {out}: is the input file {in_option} {in_path}; writing it would "
+                                  "overwrite the data this command reads: choose another name")
 
 
 def check_output_dir(path, option: str) -> Path:

@@ -37,8 +37,14 @@ from typing import Callable
 import numpy as np
 
 from uvsim.errors import SimulationError
+from uvsim.sam.subsystems import servo_time_constants
 from uvsim.sam.vehicle import NEUTRAL, SAM_INPUTS, load_sam
 
+#: Most samples a maneuver may have (50 Hz for 55 h), refused before anything is allocated; a
+#: sample costs up to BYTES_PER_SAMPLE at peak (states, inputs, actuator states and the output
+#: frame with their copies: 650-790 bytes measured with tracemalloc on tight_loop, 30-600 s).
+MAX_SAMPLES = 10_000_000
+BYTES_PER_SAMPLE = 1000
 RPM_MAX = 1525.0                 # rev/min, smarc_modelling SAM.py
 TV_MAX = np.radians(7.0)         # rad, seed 003 sec. V-A-1 / SAM.py
 
@@ -145,9 +151,20 @@ def run_maneuver(name: str, dataset: str = "multifidelity", dt: float | None = N
     m = MANEUVERS[name]
     dt = m.dt if dt is None else float(dt)
     duration = m.duration if duration is None else float(duration)
-    if not (dt > 0 and duration > dt):
+    if not (np.isfinite(dt) and np.isfinite(duration) and dt > 0 and duration > dt):
         raise SimulationError(f"maneuver {name}: need 0 < dt < duration, got dt={dt}, duration={duration}")
+    n = int(duration / dt) + 1
+    if n > MAX_SAMPLES:
+        raise SimulationError(f"maneuver {name}: duration {duration:g} s at dt {dt:g} s is {n:.3g} samples "
+                              f"(~{n * BYTES_PER_SAMPLE / 1e9:.3g} GB); at most {MAX_SAMPLES:.0e}: shorten --duration "
+                              "or lengthen --dt")
     veh = load_sam(dataset) if vehicle is None else vehicle
+    taus = servo_time_constants(veh)
+    if taus and dt > min(taus.values()):
+        fastest = min(taus, key=taus.get)
+        raise SimulationError(f"maneuver {name}: dt {dt:g} s is longer than the fastest actuator time constant "
+                              f"({fastest}, {taus[fastest]:g} s); RK4 then misses (or blows up on) that lag: "
+                              f"use dt <= {taus[fastest]:g} s (default {m.dt:g} s)")
     t = np.arange(0.0, duration + 0.5 * dt, dt)
     u = m.commands(t)
     model = make_model(veh)

@@ -407,6 +407,28 @@ def per_second_factors(groups: Mapping[str, "Group"]) -> dict:
     return {c: top / r for c, r in rate.items()}
 
 
+def check_signal_settings(noise=None, weights=None) -> None:
+    """Refuse unknown signal names (with the nearest known one) and values that are not a
+    positive noise level or a non-negative weight, in ``noise`` and ``weights`` ({name: value},
+    groups or channels); the fits call it before any work."""
+    import difflib
+
+    known = list(GROUPS) + list(CHANNEL_GROUP)
+    for what, d in (("noise", dict(noise or {})), ("weights", dict(weights or {}))):
+        for k in sorted(set(d) - set(known)):
+            near = difflib.get_close_matches(str(k), known, n=1)
+            raise CalibrationError(f"{what}: unknown signal {k!r}{f' (did you mean {near[0]!r}?)' if near else ''}; "
+                                   f"expected groups {list(GROUPS)} or channels {list(CHANNEL_GROUP)}")
+        for k, v in d.items():
+            try:
+                ok = np.isfinite(float(v)) and (float(v) > 0 if what == "noise" else float(v) >= 0)
+            except (TypeError, ValueError):
+                ok = False
+            if not ok:
+                raise CalibrationError(f"{what}.{k}: expected a {'positive' if what == 'noise' else 'non-negative'} "
+                                       f"number, got {v!r}")
+
+
 def measurements_for(run, vehicle=None, *, noise: Mapping[str, float] | None = None,
                      weights: Mapping[str, float] | None = None, run_weight: float | None = None,
                      sensors: Mapping[str, np.ndarray] | None = None, attitude_lag: float = 0.0,
@@ -431,20 +453,7 @@ def measurements_for(run, vehicle=None, *, noise: Mapping[str, float] | None = N
     attitude_lag = lag_time_constant(attitude_lag)
     check_sample_weighting(sample_weighting)
     noise = dict(noise or {})
-    known = set(GROUPS) | set(CHANNEL_GROUP)
-    for what, d in (("noise", noise), ("weights", weights or {})):
-        bad = sorted(set(d) - known)
-        if bad:
-            raise CalibrationError(f"{what}: unknown signal(s) {bad}; expected groups {list(GROUPS)} or channels "
-                                   f"{list(CHANNEL_GROUP)}")
-        for k, v in d.items():
-            try:
-                ok = np.isfinite(float(v)) and (float(v) > 0 if what == "noise" else float(v) >= 0)
-            except (TypeError, ValueError):
-                ok = False
-            if not ok:
-                raise CalibrationError(f"{what}.{k}: expected a {'positive' if what == 'noise' else 'non-negative'} "
-                                       f"number, got {v!r}")
+    check_signal_settings(noise, weights)
     sens = dict(getattr(vehicle, "sensors", {}) or {})
     sens.update(sensors or {})
     g = float(getattr(vehicle, "g", G_DEFAULT))

@@ -237,6 +237,7 @@ def simulate(vehicle, t, inputs, *, input_kind: str = "force", pos0=None, q0=Non
     model.check_inputs(U.shape[1])
     V = _check_voltage(voltage, t.shape)
     y0 = model.initial_state(pos0, q0, nu0, U[0][None, :])
+    check_method(method)
     if method.lower() == "rk4":
         if substeps < 1:
             raise SimulationError(f"substeps must be >= 1, got {substeps}")
@@ -245,6 +246,25 @@ def simulate(vehicle, t, inputs, *, input_kind: str = "force", pos0=None, q0=Non
         Y = _solve_ivp(model, t, U, y0[0], method, rtol, atol, on_blowup, V)
     return SimulationResult(t, Y, model.state_names, U, model.input_kind, input_names(model.input_kind, U.shape[1]),
                             model.vehicle.name, {"method": method})
+
+
+#: The integration methods by name: our fixed-step "rk4" and scipy.integrate.solve_ivp's
+#: (scipy docs, solve_ivp ``method``: RK45, RK23, DOP853, Radau, BDF, LSODA).
+IVP_METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
+
+
+def check_method(method) -> None:
+    """Refuse an unknown integration method by name (with the nearest one), before any work."""
+    import difflib
+
+    if not isinstance(method, str):
+        raise SimulationError(f"method: expected a name (rk4 or one of {', '.join(IVP_METHODS)}), got {method!r}")
+    if method.lower() == "rk4" or method in IVP_METHODS:
+        return
+    names = ["rk4", *IVP_METHODS]
+    near = [m for m in names if m.lower() == method.lower()] or difflib.get_close_matches(method, names, n=1)
+    raise SimulationError(f"method {method!r}: unknown{f' (did you mean {near[0]!r}?)' if near else ''}; expected "
+                          f"rk4 (fixed step) or a scipy solve_ivp method: {', '.join(IVP_METHODS)}")
 
 
 def _make_model(vehicle, overrides, input_kind, current, n=None) -> Model:

@@ -32,6 +32,7 @@ current_e, current_d`` plus those of the damping model and effects.
 from __future__ import annotations
 
 import copy
+import os
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -328,6 +329,9 @@ def load_vehicle(name_or_path: "str | Path | Vehicle") -> Vehicle:
     """Load and validate a vehicle by built-in name or file path."""
     if isinstance(name_or_path, Vehicle):
         return name_or_path
+    if not isinstance(name_or_path, (str, os.PathLike)):
+        raise VehicleError(f"load_vehicle: expected a built-in vehicle name, a vehicle file's path or a Vehicle, "
+                           f"got {type(name_or_path).__name__} {name_or_path!r}")
     path = vehicle_path(name_or_path)
     d = load_yaml(path, error=VehicleError, what="vehicle file (YAML)")
     if not isinstance(d, dict):

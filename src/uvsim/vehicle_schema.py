@@ -15,7 +15,7 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from uvsim.constants import G
+from uvsim.constants import G, MAX_CURRENT_SPEED
 from uvsim.errors import VehicleError
 from uvsim.rigid_body import inertia_tensor
 from uvsim.schema import finite_number, require_mapping, unknown_key_message
@@ -340,6 +340,15 @@ def sensor_on_the_vehicle(v: dict, ctx: Context) -> None:
                            "from the body origin (expected metres, body frame)")
 
 
+def current_a_current(v: dict, ctx: Context) -> None:
+    """``current_ned`` no faster than MAX_CURRENT_SPEED (uvsim.constants: 5 m/s)."""
+    cur = v.get("current_ned")
+    if cur is not None and np.linalg.norm(cur) > MAX_CURRENT_SPEED:
+        raise VehicleError(f"{ctx.at('current_ned')} {np.asarray(cur).tolist()}: {np.linalg.norm(cur):.3g} m/s is "
+                           f"faster than any current a vehicle is flown in (at most {MAX_CURRENT_SPEED:g} m/s); "
+                           "expected m/s (1 kn = 0.514 m/s)")
+
+
 def vehicle_parameter_names(ctx: Context) -> list:
     """The keys of ``uncertainty``: the built vehicle's parameter names (``parameters()``)."""
     return list(ctx.vehicle.parameters())
@@ -363,7 +372,7 @@ ENVIRONMENT = Section({
     "rho": Field("number", default=1000.0, positive=True, unit="kg/m^3", meaning="water density"),
     "current_ned": Field("vec3", default=(0.0, 0.0, 0.0), unit="m/s",
                          meaning="constant ocean current, NED (parameters current_n, current_e, current_d)"),
-})
+}, rules=(current_a_current,))
 
 INERTIA = Section({
     **{k: Field("number", required=True, positive=True, unit="kg m^2", meaning=f"moment of inertia {k}")

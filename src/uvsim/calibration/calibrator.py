@@ -47,7 +47,7 @@ from uvsim.fitting.evaluate import judged_scales
 from uvsim.fitting.objective import check_loss, continuity_factors
 from uvsim.fitting.parameters import default_bounds, physical_bounds
 from uvsim.latency import runs_for
-from uvsim.measurements import check_sample_weighting, measurements_for
+from uvsim.measurements import check_sample_weighting, check_signal_settings, measurements_for
 from uvsim.plausibility import check_runs, parse_allow
 
 log = logging.getLogger("uvsim")
@@ -280,10 +280,17 @@ class Calibrator:
         self.initial_vehicle_ = veh
         check_loss(self.loss)
         check_sample_weighting(self.sample_weighting)
+        check_signal_settings(self.noise, self.signal_weights)  # before the GA, not after it
         if not 0 < float(self.margin) < 1:
             raise CalibrationError(f"margin {self.margin!r}: expected a fraction between 0 and 1 (0.5 = +-50 %)")
         if self.ga_channels not in ("own", "all"):
             raise CalibrationError(f"ga_channels {self.ga_channels!r}: expected 'own' or 'all'")
+        for name in ("population", "generations", "tournament", "seed", "max_iter", "workers"):
+            value = getattr(self, name)
+            if value is None and name == "workers":
+                continue
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+                raise CalibrationError(f"{name} {value!r}: expected a whole number (not truncated in silence)")
         horizons = self._horizons()
         self._continuity()  # a bad value is an error before the GA, not after it
         base = veh.parameters()

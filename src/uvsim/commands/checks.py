@@ -16,7 +16,7 @@ import numpy as np
 from typing import Iterable, Mapping
 
 from uvsim.errors import ResultCheckError
-from uvsim.files import check_output_dir, check_output_file
+from uvsim.files import check_not_an_input, check_output_dir, check_output_file
 
 #: A fitted model whose RMSE exceeds this many times the spread of the measured signal
 #: (the RMS of its deviation from the run mean) predicts nothing: the fit "exploded".
@@ -46,11 +46,14 @@ def say(command: str, message: str) -> None:
     print(f"uvsim {command}: {message}", file=sys.stderr, flush=True)
 
 
-def check_outputs(files: Mapping[str, object] = (), dirs: Mapping[str, object] = ()) -> None:
-    """Check output files ``{option: path}`` and directories before any work (None = not given)."""
+def check_outputs(files: Mapping[str, object] = (), dirs: Mapping[str, object] = (),
+                  inputs: Mapping[str, object] = ()) -> None:
+    """Check output files ``{option: path}`` and directories before any work (None = not given);
+    no output file may be one of the input files ``inputs`` ({option: path})."""
     for option, path in dict(files).items():
         if path is not None:
             check_output_file(path, option)
+            check_not_an_input(path, option, inputs)
     for option, path in dict(dirs).items():
         if path is not None:
             check_output_dir(path, option)

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from uvsim.commands.checks import add_allow_argument, check_outputs, check_runs_at_door
+from uvsim.constants import MAX_CURRENT_SPEED
 from uvsim.errors import UvsimError
 
 ANGLES = ("roll", "pitch", "yaw")
@@ -23,8 +24,12 @@ def _triple(text: str):
         vals = [float(x) for x in text.split(",")]
     except ValueError:
         raise UvsimError(f"--current: expected three numbers N,E,D in m/s, got {text!r}") from None
-    if len(vals) != 3:
-        raise UvsimError(f"--current: expected three numbers N,E,D in m/s, got {text!r}")
+    if len(vals) != 3 or not all(np.isfinite(vals)):
+        raise UvsimError(f"--current: expected three finite numbers N,E,D in m/s, got {text!r}")
+    speed = float(np.linalg.norm(vals))
+    if speed > MAX_CURRENT_SPEED:
+        raise UvsimError(f"--current {text}: {speed:.3g} m/s is faster than any current a vehicle is flown in "
+                         f"(at most {MAX_CURRENT_SPEED:g} m/s); give it in m/s (1 kn = 0.514 m/s)")
     return vals
 
 
@@ -65,13 +70,14 @@ def _run(args) -> int:
     from uvsim.gaps import split_run
     from uvsim.latency import delay_inputs
     from uvsim.logs import read_run, write_run
-    from uvsim.simulate import simulate_run
+    from uvsim.simulate import check_method, simulate_run
     from uvsim.vehicle import load_vehicle
 
     if args.out is None and not args.compare:
         raise UvsimError("--out: required unless --compare is given")
     current = _triple(args.current) if args.current else None
-    check_outputs({"--out": args.out, "--plot": args.plot})
+    check_method(args.method)
+    check_outputs({"--out": args.out, "--plot": args.plot}, inputs={"--run": args.run, "--vehicle": args.vehicle})
     veh = load_vehicle(_vehicle_for(args))
     run = read_run(args.run)
     segments = split_run(run)  # a run with gaps: each segment from its own first measured state (uvsim.gaps)

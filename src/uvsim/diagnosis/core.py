@@ -48,6 +48,7 @@ from uvsim.fitting.verdict import compare as compare_models
 from uvsim.forces import make_term
 from uvsim.latency import runs_for
 from uvsim.logs import Dataset, read_dataset
+from uvsim.measurements import check_signal_settings
 from uvsim.plausibility import check_runs, parse_allow
 from uvsim.vehicle import load_vehicle
 
@@ -151,8 +152,10 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         unknown = sorted(set(only) - set(EFFECTS))
         if unknown:
             raise CalibrationError(f"unknown candidate effect(s) {unknown}; known: {', '.join(EFFECTS)}")
-    if not (isinstance(max_effects, int) and max_effects >= 1):
-        raise CalibrationError(f"max_effects must be a positive integer, got {max_effects!r}")
+    check_signal_settings(noise, weights)
+    for name, value in (("max_effects", max_effects), ("top", top), ("max_iter", max_iter), ("workers", workers)):
+        if not (isinstance(value, (int, np.integer)) and not isinstance(value, bool) and value >= 1):
+            raise CalibrationError(f"{name} must be a positive integer (1 or more), got {value!r}")
     if not (horizon is None or (np.isfinite(horizon) and horizon > 0)):
         raise CalibrationError(f"horizon must be a positive number of seconds, got {horizon!r}")
     train, val, split_note = _split(dataset)

@@ -56,6 +56,10 @@ def allocation_matrix(positions, directions) -> np.ndarray:
 
 
 DOF_LETTERS = "XYZKMN"
+#: A thruster direction's length may differ from 1 by this much (directions written to 4
+#: digits, e.g. 0.7071); beyond it the file is refused rather than normalised in silence, since
+#: the export writes the file's direction as given.
+DIRECTION_NORM_TOL = 1e-3
 #: Accepted range of a gain or reverse ratio in a vehicle file (a thruster delivering
 #: more than twice its measured curve is a unit error, not a calibration).
 FACTOR_RANGE = (0.0, 2.0)
@@ -419,8 +423,11 @@ def build_actuators(spec, where: str) -> Actuators:
                 if arr is None or arr.shape != (3,) or not np.all(np.isfinite(arr)):
                     raise VehicleError(f"{where}: {field}.{key}: expected 3 finite numbers, got {val!r}")
             d = np.asarray(unit["direction"], float)
-            if np.linalg.norm(d) < 1e-9:
-                raise VehicleError(f"{where}: {field}.direction: must not be the zero vector")
+            if abs(np.linalg.norm(d) - 1.0) > DIRECTION_NORM_TOL:
+                hint = "" if np.linalg.norm(d) < 1e-9 else f": write {np.round(d / np.linalg.norm(d), 4).tolist()}"
+                raise VehicleError(f"{where}: {field}.direction: {list(map(float, d))} has length "
+                                   f"{np.linalg.norm(d):.4g}; expected a unit vector (length 1 within "
+                                   f"{DIRECTION_NORM_TOL:g}){hint}")
             P.append(unit["position"])
             D.append(d)
             names.append(str(unit.get("name", f"T{i + 1}")))

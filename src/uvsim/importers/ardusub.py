@@ -42,6 +42,10 @@ from uvsim.importers.timeline import Stream
 G_BARO = 9.80665  # m/s^2, standard gravity used to turn pressure into depth
 WATER = {"fresh": 1.0, "salt": 1.024}  # specific gravity, ArduPilot AP_Baro.h (_specific_gravity)
 MG_TO_MS2 = 9.80665e-3  # MAVLink SCALED_IMU accelerations are in mG
+#: Surface (air) pressure accepted for ``surface_pressure``, Pa: sea-level records span 870-1084 hPa
+#: (WMO: Typhoon Tip 1979, Agata 1968), and a lake at 4000 m sits near 620 hPa (ISA); a value
+#: outside is in another unit (hPa/mbar, kPa, psi), not air pressure in Pa.
+SURFACE_PRESSURE_PA = (55_000.0, 110_000.0)
 ARMED_FLAG = 128  # MAV_MODE_FLAG_SAFETY_ARMED in HEARTBEAT.base_mode
 BIN_TYPES = ["ATT", "IMU", "BARO", "XKF1", "VISP", "RCOU", "BAT", "ARM", "EV", "PARM", "MSG"]
 TLOG_TYPES = ["ATTITUDE", "SCALED_IMU", "SCALED_IMU2", "SCALED_IMU3", "SCALED_PRESSURE", "SCALED_PRESSURE2",
@@ -131,6 +135,23 @@ def _unwrap_u32(t_us: np.ndarray) -> np.ndarray:
     return t_us + jumps * 2.0 ** 32
 
 
+def _check_surface_pressure(p) -> None:
+    lo, hi = SURFACE_PRESSURE_PA
+    try:
+        p = float(p)
+    except (TypeError, ValueError):
+        raise LogFormatError(f"surface pressure {p!r}: expected a number in Pa") from None
+    if lo <= p <= hi:
+        return
+    hint = ""
+    for unit, factor in (("hPa (mbar)", 100.0), ("kPa", 1000.0), ("psi", 6894.76), ("bar", 1e5)):
+        if lo <= p * factor <= hi:
+            hint = f"; it looks like {unit}: give {p * factor:.0f} Pa"
+            break
+    raise LogFormatError(f"surface pressure {p:g} Pa: expected an air pressure between {lo:.0f} and {hi:.0f} Pa"
+                         f"{hint}")
+
+
 def read_ardusub(path, *, water: str | float | None = None, surface_pressure: float | None = None,
                  imu_instance: int = 0) -> ArduSubLog:
     """Read one ArduSub log into streams (see the module docstring).
@@ -143,6 +164,8 @@ def read_ardusub(path, *, water: str | float | None = None, surface_pressure: fl
     imu_instance : which IMU (DataFlash IMU.I) gives rates and accelerations.
     """
     path = Path(path)
+    if surface_pressure is not None:
+        _check_surface_pressure(surface_pressure)
     if not path.is_file():
         raise LogFormatError(f"{path}: log file does not exist")
     suffix = path.suffix.lower()

@@ -466,3 +466,14 @@ class RevolvingMasses(_MassTerm):
     def to_dict(self):
         return {"type": self.kind, "input": self.input, "mass": self.mass, "x": self.x, "radius": self.radius,
                 "servo": self.servo.to_dict()}
+
+
+def servo_time_constants(vehicle) -> dict[str, float]:
+    """{"<effect>.<servo>": time constant, s} of every actuator servo among ``vehicle``'s
+    effects (the first-order lags above): the fastest sets the longest integration step."""
+    out = {}
+    for term in getattr(vehicle, "effects", ()):
+        for name, obj in vars(term).items():
+            if isinstance(obj, _Servo):
+                out[f"{type(term).__name__}.{name}"] = float(obj.tau)
+    return out

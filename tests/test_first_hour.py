@@ -1,0 +1,182 @@
+"""Issue 47 (part): what a new user tried in the first hour that the commands accepted,
+fixed in silence or answered with a traceback; each is now refused in one line naming what is
+wrong and what to do (exit 2), before any work."""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+import uvsim
+from contract_data import SHIPPED_DATASET, shipped_vehicle_text, write_tiny_dataset
+from uvsim.cli import main
+from uvsim.errors import CalibrationError, LogFormatError, SimulationError, VehicleError
+from uvsim.logs import read_dataset
+
+TLOG = Path(uvsim.__file__).parent / "data" / "external" / "ardusub-log-tools-samples" / "small.tlog"
+RUN = SHIPPED_DATASET / "heave_01.csv"
+
+
+def _one_line_error(capsys, *needles):
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "Traceback" not in err, err
+    for n in needles:
+        assert n in err, err
+    return err
+
+
+# ----------------------------------------------------------------------------- files
+def test_a_key_twice_in_a_vehicle_file_or_manifest_is_refused(tmp_path):
+    text = shipped_vehicle_text()
+    veh = tmp_path / "veh.yaml"
+    veh.write_text(text + "\nname: another\n")  # YAML would keep the second 'name'
+    with pytest.raises(VehicleError, match=r"duplicate key 'name' \(first at line \d+\)"):
+        uvsim.load_vehicle(veh)
+    ds = write_tiny_dataset(tmp_path / "ds")
+    m = ds / "manifest.yaml"
+    m.write_text(m.read_text() + "vehicle: bluerov2_heavy_initial\n")
+    with pytest.raises(LogFormatError, match="duplicate key 'vehicle'"):
+        read_dataset(ds)
+    # the same text without the repeat loads
+    veh.write_text(text)
+    assert uvsim.load_vehicle(veh).name
+
+
+def test_load_vehicle_of_none_names_what_it_expects():
+    with pytest.raises(VehicleError, match="expected a built-in vehicle name, a vehicle file's path or a Vehicle, "
+                                           "got NoneType"):
+        uvsim.load_vehicle(None)
+
+
+def test_a_thruster_direction_that_is_not_a_unit_vector_is_refused_not_normalised(tmp_path):
+    text = shipped_vehicle_text()
+    d = yaml.safe_load(text)
+    units = d["thrusters"]["units"]
+    bad = dict(units[0], direction=[2.0 * x for x in units[0]["direction"]])
+    d["thrusters"]["units"] = [bad] + units[1:]
+    with pytest.raises(VehicleError, match=r"thrusters.units\[0\].direction: .* has length 2; expected a unit vector"):
+        uvsim.vehicle.vehicle_from_dict(d, source="veh.yaml")
+    # written to 4 digits (0.7071) it is a unit vector within the tolerance
+    d["thrusters"]["units"] = [dict(units[0], direction=[0.7071, 0.7071, 0.0])] + units[1:]
+    uvsim.vehicle.vehicle_from_dict(d, source="veh.yaml")
+
+
+# ----------------------------------------------------------------------------- simulate
+@pytest.mark.parametrize("how", ["same", "dot", "symlink", "other_dir"])
+def test_simulate_never_overwrites_its_input_run(tmp_path, monkeypatch, capsys, how):
+    work = tmp_path / "w"
+    work.mkdir()
+    run = work / "R.csv"
+    run.write_bytes(RUN.read_bytes())
+    monkeypatch.chdir(work)
+    out = {"same": "R.csv", "dot": "./R.csv", "other_dir": "../w/R.csv"}.get(how)
+    if how == "symlink":
+        (work / "link.csv").symlink_to(run)
+        out = "link.csv"
+    assert main(["simulate", "--vehicle", "bluerov2_heavy", "--run", "R.csv", "--out", out]) == 2
+    _one_line_error(capsys, "is the input file --run", "choose another name")
+    assert run.read_bytes() == RUN.read_bytes()
+
+
+def test_a_current_faster_than_any_water_current_is_refused(tmp_path, capsys):
+    assert main(["simulate", "--vehicle", "bluerov2_heavy", "--run", str(RUN), "--current", "30,0,0",
+                 "--out", str(tmp_path / "s.csv")]) == 2
+    _one_line_error(capsys, "30 m/s is faster than any current", "(at most 5 m/s)")
+    assert not (tmp_path / "s.csv").exists()
+    d = yaml.safe_load(shipped_vehicle_text())
+    d.setdefault("environment", {})["current_ned"] = [0.0, 12.0, 0.0]
+    with pytest.raises(VehicleError, match="environment.current_ned .* 12 m/s is faster"):
+        uvsim.vehicle.vehicle_from_dict(d, source="veh.yaml")
+    # a real current passes
+    assert main(["simulate", "--vehicle", "bluerov2_heavy", "--run", str(RUN), "--current", "0.5,0.2,0",
+                 "--out", str(tmp_path / "s.csv")]) == 0
+
+
+@pytest.mark.parametrize("method, hint", [("bogus", ""), ("rk45", "did you mean 'RK45'?")])
+def test_an_unknown_integration_method_is_named_without_scipy_internals(tmp_path, capsys, method, hint):
+    assert main(["simulate", "--vehicle", "bluerov2_heavy", "--run", str(RUN), "--method", method,
+                 "--out", str(tmp_path / "s.csv")]) == 2
+    err = _one_line_error(capsys, f"method {method!r}: unknown", hint, "RK45, RK23, DOP853, Radau, BDF, LSODA")
+    assert "<class" not in err
+
+
+def test_a_closed_pipe_ends_the_command_quietly():
+    """``uvsim vehicle show X | head``: the reader leaves; no "Broken pipe" error, exit 141."""
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(Path(uvsim.__file__).parents[1]),
+                                                        os.environ.get("PYTHONPATH", "")])}
+    proc = subprocess.Popen([sys.executable, "-m", "uvsim.cli", "vehicle", "show", "bluerov2_heavy"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+    proc.stdout.close()  # the reader is gone before the first write
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=60) == 141
+    assert "Broken pipe" not in err and "Traceback" not in err and "Exception ignored" not in err, err
+
+
+# ----------------------------------------------------------------------------- maneuver
+@pytest.mark.parametrize("extra, needle", [
+    (["--dt", "5"], "longer than the fastest actuator time constant (Propulsion.tv, 0.05 s)"),
+    (["--duration", "1e7"], "5e+08 samples"),
+    (["--dt", "nan"], "need 0 < dt < duration"),
+])
+def test_maneuver_steps_and_sizes_it_cannot_integrate_are_refused_before_allocating(tmp_path, capsys, extra,
+                                                                                     needle):
+    assert main(["maneuver", "tight_loop", "--out", str(tmp_path / "m.csv"), *extra]) == 2
+    _one_line_error(capsys, needle)
+    assert not (tmp_path / "m.csv").exists()
+
+
+def test_the_limits_come_from_the_vehicle_s_servos():
+    from uvsim.maneuvers import load_sam, run_maneuver
+    from uvsim.sam.subsystems import servo_time_constants
+
+    taus = servo_time_constants(load_sam("multifidelity"))
+    assert taus and min(taus.values()) == pytest.approx(0.05)
+    with pytest.raises(SimulationError, match="fastest actuator time constant"):
+        run_maneuver("helix", dt=0.051)
+
+
+# ----------------------------------------------------------------------------- import
+def test_a_surface_pressure_in_hpa_is_refused_with_the_pa_value(tmp_path, capsys):
+    out = tmp_path / "dive"
+    assert main(["import", "ardusub", str(TLOG), "--out", str(out), "--surface-pressure", "1013.25"]) == 2
+    _one_line_error(capsys, "surface pressure 1013.25 Pa", "it looks like hPa (mbar): give 101325 Pa")
+    assert not out.exists()
+    assert main(["import", "ardusub", str(TLOG), "--out", str(out), "--surface-pressure", "101325",
+                 "--adapt-vehicle"]) == 0
+
+
+# ----------------------------------------------------------------------------- fits
+def test_a_misspelt_signal_is_refused_before_the_ga_with_the_name_meant(tmp_path, capsys, monkeypatch):
+    import uvsim.calibration.calibrator as calibrator
+
+    def no_ga(*a, **k):
+        raise AssertionError("the GA ran before the settings were checked")
+
+    monkeypatch.setattr(calibrator, "run_ga", no_ga)
+    ds = write_tiny_dataset(tmp_path / "ds")
+    assert main(["calibrate", "--data", str(ds), "--weights", "positon=1", "--out", str(tmp_path / "f.yaml")]) == 2
+    _one_line_error(capsys, "weights: unknown signal 'positon' (did you mean 'position'?)")
+    assert main(["calibrate", "--data", str(ds), "--noise", "dpeth=0.01", "--out", str(tmp_path / "f.yaml")]) == 2
+    _one_line_error(capsys, "noise: unknown signal 'dpeth' (did you mean 'depth'?)")
+
+
+@pytest.mark.parametrize("option", ["--max-iter", "--top", "--workers", "--max-effects"])
+def test_diagnose_refuses_counts_below_one(tmp_path, capsys, option):
+    ds = write_tiny_dataset(tmp_path / "ds")
+    assert main(["diagnose", "--data", str(ds), option, "0", "--quiet"]) == 2
+    name = option[2:].replace("-", "_")
+    _one_line_error(capsys, f"{name} must be a positive integer (1 or more), got 0")
+
+
+@pytest.mark.parametrize("setting", [{"population": 4.5}, {"generations": 2.0}, {"workers": 1.5}, {"seed": True}])
+def test_calibrator_settings_are_not_truncated(tmp_path, setting):
+    from uvsim.calibration import Calibrator
+
+    ds = write_tiny_dataset(tmp_path / "ds")
+    name, value = next(iter(setting.items()))
+    with pytest.raises(CalibrationError, match=f"{name} {value!r}: expected a whole number"):
+        Calibrator(**setting).fit(ds)
