@@ -180,3 +180,31 @@ def test_calibrator_settings_are_not_truncated(tmp_path, setting):
     name, value = next(iter(setting.items()))
     with pytest.raises(CalibrationError, match=f"{name} {value!r}: expected a whole number"):
         Calibrator(**setting).fit(ds)
+
+
+# ----------------------------------------------------------------------------- what is printed
+def test_compare_on_a_handful_of_samples_says_it_says_little(tmp_path, capsys):
+    run = tmp_path / "three.csv"
+    run.write_text("".join(RUN.read_text().splitlines(keepends=True)[:4]))
+    assert main(["simulate", "--vehicle", "bluerov2_heavy", "--run", str(run), "--compare",
+                 "--plot", str(tmp_path / "c.png")]) == 0
+    text = capsys.readouterr()
+    assert "Fit %" in text.out and "warning: only 3 samples" in text.err
+
+
+def test_rmse_lines_are_printed_to_four_digits_with_units():
+    from uvsim.commands.calibration_output import _rmse_text
+
+    text = _rmse_text({"depth_m": 0.007502347860412031, "rates_radps": 0.003885595124409449,
+                       "position_m": float("nan")})
+    assert text == "depth 0.007502 m, rates 0.003886 rad/s, position not finite"
+
+
+def test_an_inline_curve_is_named_not_printed():
+    from uvsim.calibration.supply_voltage import not_applicable
+
+    d = yaml.safe_load(shipped_vehicle_text())
+    d["thrusters"]["curve"] = {"pwm": [1100.0 + 10 * i for i in range(81)],
+                               "thrust": [0.05 * (i - 40) for i in range(81)]}
+    why = not_applicable(uvsim.vehicle.vehicle_from_dict(d, source="veh.yaml"))
+    assert "an inline table (pwm, thrust; 81 points)" in why and "1100.0" not in why

@@ -49,12 +49,24 @@ def check_setting(value):
     return value
 
 
+def _curve_name(curve) -> str:
+    """A curve as a user wrote it, in a few words: its name, or the kind of table given inline
+    (never its 81 points)."""
+    if isinstance(curve, str) or curve is None:
+        return repr(curve)
+    if isinstance(curve, dict):
+        keys = sorted(curve)
+        n = next((len(v) for v in curve.values() if isinstance(v, (list, tuple))), None)
+        return f"an inline table ({', '.join(keys)}{f'; {n} points' if n else ''})"
+    return f"an inline {type(curve).__name__}"
+
+
 def not_applicable(vehicle) -> str | None:
     """Why ``vehicle``'s thrusters cannot be put on the voltage family, or None when they can."""
     th = vehicle.to_dict().get("thrusters") or {}
     if th.get("curve") != FIXED_CURVE or any("curve" in u for u in th.get("units", [])):
         return (f"supply_voltage='auto' needs the vehicle's thrusters on the shipped {FIXED_CURVE!r} curve (the "
-                f"T200 family's 16 V sheet); vehicle {vehicle.name!r} has curve {th.get('curve')!r}"
+                f"T200 family's 16 V sheet); vehicle {vehicle.name!r} has curve {_curve_name(th.get('curve'))}"
                 + (" or per-unit curves" if any("curve" in u for u in th.get("units", [])) else "")
                 + " (a vehicle already on the family frees supply_voltage with --free)")
     return None

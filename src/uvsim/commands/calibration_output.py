@@ -181,10 +181,22 @@ def print_summary(cal, out=None) -> None:
     for text, runs in _grouped_notes(rep["notes"]).items():
         say(f"note: {text} ({len(runs)} run{'s' if len(runs) > 1 else ''}: {', '.join(runs[:3])}"
             f"{', ...' if len(runs) > 3 else ''})")
-    say(f"training RMSE {jsonable(rep['training_rmse'])}")
-    say(f"validation RMSE {jsonable(rep['validation_rmse'])} (initial {jsonable(rep['initial_validation_rmse'])})")
+    say(f"training RMSE {_rmse_text(rep['training_rmse'])}")
+    say(f"validation RMSE {_rmse_text(rep['validation_rmse'])} (initial {_rmse_text(rep['initial_validation_rmse'])})")
     if rep["validation_fit_percent"]:
         say("validation Fit %: " + ", ".join(f"{c} {v:.1f}" for c, v in rep["validation_fit_percent"].items()))
+
+
+def _rmse_text(rmse) -> str:
+    """``{group_unit: RMSE}`` as ``depth 0.0075 m, rates 0.00389 rad/s`` (4 significant digits)."""
+    if not rmse:
+        return "(none)"
+    out = []
+    for k, v in rmse.items():
+        group, _, unit = str(k).partition("_")
+        unit = {"m": "m", "rad": "rad", "radps": "rad/s", "mps": "m/s", "mps2": "m/s^2"}.get(unit, unit)
+        out.append(f"{group} {v:.4g} {unit}" if v is not None and math.isfinite(v) else f"{group} not finite")
+    return ", ".join(out)
 
 
 def outcome(rep, ds) -> tuple[str, str, list[str]]:

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from uvsim.commands.checks import add_allow_argument, check_outputs, check_runs_at_door
+from uvsim.commands.checks import add_allow_argument, check_outputs, check_runs_at_door, say
 from uvsim.constants import MAX_CURRENT_SPEED
 from uvsim.errors import UvsimError
 
@@ -223,6 +223,11 @@ def _with_breaks(pieces, chans: list[dict], lengths: list[int]):
     return t, sim, meas, chans
 
 
+#: Fewer samples than this in ``--compare``: the table is printed with a warning (a Fit % of a
+#: handful of samples is mostly the noise of those samples).
+MIN_COMPARE_SAMPLES = 20
+
+
 def _compare(args, veh, run, pieces, current) -> None:
     """Print the per-channel table and write the figure for the simulated ``pieces``
     ((segment, result) pairs: the run itself, or its segments when it has gaps)."""
@@ -234,6 +239,9 @@ def _compare(args, veh, run, pieces, current) -> None:
     span = sum(seg.t[-1] - seg.t[0] for seg, _ in pieces)
     per = f" in {len(pieces)} segments (gaps left out)" if len(pieces) > 1 else ""
     print(f"{run.name} vs {veh.name}: {sum(lengths)} samples, {span:.2f} s{per}")
+    if sum(lengths) < MIN_COMPARE_SAMPLES:
+        say("simulate", f"warning: only {sum(lengths)} samples ({span:.2f} s): an RMSE and a Fit % over so few "
+                        f"samples say little about the model; compare a run of at least {MIN_COMPARE_SAMPLES} samples")
     print(f"{'channel':>8} {'unit':>6} {'n':>6} {'RMSE':>11} {'NRMSE %':>9} {'Fit %':>9}")
     for r in rows:
         print(f"{r['name']:>8} {r['unit']:>6} {r['n']:>6d} {r['rmse']:>11.4g} {r['nrmse_percent']:>9.2f} "
