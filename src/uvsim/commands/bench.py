@@ -163,7 +163,7 @@ def _structural(args) -> int:
               f"{d['false_positives_clean']}; named anything {d['named_anything']}; base model off "
               f"{d['base_model_answers']}; seconds mean {d['seconds_mean']:.1f}, max {d['seconds_max']:.1f}")
     w = s["worst_group_change_of_an_accepted_candidate"]
-    print(f"largest open-loop worsening of a logged group by an accepted candidate: "
+    print("largest open-loop worsening of a logged group by an accepted candidate: "
           + ("none accepted" if w is None else f"{100 * w:+.1f} %")
           + f"; accepted candidates worsening a group by > 10 %: {s['accepted_candidates_worsening_a_group_over_10pct']}")
     return 0
