@@ -6,15 +6,14 @@ Truth: the BlueROV2 Heavy with the GA-optimized coefficients of seed 000 Table 5
 attitude + gyro rates for the rotational DOFs, with the noise of
 uvsim.synthetic.DEFAULT_NOISE.  Deterministic (seed 2025).
 
-    python examples/make_tank_dataset.py [OUT_DIR]
+    python examples/make_tank_dataset.py [OUT_DIR]   # default ./bluerov2_tank; the shipped copy: src/uvsim/data/datasets/bluerov2_tank
 """
 import sys
 from pathlib import Path
 
-import uvsim
 from uvsim.synthetic import generate_dataset
 
-out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(uvsim.__file__).parent / "data" / "datasets" / "bluerov2_tank"
+out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path("bluerov2_tank")  # never into the installed package
 ds = generate_dataset(
     "bluerov2_heavy", out, seed=2025,
     description=("Synthetic BlueROV2 Heavy tank tests (seed 000 sec. 4.2.2 style): truth = Table 5 coefficients; "

@@ -7,17 +7,16 @@ anchor at (-4, 1, -1) m NED (behind, to starboard, above the start) with stiffne
 0.3 N/m (uvsim.effects.tether).  It is the example for `uvsim diagnose`
 (docs/diagnose.md).  Deterministic (seed 2026).
 
-    python examples/make_tether_dataset.py [OUT_DIR]
+    python examples/make_tether_dataset.py [OUT_DIR]   # default ./bluerov2_tank_tether; the shipped copy: src/uvsim/data/datasets/bluerov2_tank_tether
 """
 import sys
 from pathlib import Path
 
-import uvsim
 from uvsim.synthetic import generate_dataset
 
 TETHER = {"type": "tether", "anchor_n": -4.0, "anchor_e": 1.0, "anchor_d": -1.0, "stiffness": 0.3}
 
-out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(uvsim.__file__).parent / "data" / "datasets" / "bluerov2_tank_tether"
+out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path("bluerov2_tank_tether")  # never into the installed package
 ds = generate_dataset(
     "bluerov2_heavy", out, seed=2026, runs_per_dof=3, validation_per_dof=1, effects=[TETHER],
     description=("Synthetic BlueROV2 Heavy tank tests with an undeclared tether (anchor (-4, 1, -1) m NED, "

@@ -9,16 +9,14 @@ the two effects and the example needs no ``--retune``.  It is the two-effect exa
 ``uvsim diagnose`` (docs/diagnose.md); ``truth.yaml`` beside the manifest records the
 truth.  Deterministic (seed 2027).
 
-    python examples/make_two_effect_dataset.py [OUT_DIR]
+    python examples/make_two_effect_dataset.py [OUT_DIR]   # default ./bluerov2_two_effects; the shipped copy: src/uvsim/data/datasets/bluerov2_two_effects
 """
 import sys
 from pathlib import Path
 
-import uvsim
 from uvsim.scenarios import generate, sample_scenario
 
-out = (Path(sys.argv[1]) if len(sys.argv) > 1
-       else Path(uvsim.__file__).parent / "data" / "datasets" / "bluerov2_two_effects")
+out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path("bluerov2_two_effects")  # never into the installed package
 spec = sample_scenario(2027, profile="diagnose", n_runs=18, duration=[10, 12], rate_hz=25.0, input_kind="force",
                        perturbation=0.0,
                        effects=[{"type": "tether", "variant": "3d", "magnitude": 0.5},
