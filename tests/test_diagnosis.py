@@ -171,11 +171,14 @@ def test_cli_writes_report_corrected_vehicle_and_plots(tmp_path, capsys):
     assert "diagnosed:" in veh.read_text()
     assert sorted(p.name for p in plots.iterdir()) == ["errors_over_time.png", "residual.png", "steps.png",
                                                       "validation_runs.png"]
+    assert not list(tmp_path.glob("*.ckpt"))  # finished: the checkpoint (r.json.ckpt) is removed (issue 47)
 
 
 @pytest.mark.parametrize("kw, match", [
     ({"only": ["currents"]}, "unknown candidate effect"),
     ({"max_effects": 0}, "max_effects"),
+    ({"top": 0}, "top must be a positive integer"),
+    ({"max_iter": 2.5}, "max_iter must be a positive integer"),
     ({"horizon": -1.0}, "horizon"),
     ({"retune": ["X_uuu"]}, "retune: unknown base parameter"),
 ])

@@ -19,7 +19,7 @@ from pathlib import Path
 
 from uvsim.commands import lag_option, parse_pairs
 from uvsim.commands.checks import (add_allow_argument, add_progress_arguments, check_outputs,
-                                   check_runs_at_door, say, want_progress)
+                                   check_runs_at_door, remove_checkpoints, say, want_progress)
 from uvsim.commands.calibration_output import (jsonable, print_summary, print_verdict,  # noqa: F401 (re-exported)
                                                record_outcome, save_fitted_vehicle)
 from uvsim.errors import UvsimError
@@ -222,6 +222,9 @@ def _run(args) -> int:
     rep = cal.report_
     rep["input_notes"] = notes
     status = finish_calibration(cal, ds, out, args.json, args.plots, keep_worse=args.keep_worse)
+    from uvsim.calibration.joint import joint_checkpoint_path
+
+    remove_checkpoints(ckpt, *(joint_checkpoint_path(f"{ckpt}{tag}") for tag in ("", ".latency", ".supply")))
     return EXIT_CODES[status]
 
 

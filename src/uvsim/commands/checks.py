@@ -131,6 +131,17 @@ def rmse_problems(rmse: Mapping[str, float], runs, what: str,
     return out
 
 
+def remove_checkpoints(*paths) -> None:
+    """Remove a finished command's checkpoint files (``paths``; absent ones are skipped): once its
+    outputs are written, resuming has nothing left to save, and a diagnosis checkpoint holds tens
+    of MB."""
+    from pathlib import Path
+
+    for p in paths:
+        if p is not None and Path(p).is_file():
+            Path(p).unlink()
+
+
 def fail_if(problems: Iterable[str], command: str, hint: str) -> None:
     problems = list(problems)
     if problems:

@@ -11,7 +11,8 @@ import json
 from pathlib import Path
 
 from uvsim.commands import lag_option, parse_pairs
-from uvsim.commands.checks import add_allow_argument, check_outputs, check_runs_at_door, diagnosis_problems, say
+from uvsim.commands.checks import (add_allow_argument, check_outputs, check_runs_at_door, diagnosis_problems,
+                                   remove_checkpoints, say)
 from uvsim.fitting.verdict import EXIT_CODES
 from uvsim.fitting.verdict import table as verdict_table
 
@@ -203,6 +204,7 @@ def run(args) -> int:
     if args.out and keep:
         save_fixed_vehicle(diag, args.out)
         print(f"corrected vehicle: {args.out}")
+    remove_checkpoints(ckpt, args.resume)  # finished: every fit is in the report
     print(f"VERDICT (exit {EXIT_CODES[status]}) {why if problems else (mv['message'] if mv else why)}")
     if status != "better":
         say("diagnose", f"verdict {status}: {why}" + ("" if keep or not args.out else
