@@ -208,3 +208,17 @@ def test_an_inline_curve_is_named_not_printed():
                                "thrust": [0.05 * (i - 40) for i in range(81)]}
     why = not_applicable(uvsim.vehicle.vehicle_from_dict(d, source="veh.yaml"))
     assert "an inline table (pwm, thrust; 81 points)" in why and "1100.0" not in why
+
+
+@pytest.mark.parametrize("command, option, default", [
+    (["calibrate"], "--population", "60"), (["diagnose"], "--top", "3"), (["simulate"], "--substeps", "1"),
+    (["maneuver"], "--dataset", "multifidelity"), (["import", "ardusub"], "--imu", "0"),
+])
+def test_help_shows_the_defaults(capsys, command, option, default):
+    with pytest.raises(SystemExit) as e:
+        main([*command, "--help"])
+    assert e.value.code == 0
+    out = capsys.readouterr().out
+    block = out[out.index("\n  " + option) + 1:]
+    block = " ".join(block[:block.find("\n  -", 1) if "\n  -" in block[1:] else len(block)].split())
+    assert f"default: {default})" in block or f"default {default}" in block, block
