@@ -222,3 +222,11 @@ def test_help_shows_the_defaults(capsys, command, option, default):
     block = out[out.index("\n  " + option) + 1:]
     block = " ".join(block[:block.find("\n  -", 1) if "\n  -" in block[1:] else len(block)].split())
     assert f"default: {default})" in block or f"default {default}" in block, block
+
+
+@pytest.mark.parametrize("sep, name", [(";", "semicolon"), ("\t", "tab")])
+def test_a_csv_with_another_separator_is_named_as_such(tmp_path, capsys, sep, name):
+    run = tmp_path / "R.csv"
+    run.write_text("".join(line.replace(",", sep) for line in RUN.read_text().splitlines(keepends=True)[:50]))
+    assert main(["simulate", "--vehicle", "bluerov2_heavy", "--run", str(run), "--out", str(tmp_path / "s.csv")]) == 2
+    _one_line_error(capsys, f"the file is {name}-separated ({sep!r}); expected comma-separated columns")

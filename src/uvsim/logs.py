@@ -361,6 +361,13 @@ def read_run(path, *, dof=None, weight=1.0, split="train", n_thrusters: int | No
     if suffix == ".csv":
         try:
             header = _csv_header(path)
+            if len(header) == 1:
+                for sep, name in ((";", "semicolon"), ("\t", "tab"), ("|", "vertical bar")):
+                    if sep in header[0]:
+                        shown = header[0] if len(header[0]) <= 60 else header[0][:60] + "..."
+                        raise LogFormatError(f"{path}: the header is one column {shown!r}: the file is "
+                                             f"{name}-separated ({sep!r}); expected comma-separated columns "
+                                             "(docs/log_format.md; pandas: df.to_csv(path, index=False))")
             dup = sorted({h for h in header if header.count(h) > 1})
             if dup:  # pandas would silently rename the second one to 'x.1'
                 raise LogFormatError(f"{path}: column {dup[0]!r} appears more than once")
