@@ -230,3 +230,16 @@ def test_a_csv_with_another_separator_is_named_as_such(tmp_path, capsys, sep, na
     run.write_text("".join(line.replace(",", sep) for line in RUN.read_text().splitlines(keepends=True)[:50]))
     assert main(["simulate", "--vehicle", "bluerov2_heavy", "--run", str(run), "--out", str(tmp_path / "s.csv")]) == 2
     _one_line_error(capsys, f"the file is {name}-separated ({sep!r}); expected comma-separated columns")
+
+
+def test_positions_in_millimetres_are_refused_naming_the_point():
+    d = yaml.safe_load(shipped_vehicle_text())
+    units = d["thrusters"]["units"]
+    mm = dict(units[2], position=[1000.0 * x for x in units[2]["position"]])
+    d2 = {**d, "thrusters": {**d["thrusters"], "units": units[:2] + [mm] + units[3:]}}
+    with pytest.raises(VehicleError, match=r"thrusters.units\[2\] \(.*\).position .* m from the body origin, more "
+                                           r"than 10 x the vehicle's length scale"):
+        uvsim.vehicle.vehicle_from_dict(d2, source="veh.yaml")
+    d3 = {**d, "rigid_body": {**d["rigid_body"], "r_b": [0.0, 0.0, -20.0]}}
+    with pytest.raises(VehicleError, match=r"rigid_body.r_b \[0.0, 0.0, -20.0\] is 20 m .* expected metres"):
+        uvsim.vehicle.vehicle_from_dict(d3, source="veh.yaml")

@@ -28,6 +28,10 @@ INERTIA_NAMES = ("I_xx", "I_yy", "I_zz", "I_xy", "I_xz", "I_yz")
 SENSOR_NAMES = ("imu", "pressure", "dvl")
 #: Largest sensor offset from the body origin accepted, m (a sensor is on the vehicle).
 MAX_SENSOR_OFFSET = 10.0
+#: ``r_g``, ``r_b`` and thruster positions lie within this many length scales (m / rho)^(1/3) of
+#: the body origin: a slender hull of length/diameter 20 reaches 4 scales at its ends, a value in
+#: millimetres thousands.
+POINT_REACH = 10.0
 #: Largest ``sensors.latency`` accepted, s: an autopilot's sensor and telemetry path is tens of
 #: milliseconds (ArduSub logs); half a second is a clock error, not a latency.
 MAX_LATENCY = 0.5
@@ -362,6 +366,28 @@ def mass_matrix_positive_definite(v: dict, ctx: Context) -> None:
         raise VehicleError(f"{ctx.file}: M = M_RB + M_A is not positive definite (eigenvalues {np.round(ev, 6)})")
 
 
+def points_on_the_vehicle(v: dict, ctx: Context) -> None:
+    """``r_g``, ``r_b`` and every thruster position lie within POINT_REACH x the vehicle's
+    length scale ``(m / rho)^(1/3)`` of the body origin: a point given in mm lies 1000 times
+    too far and is refused here (it would otherwise show up as a time constant too short for
+    the runs' sampling)."""
+    veh = ctx.vehicle
+    rho = float(getattr(veh, "rho", 1000.0))
+    scale = (float(veh.mass) / rho) ** (1.0 / 3.0)
+    reach = POINT_REACH * scale
+    points = [("rigid_body.r_g", veh.r_g), ("rigid_body.r_b", veh.r_b)]
+    pos = getattr(getattr(veh, "actuators", None), "positions", None)
+    if pos is not None:
+        names = list(getattr(veh.actuators, "names", [])) or [str(i + 1) for i in range(len(pos))]
+        points += [(f"thrusters.units[{i}] ({names[i]}).position", p) for i, p in enumerate(pos)]
+    for where, p in points:
+        d = float(np.linalg.norm(p))
+        if d > reach:
+            raise VehicleError(f"{ctx.file}: {where} {np.round(np.asarray(p, float), 6).tolist()} is {d:.3g} m from "
+                               f"the body origin, more than {POINT_REACH:g} x the vehicle's length scale "
+                               f"(m / rho)^(1/3) = {scale:.3g} m; expected metres (a value in mm is 1000 x too far)")
+
+
 # ----------------------------------------------------------------------------- the schema
 _SECTION = "{file}: '{key}' section missing or not a mapping"
 
@@ -440,7 +466,7 @@ VEHICLE = Section({
                      expected="{where}: expected a mapping such as {{pressure: {{position: [x, y, z]}}}}"),
     "uncertainty": Field("section", section=UNCERTAINTY, default={}, nullable=True, after_build=True,
                          example="uncertainty: {X_u: 2.0, N_rdot: 0.05}", meaning="1-sigma of named parameters"),
-}, key_rules=(required_sections_given,), built_rules=(mass_matrix_positive_definite,),
+}, key_rules=(required_sections_given,), built_rules=(mass_matrix_positive_definite, points_on_the_vehicle),
     hint=" (free-form metadata goes under 'meta:')")
 
 
