@@ -8,6 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 import yaml
 
@@ -243,3 +244,21 @@ def test_positions_in_millimetres_are_refused_naming_the_point():
     d3 = {**d, "rigid_body": {**d["rigid_body"], "r_b": [0.0, 0.0, -20.0]}}
     with pytest.raises(VehicleError, match=r"rigid_body.r_b \[0.0, 0.0, -20.0\] is 20 m .* expected metres"):
         uvsim.vehicle.vehicle_from_dict(d3, source="veh.yaml")
+
+
+def test_the_ga_plot_s_best_so_far_never_rises(tmp_path, monkeypatch):
+    """The sway logbook of the shipped data: generation best 156.2 -> 238.8 (no elitism); the
+    solid curve is the best so far, each generation's best is drawn beside it, labelled."""
+    import uvsim.plotting.calibration as pc
+
+    figs = []
+    monkeypatch.setattr(pc, "_save", lambda fig, path: figs.append(fig) or Path(path))
+    lb = [{"gen": g, "min": m, "avg": 2 * m} for g, m in enumerate([300.0, 156.2, 238.8, 150.0, 170.0])]
+    pc.plot_convergence({"sway": lb}, tmp_path / "ga.png")
+    ax = figs[0].axes[0]
+    solid = [ln for ln in ax.get_lines() if ln.get_linestyle() == "-"][0]
+    y = np.asarray(solid.get_ydata())
+    assert np.all(np.diff(y) <= 0) and y[-1] == 150.0 and solid.get_label() == "sway best so far"
+    dashed = [ln for ln in ax.get_lines() if ln.get_linestyle() == "--"][0]
+    assert list(dashed.get_ydata()) == [r["min"] for r in lb]
+    assert "best so far" in ax.get_title() and "each generation's best" in ax.get_title()

@@ -9,7 +9,8 @@
 * ``error_boxplots.png``: for runs marked with a DOF, the error of the DOF's own
   coordinate per run, as seed 000 Fig. 6 (linear DOFs, m) and Fig. 7 (rotational
   DOFs, rad);
-* ``ga_convergence.png``: best and mean GA fitness per generation and DOF (when a GA ran).
+* ``ga_convergence.png``: per DOF the best fitness so far (never rising), each generation's best
+  and its mean (when a GA ran).
 """
 from __future__ import annotations
 
@@ -117,11 +118,14 @@ def plot_convergence(logbooks, path) -> Path:
     fig, ax = plt.subplots(figsize=(7, 4))
     for dof, lb in logbooks.items():
         gen = [r["gen"] for r in lb]
-        line, = ax.semilogy(gen, [r["min"] for r in lb], "-", label=f"{dof} best")
+        best = [r["min"] for r in lb]
+        line, = ax.semilogy(gen, np.minimum.accumulate(best), "-", label=f"{dof} best so far")
+        ax.semilogy(gen, best, "--", color=line.get_color(), lw=0.7)
         ax.semilogy(gen, [r["avg"] for r in lb], ":", color=line.get_color(), lw=0.8)
     ax.set_xlabel("generation")
     ax.set_ylabel("fitness (weighted mean |error| / noise)")
-    ax.set_title("GA convergence (solid: best, dotted: population mean)")
+    ax.set_title("GA convergence (solid: best so far, dashed: each generation's best, dotted: its mean)",
+                 fontsize=9)
     ax.legend(fontsize=7)
     return _save(fig, path)
 
