@@ -111,31 +111,44 @@ def plot_steps(diag, path) -> Path:
     """Validation cost per residual of the models along the forward selection, with every
     fitted candidate of each step (green: chosen)."""
     rep = diag.report
-    fig, ax = plt.subplots(figsize=(7.5, 3.8))
+    fig, (ax, key) = plt.subplots(1, 2, figsize=(10.5, 4.2), gridspec_kw={"width_ratios": [3, 2]})
     xs, labels = [0], ["given"]
     ys = [rep["validation_cost_per_entry"]["given"]]
+    entries = []  # the candidates, numbered on the plot and named in the key beside it (no overprinting)
     for x, st in enumerate(rep["steps"], 1):
-        for c in st["candidates"]:
-            if "validation_cost_per_entry" in c:
-                col = "tab:green" if c["chosen"] else ("tab:olive" if c["accepted"] else "tab:gray")
-                ax.plot(x, c["validation_cost_per_entry"], "o", color=col, ms=6)
-                ax.annotate(f"{c['effect']}:{c['variant']}", (x, c["validation_cost_per_entry"]), fontsize=6,
-                            xytext=(4, 0), textcoords="offset points")
+        fitted = [c for c in st["candidates"] if "validation_cost_per_entry" in c]
+        for j, c in enumerate(fitted):
+            col = "tab:green" if c["chosen"] else ("tab:olive" if c["accepted"] else "tab:gray")
+            xj = x + 0.12 * (j - 0.5 * (len(fitted) - 1))  # side by side within the step
+            ax.plot(xj, c["validation_cost_per_entry"], "o", color=col, ms=9, zorder=3)
+            ax.annotate(str(len(entries) + 1), (xj, c["validation_cost_per_entry"]), fontsize=6, color="white",
+                        ha="center", va="center", zorder=4)
+            entries.append((len(entries) + 1, "base model" if st["step"] == 0 else f"step {st['step']}", c, col))
         if st.get("after_cost_per_entry") is not None:
             xs.append(x)
             ys.append(st["after_cost_per_entry"])
             labels.append(st["chosen"])
-    ax.plot(xs, ys, "-s", color="tab:blue", label="model after each step")
+    ax.plot(xs, ys, "-s", color="tab:blue", mfc="none", ms=10, label="model after each step", zorder=2)
     ax.axhline(1.0, color="k", ls="--", lw=0.8, label="noise level")
     ax.set_yscale("log")
     ax.set_xticks(range(0, len(rep["steps"]) + 1),
                   ["given"] + [("base model" if st["step"] == 0 else f"step {st['step']}") for st in rep["steps"]])
-    ax.set_xlabel("forward-selection step (step 0: the base model's thrust curve and damping)")
+    ax.set_xlabel("forward-selection step\n(step 0: the base model's thrust curve and damping)")
     ax.set_ylabel("validation cost per residual\n[squared noise sigmas]")
     ax.legend(fontsize=8)
     ax.set_title(f"Diagnosis: {rep['effect']} ({rep['confidence']})", fontsize=10)
+    key.axis("off")
+    lines = [(f"{i:>2}  {x}: {c['effect']}:{c['variant']}  {c['validation_cost_per_entry']:.3g}"
+              + ("  chosen" if c["chosen"] else ("  accepted" if c["accepted"] else "")), col)
+             for i, x, c, col in entries[:28]]
+    if len(entries) > 28:
+        lines.append((f"... and {len(entries) - 28} more (report.json, steps)", "k"))
+    for k, (text, col) in enumerate(lines):
+        key.text(0.0, 1.0 - k * 0.035, text, transform=key.transAxes, fontsize=7, family="monospace",
+                 color=col if col != "tab:gray" else "0.35", va="top")
+    key.set_title("candidates (number, step, effect:variant, cost)", fontsize=8, loc="left")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
     plt.close(fig)
     return Path(path)
 
@@ -158,7 +171,7 @@ def plot_residual(diag, path) -> Path:
     fig.suptitle(f"Residual after diagnosis: {v.get('status', '?')} ({v.get('cost_per_entry', float('nan')):.2f} "
                  f"squared noise sigmas per residual; noise level {v.get('at_noise', float('nan')):g})", fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
+    fig.savefig(path, dpi=100, bbox_inches="tight")  # long channel and run names: nothing cut off
     plt.close(fig)
     return Path(path)
 
