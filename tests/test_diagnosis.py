@@ -615,3 +615,25 @@ def test_a_variant_the_verdict_refused_gets_a_simpler_one_tried():
     bad = {**good, "compare": {**good["compare"], "guard": {"ok": False, "why": "trade-off: x +30 %"}}}
     st["fitted"] = [blocked]
     assert blocked_fallback(_StubSelector({simple.label: bad}), st, None) is None
+
+
+def test_a_richer_variant_accepted_after_a_refusal_is_chosen_though_not_significantly_better():
+    """Slow test seed 7 (tether + current), in stubs: the screened tether variant (slack_attach)
+    is a trade-off, its richer variant (full) is fitted by the fallback and accepted, but is not
+    significantly better on validation than the refused row; it is still the step's choice (it
+    was chosen nowhere before this fix, and the diagnosis named nothing)."""
+    from uvsim.diagnosis.decision import blocked_fallback
+
+    cands = {c.variant: c for c in catalogue(input_kind="force", n_thrusters=8, dt=0.02, p_ref=np.zeros(3),
+                                             has_position=True, z_max=None, only=["tether"])}
+    refused, rich = cands["slack_attach"], cands["full"]
+    blocked = {**_row(refused, 10.0), "accepted": False, "guard_blocked": True, "why": "trade-off: x +141 %",
+               "vehicle": 1.0, "all_values": {}}
+    st = {"all_screened": [(refused, {"reduction": 0.45}), (rich, {"reduction": 0.46})], "cur": {},
+          "fitted": [blocked], "held": []}
+    accepted = {**_row(rich, 9.9, seed=1), "vehicle": 1.0, "all_values": {}}  # as good, not significantly better
+    sel = _StubSelector({rich.label: accepted})
+    win = blocked_fallback(sel, st, None)
+    assert sel.fitted[0] == rich.label
+    assert win is not None and win["candidate"] is rich and win["accepted"]
+    assert "in place of tether:slack_attach" in win["why"]

@@ -357,12 +357,18 @@ def blocked_fallback(sel, st, val_cur):
     :func:`richer_challenger`), its simpler ones (:func:`simplest_sufficient`: a horizontal pull
     where a 3-D one traded depth for position, the foreign suite's case b) and its alternatives
     (a lag from rest: :func:`alternative_challenger`) get their chance, each judged by the verdict
-    too.  Returns the first accepted one, or None."""
+    too.  Returns the first accepted one, or None.  A challenger fitted here and accepted but not
+    returned (a richer variant that is not significantly better than the refused row it was
+    measured against) still competes: the step's accepted rows go to :func:`parsimonious`."""
     for row in sorted([r for r in st["fitted"] if r.get("guard_blocked")], key=lambda r: r["val"]["cost"]):
         best = (inertia_challenger(sel, row, st, val_cur) or richer_challenger(sel, row, st, val_cur)
                 or simplest_sufficient(sel, row, st, val_cur)
                 or alternative_challenger(sel, row, st, val_cur, blocked=True))
         if best is not None:
+            return best
+        best = parsimonious([r for r in st["fitted"] if r.get("accepted")])
+        if best is not None:
+            best["why"] += f"; in place of {row['candidate'].label}, which the verdict refused"
             return best
     return None
 
