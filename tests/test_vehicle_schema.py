@@ -218,6 +218,10 @@ RULE_CASES = {
                               "sensors.dvl.position: missing (expected [x, y, z], m, body frame)"),
     "sensor_on_the_vehicle": (lambda d: mutate(d, "sensors.imu.position", [0, 0, 11]),
                               "sensors.imu.position [0.0, 0.0, 11.0] is more than 10 m from the body origin"),
+    "current_a_current": (lambda d: mutate(d, "environment.current_ned", [0, 12, 0]),
+                          "environment.current_ned [0.0, 12.0, 0.0]: 12 m/s is faster than any current"),
+    "points_on_the_vehicle": (lambda d: mutate(d, "rigid_body.r_b", [0, 0, -20]),
+                              "rigid_body.r_b [0.0, 0.0, -20.0] is 20 m from the body origin"),
     "vehicle_parameter_names": (lambda d: mutate(d, "uncertainty.X_uq", 1.0),
                                 "uncertainty: unknown key 'X_uq' (did you mean"),
     "mass_matrix_positive_definite": (

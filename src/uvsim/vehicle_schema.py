@@ -345,7 +345,7 @@ def sensor_on_the_vehicle(v: dict, ctx: Context) -> None:
 
 
 def current_a_current(v: dict, ctx: Context) -> None:
-    """``current_ned`` no faster than MAX_CURRENT_SPEED (uvsim.constants: 5 m/s)."""
+    """``current_ned`` is at most 5 m/s (uvsim.constants.MAX_CURRENT_SPEED): faster is knots or km/h."""
     cur = v.get("current_ned")
     if cur is not None and np.linalg.norm(cur) > MAX_CURRENT_SPEED:
         raise VehicleError(f"{ctx.at('current_ned')} {np.asarray(cur).tolist()}: {np.linalg.norm(cur):.3g} m/s is "
@@ -367,10 +367,10 @@ def mass_matrix_positive_definite(v: dict, ctx: Context) -> None:
 
 
 def points_on_the_vehicle(v: dict, ctx: Context) -> None:
-    """``r_g``, ``r_b`` and every thruster position lie within POINT_REACH x the vehicle's
-    length scale ``(m / rho)^(1/3)`` of the body origin: a point given in mm lies 1000 times
-    too far and is refused here (it would otherwise show up as a time constant too short for
-    the runs' sampling)."""
+    """``r_g``, ``r_b`` and thruster positions lie within 10 length scales (m / rho)^(1/3) of the origin.
+
+    POINT_REACH sets the 10: a point given in mm lies 1000 times too far and is refused here
+    (it would otherwise show up as a time constant too short for the runs' sampling)."""
     veh = ctx.vehicle
     rho = float(getattr(veh, "rho", 1000.0))
     scale = (float(veh.mass) / rho) ** (1.0 / 3.0)
