@@ -82,10 +82,10 @@ TRUTH_TOLERANCE = 0.02
 #: battery that differs from the file's is carried by the thrust model rather than by the
 #: hydrodynamic coefficients (issue 22's "thrust model first").
 REAL_LOG_FREE = "z_b,thruster_gain_*,thruster_reverse_*"
-#: The real-log command's ``--latency`` (docs/calibration.md, "Sensor latency"): estimated after the
+#: The real-log command's ``--latency`` (docs/calibration_sensors.md, "Sensor latency"): estimated after the
 #: joint fit, fitted again with it when it lowers the windowed cost by 2 % or more.
 REAL_LOG_LATENCY = "auto"
-#: The real-log command's ``--supply-voltage`` (docs/calibration.md, "Supply voltage"): a second
+#: The real-log command's ``--supply-voltage`` (docs/calibration_method.md, "Supply voltage"): a second
 #: joint fit with the thrusters on the T200 voltage family, kept when the verdict on the training
 #: runs calls it better than the first fit in every channel.  ``supply`` of :func:`run_one`: False none, True freed from the start, "auto".
 REAL_LOG_SUPPLY = "auto"

@@ -6,7 +6,7 @@ at its reference nuisance) with the inputs delayed by each latency of a grid
 (:data:`SCAN_GRID`; :mod:`uvsim.latency`).  The latency of lowest cost, refined by a parabola
 through it and its neighbours, is taken when it lowers the cost by at least
 :data:`MIN_GAIN` of the cost at the vehicle's own latency; the calibration then fits again
-from its result with that latency (docs/calibration.md, "Sensor latency").
+from its result with that latency (docs/calibration_sensors.md, "Sensor latency").
 
 Why after the fit and not with the start model: a start model 20-40 % off mistakes its own
 errors for a delay (too much added mass looks like a late response).  On the structural

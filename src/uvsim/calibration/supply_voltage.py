@@ -20,7 +20,7 @@ refit has one parameter more and is judged in-sample, where one more parameter a
 chosen model on them against the start model as it judges any fit.
 
 Measured with the earlier rule (training Fit % higher in every channel) on 14 structural-benchmark
-seeds (2026-11-27, docs/calibration.md "Supply voltage"): the voltage fit's training Fit % was higher in every channel on 7 of the 8 seeds whose truth runs on
+seeds (2026-11-27, docs/calibration_method.md "Supply voltage"): the voltage fit's training Fit % was higher in every channel on 7 of the 8 seeds whose truth runs on
 another sheet (12-20 V) and on none of the 6 on 16 V; the rule left 2 fits worse than their start
 where the real-log command left 5.  On all 50 seeds (the same day): 48 fits no worse than their
 start in every validation channel where 45 were without it, both worse fits refused by the result

@@ -73,7 +73,7 @@ ATTITUDE_BIAS_SIGMA = 0.01
 #: :data:`ATTITUDE_BIAS_SIGMA`'s; uncalibrated, such parts are specified at +-25-80 mg, e.g.
 #: InvenSense MPU-6000 / ICM-20602 data sheets, zero-g offset).  A per-run offset the model does
 #: not carry is a force the fit must explain otherwise: on the structural benchmark's seed 22 it
-#: bent the thruster gains by 1-4 % (docs/calibration.md, "Accelerometer bias").
+#: bent the thruster gains by 1-4 % (docs/calibration_sensors.md, "Accelerometer bias").
 ACC_BIAS_SIGMA = 0.1
 
 
