@@ -64,6 +64,7 @@ from uvsim.accelerometer import _components, _specific_force, specific_force  # 
 from uvsim.kinematics import (cross_components, down_axis_components, quat_to_euler,  # noqa: F401
                               rotation_vector_error, unwrap_angles, wrap)  # (rotation_vector_error: re-exported)
 from uvsim.logs import ACCEL_COLUMNS, DEPTH_COLUMN, EULER_COLUMNS, POSITION_COLUMNS, RATE_COLUMNS, VELOCITY_COLUMNS
+from uvsim.schema import did_you_mean
 
 #: Signal groups and their channels, in a fixed order.
 GROUPS = {
@@ -411,13 +412,10 @@ def check_signal_settings(noise=None, weights=None) -> None:
     """Refuse unknown signal names (with the nearest known one) and values that are not a
     positive noise level or a non-negative weight, in ``noise`` and ``weights`` ({name: value},
     groups or channels); the fits call it before any work."""
-    import difflib
-
     known = list(GROUPS) + list(CHANNEL_GROUP)
     for what, d in (("noise", dict(noise or {})), ("weights", dict(weights or {}))):
         for k in sorted(set(d) - set(known)):
-            near = difflib.get_close_matches(str(k), known, n=1)
-            raise CalibrationError(f"{what}: unknown signal {k!r}{f' (did you mean {near[0]!r}?)' if near else ''}; "
+            raise CalibrationError(f"{what}: unknown signal {k!r}{did_you_mean(k, known)}; "
                                    f"expected groups {list(GROUPS)} or channels {list(CHANNEL_GROUP)}")
         for k, v in d.items():
             try:

@@ -75,6 +75,14 @@ def require_mapping(value: Any, where: str, *, error: type = UvsimError, example
     return dict(value)
 
 
+def is_whole_number(value: Any) -> bool:
+    """``value`` is an integer (Python or numpy), not a bool and not a float such as 4.5 or 2.0
+    that a setting would otherwise truncate in silence."""
+    import numbers
+
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
+
+
 def finite_number(value: Any, where: str, *, error: type = UvsimError, bool_ok: bool = True,
                   unit: str | None = None) -> float:
     """``value`` as a finite float; else ``error`` naming ``where``: "expected a number, got ..."

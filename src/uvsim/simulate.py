@@ -18,6 +18,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from uvsim.errors import SimulationError
+from uvsim.schema import did_you_mean
 from uvsim.kinematics import euler_to_quat, quat_to_euler, quat_to_rotation, unwrap_angles
 from uvsim.model import NU, POS, QUAT, Model
 
@@ -255,15 +256,11 @@ IVP_METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
 
 def check_method(method) -> None:
     """Refuse an unknown integration method by name (with the nearest one), before any work."""
-    import difflib
-
     if not isinstance(method, str):
         raise SimulationError(f"method: expected a name (rk4 or one of {', '.join(IVP_METHODS)}), got {method!r}")
     if method.lower() == "rk4" or method in IVP_METHODS:
         return
-    names = ["rk4", *IVP_METHODS]
-    near = [m for m in names if m.lower() == method.lower()] or difflib.get_close_matches(method, names, n=1)
-    raise SimulationError(f"method {method!r}: unknown{f' (did you mean {near[0]!r}?)' if near else ''}; expected "
+    raise SimulationError(f"method {method!r}: unknown{did_you_mean(method, ['rk4', *IVP_METHODS])}; expected "
                           f"rk4 (fixed step) or a scipy solve_ivp method: {', '.join(IVP_METHODS)}")
 
 

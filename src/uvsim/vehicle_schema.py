@@ -344,13 +344,20 @@ def sensor_on_the_vehicle(v: dict, ctx: Context) -> None:
                            "from the body origin (expected metres, body frame)")
 
 
+def check_current_speed(current, where: str, error: type = VehicleError) -> None:
+    """Raise ``error`` naming ``where`` when the current vector (N, E, D, m/s) is faster than
+    MAX_CURRENT_SPEED; the vehicle files' ``current_ned`` and ``simulate --current`` share it."""
+    speed = float(np.linalg.norm(current))
+    if speed > MAX_CURRENT_SPEED:
+        raise error(f"{where}: {speed:.3g} m/s is faster than any current a vehicle is flown in (at most "
+                    f"{MAX_CURRENT_SPEED:g} m/s); expected m/s (1 kn = 0.514 m/s)")
+
+
 def current_a_current(v: dict, ctx: Context) -> None:
     """``current_ned`` is at most 5 m/s (uvsim.constants.MAX_CURRENT_SPEED): faster is knots or km/h."""
     cur = v.get("current_ned")
-    if cur is not None and np.linalg.norm(cur) > MAX_CURRENT_SPEED:
-        raise VehicleError(f"{ctx.at('current_ned')} {np.asarray(cur).tolist()}: {np.linalg.norm(cur):.3g} m/s is "
-                           f"faster than any current a vehicle is flown in (at most {MAX_CURRENT_SPEED:g} m/s); "
-                           "expected m/s (1 kn = 0.514 m/s)")
+    if cur is not None:
+        check_current_speed(cur, f"{ctx.at('current_ned')} {np.asarray(cur).tolist()}")
 
 
 def vehicle_parameter_names(ctx: Context) -> list:

@@ -49,6 +49,7 @@ from uvsim.fitting.parameters import default_bounds, physical_bounds
 from uvsim.latency import runs_for
 from uvsim.measurements import check_sample_weighting, check_signal_settings, measurements_for
 from uvsim.plausibility import check_runs, parse_allow
+from uvsim.schema import is_whole_number
 
 log = logging.getLogger("uvsim")
 #: Window lengths of the joint stage's continuation: 2 s windows, held nearly continuous by
@@ -289,7 +290,7 @@ class Calibrator:
             value = getattr(self, name)
             if value is None and name == "workers":
                 continue
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+            if not is_whole_number(value):
                 raise CalibrationError(f"{name} {value!r}: expected a whole number (not truncated in silence)")
         horizons = self._horizons()
         self._continuity()  # a bad value is an error before the GA, not after it

@@ -189,18 +189,20 @@ def print_summary(cal, out=None) -> None:
 
 def _rmse_text(rmse) -> str:
     """``{group_unit: RMSE}`` as ``depth 0.0075 m, rates 0.00389 rad/s`` (4 significant digits)."""
+    from uvsim.measurements import UNITS
+
     if not rmse:
         return "(none)"
     out = []
     for k, v in rmse.items():
-        group, _, unit = str(k).partition("_")
-        unit = {"m": "m", "rad": "rad", "radps": "rad/s", "mps": "m/s", "mps2": "m/s^2"}.get(unit, unit)
-        out.append(f"{group} {v:.4g} {unit}" if v is not None and math.isfinite(v) else f"{group} not finite")
+        group = str(k).partition("_")[0]
+        out.append(f"{group} {v:.4g} {UNITS.get(group, '')}".rstrip() if v is not None and math.isfinite(v)
+                   else f"{group} not finite")
     return ", ".join(out)
 
 
-def outcome(rep, ds) -> tuple[str, str, list[str]]:
-    """(status, why, problems) of a calibration report: the verdict's status ("better",
+def outcome(rep, ds) -> tuple[str, str, list[str], list[str]]:
+    """(status, why, problems, caveats) of a calibration report: the verdict's status ("better",
     "trade-off", "worse") and message, or "worse" when a sanity check fails
     (:func:`calibration_problems`: a simulation that diverges or explodes where the starting
     model's does not, every parameter of a DOF on a bound), ``problems`` then saying which.
@@ -218,7 +220,7 @@ def outcome(rep, ds) -> tuple[str, str, list[str]]:
     for c in caveats:
         if c not in why:
             why += f"; {c}"
-    return status, why, problems
+    return status, why, problems, caveats
 
 
 def record_outcome(cal, ds, *, keep_worse: bool = False) -> tuple[str, str, bool]:
@@ -226,10 +228,10 @@ def record_outcome(cal, ds, *, keep_worse: bool = False) -> tuple[str, str, bool
     report's ``status``; ``keep``: whether the fitted vehicle may be written (*better* or
     *trade-off*, and *worse* only with ``keep_worse``)."""
     rep = cal.report_
-    status, why, problems = outcome(rep, ds)
+    status, why, problems, caveats = outcome(rep, ds)
     keep = status in ("better", "trade-off") or keep_worse
     rep["status"] = {"ok": status == "better", "verdict": status, "exit_code": EXIT_CODES[status], "why": why,
-                     "problems": problems, "caveats": calibration_caveats(rep, ds), "vehicle_written": bool(keep)}
+                     "problems": problems, "caveats": caveats, "vehicle_written": bool(keep)}
     return status, why, keep
 
 

@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 
 from uvsim.commands.checks import add_allow_argument, check_outputs, check_runs_at_door, say
-from uvsim.constants import MAX_CURRENT_SPEED
 from uvsim.errors import UvsimError
+from uvsim.vehicle_schema import check_current_speed
 
 ANGLES = ("roll", "pitch", "yaw")
 
@@ -26,10 +26,7 @@ def _triple(text: str):
         raise UvsimError(f"--current: expected three numbers N,E,D in m/s, got {text!r}") from None
     if len(vals) != 3 or not all(np.isfinite(vals)):
         raise UvsimError(f"--current: expected three finite numbers N,E,D in m/s, got {text!r}")
-    speed = float(np.linalg.norm(vals))
-    if speed > MAX_CURRENT_SPEED:
-        raise UvsimError(f"--current {text}: {speed:.3g} m/s is faster than any current a vehicle is flown in "
-                         f"(at most {MAX_CURRENT_SPEED:g} m/s); give it in m/s (1 kn = 0.514 m/s)")
+    check_current_speed(vals, f"--current {text}", UvsimError)
     return vals
 
 

@@ -107,6 +107,11 @@ def plot_errors(diag, path, max_runs: int = 6) -> Path:
     return Path(path)
 
 
+def _step_name(st) -> str:
+    """A forward-selection step as the plot labels it: step 0 is the base model's."""
+    return "base model" if st["step"] == 0 else f"step {st['step']}"
+
+
 def plot_steps(diag, path) -> Path:
     """Validation cost per residual of the models along the forward selection, with every
     fitted candidate of each step (green: chosen)."""
@@ -123,7 +128,7 @@ def plot_steps(diag, path) -> Path:
             ax.plot(xj, c["validation_cost_per_entry"], "o", color=col, ms=9, zorder=3)
             ax.annotate(str(len(entries) + 1), (xj, c["validation_cost_per_entry"]), fontsize=6, color="white",
                         ha="center", va="center", zorder=4)
-            entries.append((len(entries) + 1, "base model" if st["step"] == 0 else f"step {st['step']}", c, col))
+            entries.append((len(entries) + 1, _step_name(st), c, col))
         if st.get("after_cost_per_entry") is not None:
             xs.append(x)
             ys.append(st["after_cost_per_entry"])
@@ -132,7 +137,7 @@ def plot_steps(diag, path) -> Path:
     ax.axhline(1.0, color="k", ls="--", lw=0.8, label="noise level")
     ax.set_yscale("log")
     ax.set_xticks(range(0, len(rep["steps"]) + 1),
-                  ["given"] + [("base model" if st["step"] == 0 else f"step {st['step']}") for st in rep["steps"]])
+                  ["given"] + [_step_name(st) for st in rep["steps"]])
     ax.set_xlabel("forward-selection step\n(step 0: the base model's thrust curve and damping)")
     ax.set_ylabel("validation cost per residual\n[squared noise sigmas]")
     ax.legend(fontsize=8)
