@@ -49,6 +49,7 @@ def test_filter_attitude_is_recognized(dataset):
     assert m.has_filter_attitude and m.has_gyro
 
 
+@pytest.mark.slow
 def test_offsets_are_recovered_and_absent_ones_not_invented(dataset):
     v = load_vehicle(read_dataset(dataset).vehicle_file)
     names = [r.name for r in _runs(dataset)]

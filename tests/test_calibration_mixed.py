@@ -148,6 +148,7 @@ def test_free_families_fix_and_explicit_bounds(mixed):
     assert cal.identifiability_["condition_number"] > 10
 
 
+@pytest.mark.slow
 def test_joint_stage_checkpoint_kill_and_resume(mixed, tmp_path):
     """SIGKILL during the joint stage, resume: finished iterations are not redone and the
     result equals an uninterrupted fit."""
@@ -263,6 +264,7 @@ def test_a_zero_weight_takes_a_channel_out_of_the_fit_but_not_out_of_the_verdict
     assert "depth +" in capsys.readouterr().out
 
 
+@pytest.mark.slow
 def test_a_fit_that_trades_channels_is_a_trade_off_with_the_channels_named(mixed, tmp_path, capsys, monkeypatch):
     """Issue 21 / 45: on these IMU + depth + PWM runs, freeing z_b with the default coefficients
     lowers the pooled open-loop validation error but makes depth and the roll rate worse: the

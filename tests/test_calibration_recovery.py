@@ -24,6 +24,7 @@ def six_dof():
     return runs, cal
 
 
+@pytest.mark.slow
 def test_clean_tank_data_of_the_paper_s_kind_get_the_verdict_better_every_time(six_dof):
     """Issue 45: the paper's workflow on clean tank data (seed 000's kind, from the same start model)
     is *better* than the model it started from, on this dataset and on two more drawn with other

@@ -34,6 +34,7 @@ def _main_rmse(rep, which):
 
 
 # ----------------------------------------------------------------------------- end to end
+@pytest.mark.slow
 def test_clean_scenario_needs_no_effect(tmp_path):
     """Base coefficients perturbed within +-10 % and no effect: re-tuning them explains
     everything, no effect is named."""
@@ -45,6 +46,7 @@ def test_clean_scenario_needs_no_effect(tmp_path):
     assert d.report["validation_cost_per_entry"]["final"] < 1.5  # at the noise level
 
 
+@pytest.mark.slow
 def test_a_retune_that_does_not_validate_better_is_not_kept(tmp_path):
     """Issue 45: `--retune` of every base coefficient on clean data whose base model is exact was
     kept whatever it did to the validation runs (the issue's field logs: attitude 62 -> 84 mrad
@@ -60,6 +62,7 @@ def test_a_retune_that_does_not_validate_better_is_not_kept(tmp_path):
     assert "not kept" in rep["message"]
 
 
+@pytest.mark.slow
 def test_names_a_current_estimates_it_and_halves_the_validation_error(tmp_path):
     out, truth = _scenario(tmp_path, 1, effects=[{"type": "current", "magnitude": 0.05}])
     d = diagnose(out, retune=list(BASE_RETUNE))
@@ -76,6 +79,7 @@ def test_names_a_current_estimates_it_and_halves_the_validation_error(tmp_path):
     assert any(e.kind == "current" for e in d.vehicle_after.effects)
 
 
+@pytest.mark.slow
 def test_a_lead_piece_is_named_with_its_position_and_mass(tmp_path):
     """A 1 N lead piece (0.11 kg in the truth, whose pieces have mass): the ballast wins, and
     its variant with the piece's mass is kept on the open-loop validation cost."""
@@ -96,6 +100,7 @@ def test_a_lead_piece_is_named_with_its_position_and_mass(tmp_path):
                                                      if c["variant"] in ("xy", "xyz") and "open_loop_cost" in c)) < 0.95
 
 
+@pytest.mark.slow
 def test_names_the_weak_thruster(tmp_path):
     """A PWM-driven vehicle with one thruster at half thrust: the diagnosis names the
     thruster and its gain (issue 14's undeclared per-thruster weakness)."""
@@ -154,6 +159,7 @@ def test_shipped_two_effect_dataset_names_both():
     assert _main_rmse(rep, "rmse_after") <= 0.5 * _main_rmse(rep, "rmse_before")
 
 
+@pytest.mark.slow
 def test_cli_writes_report_corrected_vehicle_and_plots(tmp_path, capsys):
     out, _ = _scenario(tmp_path, 1, effects=[{"type": "current", "magnitude": 0.05}])
     rep, veh, plots = tmp_path / "r.json", tmp_path / "fixed.yaml", tmp_path / "plots"

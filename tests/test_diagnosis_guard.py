@@ -220,6 +220,7 @@ def test_observability_is_reported_not_silent():
 
 
 # ----------------------------------------------------------------------------- end to end
+@pytest.mark.slow
 def test_an_out_of_catalogue_force_is_not_explained(tmp_path):
     """A periodic force (outside the catalogue) on otherwise exact data: the verdict says the
     residual is not explained and where it lies; whatever is named passed the guard."""
@@ -237,6 +238,7 @@ def test_an_out_of_catalogue_force_is_not_explained(tmp_path):
                 assert "no logged group's open-loop validation error is worse" in c["why"]
 
 
+@pytest.mark.slow
 def test_a_thrust_curve_at_another_voltage_is_the_base_model_not_a_thruster_fault(tmp_path):
     """Issue 22 class 5: PWM runs through the T200 curve measured at 12 V while the model's
     file says 16 V, nothing else wrong: no effect is named; the base model's thrust scale
@@ -250,6 +252,7 @@ def test_a_thrust_curve_at_another_voltage_is_the_base_model_not_a_thruster_faul
     assert rec["worst_group_change"] is not None and rec["worst_group_change"] <= 0.10
 
 
+@pytest.mark.slow
 def test_a_voltage_family_vehicle_gets_the_battery_voltage_and_the_effect_beside_it(tmp_path):
     """Issue 22 class 5 with an effect: PWM runs through the T200 curve measured at 20 V, the
     model's thrusters on the voltage family at the file's 16 V, and a ballast the model lacks.

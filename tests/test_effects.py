@@ -106,7 +106,8 @@ def test_ballast_piece_mass_reproduces_the_independent_truth(tmp_path):
     assert rmse["massless"] > 0.1, rmse
 
 
-@pytest.mark.parametrize("input_kind", ["thrust", "pwm", "force"])
+@pytest.mark.parametrize("input_kind", [pytest.param("thrust", marks=pytest.mark.slow),
+                                        pytest.param("pwm", marks=pytest.mark.slow), "force"])
 def test_a_weak_thruster_s_lag_lags_its_weak_thrust_as_in_the_independent_truth(tmp_path, input_kind):
     """Benchmark pair 118 (``uvsim.scenarios``, written apart from the effects): a weak
     horizontal thruster and a lag from rest.  uvsim stating both (``thruster_gain_4`` and a

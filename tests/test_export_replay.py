@@ -126,6 +126,7 @@ def _maneuver(duration):
     return standard_maneuver(duration)
 
 
+@pytest.mark.slow
 def test_default_gz_replay_follows_uvsim_and_plugin_mode_does_not():
     """15 s of the maneuver (surge, then a turn): the default export stays within 1 cm and
     1 mrad of uvsim at a 0.5 ms physics step (1.1 mrad at 1 ms: the engine's semi-implicit
@@ -214,6 +215,7 @@ def test_cli_check_replays_a_logged_run(tmp_path, capsys):
     assert "DIVERGED" in out and "none: unstable at every step" in out
 
 
+@pytest.mark.slow
 def test_thrusters_replay_with_pwm_through_both_targets():
     """PWM telegraph on every thruster of the BlueROV2 Heavy for 10 s: gz-sim (thrust of uvsim's
     T200 curve along each exported joint axis at its position) and UUV Simulator (the xacro's
@@ -236,6 +238,7 @@ def test_thrusters_replay_with_pwm_through_both_targets():
     assert r.position_m > 0.05
 
 
+@pytest.mark.slow
 def test_a_cg_off_the_link_origin_goes_to_gz_sim_and_is_refused_by_uuv_simulator():
     """DART adds the parallel-axis term (gz-physics AddedMassFeatures.cc, module docstring of
     uvsim.export.gz_sim), so the default gz-sim export keeps a low CG; UUV Simulator applies its

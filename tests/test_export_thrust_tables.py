@@ -42,6 +42,7 @@ def test_the_check_sees_a_table_that_misses_the_dead_band():
     assert chk["max_error_N"] > 0.05
 
 
+@pytest.mark.slow
 def test_battery_aware_curve_goes_to_gz_sim_with_every_sheet_and_replays_under_a_sagging_battery():
     veh = _battery_heavy()
     curve = veh.actuators.curves[0]

@@ -90,6 +90,7 @@ def test_bounds_are_the_measured_family_and_the_prior_a_battery():
         check_bounds({"supply_voltage": (5.0, 30.0)}, _on_family().parameters())
 
 
+@pytest.mark.slow
 def test_fit_recovers_the_voltage_of_a_truth_on_another_curve(tmp_path):
     """Independent generator, heave-rich telegraph PWM on the 12 V T200 sheet, exact
     coefficients: freeing ``supply_voltage`` of the 16 V file finds 12 V, which a thrust gain
