@@ -225,6 +225,16 @@ def test_help_shows_the_defaults(capsys, command, option, default):
     assert f"default: {default})" in block or f"default {default}" in block, block
 
 
+def test_help_shows_no_default_for_a_flag(capsys):
+    """``--no-progress`` is a flag: "(default: True)" beside it reads as "off by default"."""
+    from uvsim.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    for name, parser in sub.choices.items():
+        text = parser.format_help()
+        assert "(default: True)" not in text and "(default: False)" not in text, name
+
+
 @pytest.mark.parametrize("sep, name", [(";", "semicolon"), ("\t", "tab")])
 def test_a_csv_with_another_separator_is_named_as_such(tmp_path, capsys, sep, name):
     run = tmp_path / "R.csv"
@@ -262,3 +272,36 @@ def test_the_ga_plot_s_best_so_far_never_rises(tmp_path, monkeypatch):
     dashed = [ln for ln in ax.get_lines() if ln.get_linestyle() == "--"][0]
     assert list(dashed.get_ydata()) == [r["min"] for r in lb]
     assert "best so far" in ax.get_title() and "each generation's best" in ax.get_title()
+
+
+# ----------------------------------------------------------------------------- centre of buoyancy
+def test_a_centre_of_buoyancy_below_the_centre_of_gravity_is_refused(tmp_path, capsys):
+    """Before: r_b [0, 0, +0.024] (a sign slip) loaded and the vehicle capsized in simulation."""
+    d = yaml.safe_load(shipped_vehicle_text())
+    d["rigid_body"]["r_b"] = [0.0, 0.0, 0.024]
+    veh = tmp_path / "veh.yaml"
+    veh.write_text(yaml.safe_dump(d))
+    assert main(["simulate", "--vehicle", str(veh), "--run", str(RUN), "--out", str(tmp_path / "s.csv")]) == 2
+    _one_line_error(capsys, "veh.yaml", "rigid_body.r_b", "below the centre of gravity", "z is positive down")
+    assert not (tmp_path / "s.csv").exists()
+
+
+def test_a_fit_keeps_the_centre_of_buoyancy_above_the_centre_of_gravity(tmp_path):
+    from uvsim.calibration import Calibrator
+    from uvsim.fitting.parameters import cb_not_below_cg, default_bounds
+
+    lo, hi = cb_not_below_cg("z_b", default_bounds("z_b", -0.024, 0.5), {"z_g": 0.0}, {"z_b"})
+    assert lo == pytest.approx(-0.074) and hi == 0.0                    # the default range stops at z_g
+    assert cb_not_below_cg("z_b", (-0.1, 0.1), {"z_g": 0.0}, {"z_b", "z_g"}) == (-0.1, 0.1)   # both move
+    data = write_tiny_dataset(tmp_path / "ds")
+    with pytest.raises(CalibrationError, match=r"bounds for z_b \(-0.05, 0.05\) reach below the centre of gravity"):
+        Calibrator(free="z_b", bounds={"z_b": (-0.05, 0.05)}, population=4, generations=1).fit(data)
+
+
+def test_compare_never_writes_beside_the_shipped_run(tmp_path, monkeypatch, capsys):
+    """Before: ``simulate --run <shipped run> --compare`` wrote its figure into the installed package."""
+    monkeypatch.chdir(tmp_path)
+    beside = RUN.with_name(RUN.stem + "_compare.png")
+    assert main(["simulate", "--vehicle", "bluerov2_heavy", "--run", str(RUN), "--compare"]) == 0
+    assert (tmp_path / "heave_01_compare.png").is_file() and not beside.exists()
+    assert "plot -> heave_01_compare.png" in capsys.readouterr().out

@@ -224,6 +224,8 @@ RULE_CASES = {
                               "rigid_body.r_b [0.0, 0.0, -20.0] is 20 m from the body origin"),
     "vehicle_parameter_names": (lambda d: mutate(d, "uncertainty.X_uq", 1.0),
                                 "uncertainty: unknown key 'X_uq' (did you mean"),
+    "cb_not_below_cg": (lambda d: mutate(d, "rigid_body.r_b", [0, 0, 0.024]),
+                        "rigid_body.r_b: the centre of buoyancy (z_b = 0.024 m) lies 0.024 m below the centre of gravity"),
     "mass_matrix_positive_definite": (
         lambda d: mutate(d, "added_mass", {"matrix": (np.eye(6) + 60 * (np.ones((6, 6)) - np.eye(6))).tolist()}),
         "veh.yaml: M = M_RB + M_A is not positive definite"),

@@ -40,13 +40,14 @@ COMMAND_MODULES = [
 
 
 class DefaultsHelpFormatter(argparse.HelpFormatter):
-    """``--help`` shows each option's default (``(default: 80)``) unless its text states it, or
-    the default is no value (None, False)."""
+    """``--help`` shows each option's default (``(default: 80)``) unless its text states it,
+    the default is no value (None, False) or the option is a flag (``store_true`` /
+    ``store_false``: its default is the flag's absence, not a value)."""
 
     def _get_help_string(self, action):
         text = action.help or ""
         if ("default" in text.lower() or not action.option_strings or action.default in (None, False)
-                or action.default is argparse.SUPPRESS):
+                or action.default is argparse.SUPPRESS or action.nargs == 0):
             return text
         return f"{text} (default: %(default)s)"
 
@@ -70,6 +71,47 @@ def build_parser() -> argparse.ArgumentParser:
     for name in COMMAND_MODULES:
         importlib.import_module(name).register(sub)
     return parser
+
+
+def _commands(parser: argparse.ArgumentParser, prefix: str = "uvsim"):
+    """``(command line, parser)`` of every command and sub-command, in ``--help`` order."""
+    yield prefix, parser
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                yield from _commands(sub, f"{prefix} {name}")
+
+
+def reference_pages(width: int = 100) -> dict[str, str]:
+    """docs/cli/: one page per top-level command with its and its sub-commands' ``--help``,
+    and ``README.md``, the index; ``{file name: text}``, generated from the parsers
+    (``tests/test_cli_reference.py`` fails when the pages and the parsers differ: regenerate
+    them with ``python -m uvsim.cli_reference``, do not edit them)."""
+    old = os.environ.get("COLUMNS")
+    os.environ["COLUMNS"] = str(width)  # argparse wraps at the terminal's width
+    try:
+        pages: dict[str, list[str]] = {}
+        top = build_parser()
+        index = ["# Command-line reference\n",
+                 "Generated from the parsers (what `uvsim CMD --help` prints) by `python -m uvsim.cli_reference` "
+                 f"on Python {sys.version_info[0]}.{sys.version_info[1]}. How to use each command: the "
+                 "tutorials and guides listed in the README, \"Documentation\".\n",
+                 f"```\n{top.format_help().rstrip()}\n```\n", "| command | page |", "|---|---|"]
+        for line, parser in list(_commands(top))[1:]:
+            name = line.split()[1]
+            if name not in pages:
+                pages[name] = []
+                index.append(f"| `uvsim {name}` | [{name}.md]({name}.md) |")
+            pages[name].append(f"## `{line}`\n\n```\n{parser.format_help().rstrip()}\n```\n")
+        out = {f"{name}.md": f"# `uvsim {name}`\n\nGenerated from the parser; [index](README.md).\n\n" + "\n".join(body)
+               for name, body in pages.items()}
+        out["README.md"] = "\n".join(index) + "\n"
+        return out
+    finally:
+        if old is None:
+            del os.environ["COLUMNS"]
+        else:
+            os.environ["COLUMNS"] = old
 
 
 class Terminated(KeyboardInterrupt):

@@ -395,6 +395,21 @@ def points_on_the_vehicle(v: dict, ctx: Context) -> None:
                                f"(m / rho)^(1/3) = {scale:.3g} m; expected metres (a value in mm is 1000 x too far)")
 
 
+def cb_not_below_cg(v: dict, ctx: Context) -> None:
+    """The centre of buoyancy is not below the centre of gravity (``z_b <= z_g``, z down).
+
+    With buoyancy, a CB below the CG turns the restoring moment ``(W r_g - B r_b) x k``
+    (docs/model.md, "Restoring"; Fossen 2021 sec. 4.1) into an upsetting one: the vehicle
+    capsizes. It is almost always a sign slip (z is positive down, docs/model.md)."""
+    veh = ctx.vehicle
+    below = float(veh.r_b[2]) - float(veh.r_g[2])
+    if float(veh.buoyancy) > 0 and below > 1e-9:
+        raise VehicleError(f"{ctx.file}: rigid_body.r_b: the centre of buoyancy (z_b = {float(veh.r_b[2]):.4g} m) lies "
+                           f"{below:.4g} m below the centre of gravity (z_g = {float(veh.r_g[2]):.4g} m); the vehicle "
+                           "would capsize. z is positive down (docs/model.md): a CB above the CG has the smaller z, "
+                           "e.g. r_b: [0, 0, -0.02] with r_g: [0, 0, 0]")
+
+
 # ----------------------------------------------------------------------------- the schema
 _SECTION = "{file}: '{key}' section missing or not a mapping"
 
@@ -473,7 +488,7 @@ VEHICLE = Section({
                      expected="{where}: expected a mapping such as {{pressure: {{position: [x, y, z]}}}}"),
     "uncertainty": Field("section", section=UNCERTAINTY, default={}, nullable=True, after_build=True,
                          example="uncertainty: {X_u: 2.0, N_rdot: 0.05}", meaning="1-sigma of named parameters"),
-}, key_rules=(required_sections_given,), built_rules=(mass_matrix_positive_definite, points_on_the_vehicle),
+}, key_rules=(required_sections_given,), built_rules=(mass_matrix_positive_definite, points_on_the_vehicle, cb_not_below_cg),
     hint=" (free-form metadata goes under 'meta:')")
 
 

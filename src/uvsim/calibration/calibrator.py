@@ -45,7 +45,7 @@ from uvsim.errors import CalibrationError
 from uvsim.estimation.lag import attitude_lag_setting
 from uvsim.fitting.evaluate import judged_scales
 from uvsim.fitting.objective import check_loss, continuity_factors
-from uvsim.fitting.parameters import default_bounds, physical_bounds
+from uvsim.fitting.parameters import cb_not_below_cg, default_bounds, physical_bounds
 from uvsim.latency import runs_for
 from uvsim.measurements import check_sample_weighting, check_signal_settings, measurements_for
 from uvsim.plausibility import check_runs, parse_allow
@@ -338,14 +338,18 @@ class Calibrator:
         if idle:
             raise CalibrationError(f"bounds given for {idle}, which no stage fits; free them (free=..., --free) "
                                    "or drop their bounds")
+        for k, b in bounds.items():  # before any work: the user's bounds keep the CB above the CG
+            cb_not_below_cg(k, b, base, fitted, explicit=True)
 
         def bounds_of(k):  # explicit, else the default family bounds around the vehicle's value
-            return bounds[k] if k in bounds else default_bounds(k, float(base[k]), float(self.margin))
+            if k in bounds:
+                return cb_not_below_cg(k, bounds[k], base, fitted, explicit=True)
+            return cb_not_below_cg(k, default_bounds(k, float(base[k]), float(self.margin)), base, fitted)
 
         def joint_bounds_of(k):  # with priors: physical limits only (the prior keeps values near the file's)
             if k in bounds or not self.prior:
                 return bounds_of(k)
-            return physical_bounds(k, float(base[k]), float(self.margin))
+            return cb_not_below_cg(k, physical_bounds(k, float(base[k]), float(self.margin)), base, fitted)
 
         # ---------------------------------------------------------------- GA stage
         ga_dofs = [d for d in ga_dofs if any(k not in fixed for k in DOF_PARAMETERS[d])]

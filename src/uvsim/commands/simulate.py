@@ -45,7 +45,8 @@ def register(sub) -> None:
                         "(default 0: the first measured sample)")
     p.add_argument("--compare", action="store_true",
                    help="print RMSE / NRMSE / Fit %% per logged channel and write a measured-vs-simulated plot")
-    p.add_argument("--plot", default=None, help="figure for --compare (default: <out or run>_compare.png)")
+    p.add_argument("--plot", default=None, help="figure for --compare (default: <out>_compare.png beside --out, else "
+                                                "<run name>_compare.png in the current directory, never beside the run)")
     add_allow_argument(p)
     p.set_defaults(func=_run)
 
@@ -74,6 +75,9 @@ def _run(args) -> int:
         raise UvsimError("--out: required unless --compare is given")
     current = _triple(args.current) if args.current else None
     check_method(args.method)
+    if args.compare and not args.plot:  # the shipped runs live in the installed package: never write beside them
+        base = Path(args.out) if args.out else Path(Path(args.run).stem)
+        args.plot = str(base.with_name(base.stem + "_compare.png"))
     check_outputs({"--out": args.out, "--plot": args.plot}, inputs={"--run": args.run, "--vehicle": args.vehicle})
     veh = load_vehicle(_vehicle_for(args))
     run = read_run(args.run)
@@ -244,7 +248,6 @@ def _compare(args, veh, run, pieces, current) -> None:
         print(f"{r['name']:>8} {r['unit']:>6} {r['n']:>6d} {r['rmse']:>11.4g} {r['nrmse_percent']:>9.2f} "
               f"{r['fit_percent']:>9.2f}")
     t, sim, meas, chans = _with_breaks(pieces, chans, lengths)
-    base = Path(args.out) if args.out else Path(args.run)
-    plot = Path(args.plot) if args.plot else base.with_name(base.stem + "_compare.png")
+    plot = Path(args.plot)
     compare_run(t, chans, sim, meas, plot, title=f"{run.name}: measured vs {veh.name}")
     print(f"plot -> {plot}")

@@ -42,5 +42,5 @@ def _show(args) -> int:
     print("  added mass (positive):\n" + "\n".join("    " + str(r) for r in np.array(s["added_mass"])))
     print(f"  linear damping (paper sign):    {s['linear_damping']}")
     print(f"  quadratic damping (paper sign): {s['quadratic_damping']}")
-    print(f"  thrusters: {s['n_thrusters']}, effects: {s['effects'] or 'none'}")
+    print(f"  thrusters: {s['n_thrusters']}, effects: {', '.join(map(str, s['effects'])) or 'none'}")
     return 0

@@ -275,6 +275,23 @@ def default_bounds(name: str, value: float, margin: float) -> tuple[float, float
     return lo, hi
 
 
+def cb_not_below_cg(name: str, bounds: tuple[float, float], values, free,
+                    explicit: bool = False) -> tuple[float, float]:
+    """``bounds`` of ``name`` with the physical limit of the centre of buoyancy: ``z_b``
+    never goes below the centre of gravity (``z_b <= z_g``, z down; the vehicle file's rule
+    :func:`uvsim.vehicle_schema.cb_not_below_cg`), so a fit cannot end in a vehicle that
+    capsizes. Applies when ``z_g`` is held (not in ``free``); the default ranges are cut at
+    ``z_g``, ``explicit`` bounds (the user's) that reach below it are an error."""
+    if name != "z_b" or "z_g" in free:
+        return bounds
+    lo, hi = bounds
+    z_g = float(values["z_g"])
+    if lo >= z_g or (explicit and hi > z_g):
+        raise CalibrationError(f"bounds for z_b ({lo:g}, {hi:g}) reach below the centre of gravity (z_g = {z_g:g} m, "
+                               f"z down), where the vehicle would capsize; give bounds with z_b <= {z_g:g}")
+    return lo, min(hi, z_g)
+
+
 #: How far the joint fit's physical bounds let a mass, moment of inertia, added mass or damping
 #: coefficient move from the vehicle file's value: a factor of 10 either way. The sign is the
 #: physical limit (a body's diagonal added mass is >= 0, a passive hull's diagonal damping
