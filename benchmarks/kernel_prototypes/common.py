@@ -48,20 +48,28 @@ def load(overrides=None):
     return m, theta_of(m)
 
 
-def theta_of(m) -> np.ndarray:
-    """The parameter vector of :mod:`equations` from a built uvsim Model (one parameter set)."""
+def theta_of(m, j: int = 0) -> np.ndarray:
+    """The parameter vector of :mod:`equations` from a built uvsim Model (its parameter set ``j``)."""
     o = eq.layout(K)
     th = np.zeros(o["size"])
-    first = (lambda a: np.asarray(a, float).reshape(-1)[0])
-    th[o["Minv"]:o["Minv"] + 36] = np.asarray(m.Minv).reshape(-1, 36)[0]
-    th[o["M"]:o["M"] + 36] = np.asarray(m.M).reshape(-1, 36)[0]
+
+    def first(a):
+        a = np.asarray(a, float).reshape(-1)
+        return a[j] if a.size > 1 else a[0]
+
+    def row(a, size):
+        a = np.asarray(a, float).reshape(-1, size)
+        return a[j] if a.shape[0] > 1 else a[0]
+
+    th[o["Minv"]:o["Minv"] + 36] = row(m.Minv, 36)
+    th[o["M"]:o["M"] + 36] = row(m.M, 36)
     p = m.params
     th[o["DL"]:o["DL"] + 6] = [first(p[k]) for k in ALL_LINEAR]
     th[o["DQ"]:o["DQ"] + 6] = [first(p[k]) for k in QUAD]
     W = first(m.weight)
     B = first(p["B"])
     th[o["WmB"]] = W - B
-    r_g = np.asarray(m.weight_r_g)[0]
+    r_g = row(m.weight_r_g, 3)
     r_b = np.array([first(p[k]) for k in ("x_b", "y_b", "z_b")])
     th[o["h"]:o["h"] + 3] = W * r_g - B * r_b
     act = [t for t in m.terms if t.kind == "actuators"][0]
@@ -69,6 +77,20 @@ def theta_of(m) -> np.ndarray:
     th[o["gain"]:o["gain"] + K] = [first(p[f"thruster_gain_{i}"]) for i in range(1, K + 1)]
     th[o["rev"]:o["rev"] + K] = [first(p[f"thruster_reverse_{i}"]) for i in range(1, K + 1)]
     return th
+
+
+def theta_rows(m) -> np.ndarray:
+    """(n, n_th): every parameter set of a batched Model."""
+    return np.stack([theta_of(m, j) for j in range(m.n)])
+
+
+def batch_overrides(n: int, seed: int = 0) -> dict:
+    """One parameter set per trajectory, +-20 % around the vehicle's (as uvsim's core benchmark)."""
+    import uvsim
+
+    p = uvsim.load_vehicle(VEHICLE).parameters()
+    rng = np.random.default_rng(seed)
+    return {k: p[k] * rng.uniform(0.8, 1.2, n) for k in ("I_xx", "I_yy", "I_zz") + ADDED + ALL_LINEAR + QUAD}
 
 
 def theta_seeds(m, th) -> np.ndarray:
