@@ -96,7 +96,7 @@ def format_table(report: dict) -> str:
     lines.append("")
     lines.append(f"effects: {report['effect']}   confidence: {report['confidence']}")
     for e in report["effects"]:
-        lines.append(f"  {e['effect']}:{e['variant']}")
+        lines.append(f"  {e['effect']}:{e['variant']}" + (f": {e['answer']}" if e.get("answer") else ""))
         for k, d in e["parameters"].items():
             std = f" +- {d['std']:.2g}" if d.get("std") is not None else ""
             lines.append(f"    {k} = {d['value']:.5g}{std} {d['unit']}")

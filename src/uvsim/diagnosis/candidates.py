@@ -29,7 +29,9 @@ thruster_lag          steady (time constant; starts at the command);            
 thrust_asymmetry      common (one reverse ratio); per_thruster (one per          -
                       thruster); per_dof (one per DOF, generalized-force
                       inputs)
-thruster_gain         unit_i (thruster i's gain, one variant per thruster);     thrusters
+thruster_gain         unit_i (thruster i's gain, 0-1.5: 0 is a dead unit,      thrusters
+                      named as such); reversed_i (thruster i pushes the
+                      wrong way, mounted or wired reversed: gain -1.5-0);
                       all (every thruster's gain); with generalized-force
                       inputs through the pseudo-inverse allocation
 coupled_damping       drag_centre_z / _xz / _xyz (the translational damping     -
@@ -52,6 +54,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from uvsim.errors import CalibrationError
+from uvsim.fitting.parameters import GAIN_RANGE, REVERSED_GAIN_RANGE
 
 EFFECTS = ("current", "tether", "ballast", "thruster_lag", "thrust_asymmetry", "thruster_gain",
            "coupled_damping", "bottom_effect", "base_model")
@@ -223,9 +226,16 @@ PHYSICAL_FLOORS = ("tether_stiffness", "tether_tension", "tether_slack_length", 
                    "tether_lumped_drag", "ballast_mass")
 
 
+def _physical_floor(c: Candidate, n: str) -> bool:
+    """Whether the lower bound of ``n`` in ``c`` is a physical limit (:data:`PHYSICAL_FLOORS`;
+    a thruster's gain 0: a dead unit), not the edge of a search range."""
+    return n in PHYSICAL_FLOORS or (c.effect == "thruster_gain" and not c.tags.get("reversed")
+                                    and n.startswith("thruster_gain_"))
+
+
 def search_bound_hits(c: Candidate, values: Mapping[str, float], at_bounds: Sequence[str]) -> list[str]:
     """The parameters of ``c`` that ended on the edge of their search range (not on a
-    physical floor, :data:`PHYSICAL_FLOORS`): such an effect is not named, since the data
+    physical floor, :func:`_physical_floor`): such an effect is not named, since the data
     push it beyond what the catalogue considers physical for this vehicle."""
     out = []
     if c.effect == BASE_MODEL:  # a re-tune is not an effect: a coefficient at +-50 % says "far off", not "unphysical"
@@ -234,7 +244,7 @@ def search_bound_hits(c: Candidate, values: Mapping[str, float], at_bounds: Sequ
         if n not in c.free:
             continue
         lo, hi = c.bounds[n]
-        if n in PHYSICAL_FLOORS and abs(values.get(n, hi) - lo) <= abs(values.get(n, hi) - hi):
+        if _physical_floor(c, n) and abs(values.get(n, hi) - lo) <= abs(values.get(n, hi) - hi):
             continue
         out.append(n)
     return out
@@ -300,13 +310,43 @@ def _gain(k):
     out = []
     for i in range(k):
         n = f"thruster_gain_{i + 1}"
-        out.append(Candidate("thruster_gain", f"unit_{i + 1}", None, [n], {n: (0.05, 1.5)}, {n: 1.0},
-                             f"thruster {i + 1} delivers a fraction of its curve (fouled or damaged)",
+        out.append(Candidate("thruster_gain", f"unit_{i + 1}", None, [n], {n: GAIN_RANGE}, {n: 1.0},
+                             f"thruster {i + 1} delivers a fraction of its curve (fouled, damaged; 0: dead)",
                              {"unit": i + 1}))
+        out.append(Candidate("thruster_gain", f"reversed_{i + 1}", None, [n], {n: REVERSED_GAIN_RANGE}, {n: -1.0},
+                             f"thruster {i + 1} pushes the wrong way (mounted or wired reversed)",
+                             {"unit": i + 1, "reversed": True}))
     names = [f"thruster_gain_{i + 1}" for i in range(k)]
-    out.append(Candidate("thruster_gain", "all", None, names, {n: (0.05, 1.5) for n in names}, {n: 1.0 for n in names},
+    out.append(Candidate("thruster_gain", "all", None, names, {n: GAIN_RANGE for n in names}, {n: 1.0 for n in names},
                          "every thruster's gain"))
     return out
+
+
+#: A fitted gain below this is "no thrust": the dead-unit answer (a unit at 2 % of its curve
+#: gives under 1 N of a T200's 51 N, below what a tank log resolves).
+DEAD_GAIN = 0.02
+
+
+def plain_answer(c: Candidate, values: Mapping[str, float]) -> str | None:
+    """The answer in words when it is at a physical limit or names a fault: a dead or a
+    reversed thruster (issue 48: "thruster 1 gives no thrust"); None otherwise."""
+    if c.effect != "thruster_gain":
+        return None
+    if "unit" not in c.tags:  # every gain: name the dead units among them
+        gains = {int(n.rsplit("_", 1)[1]): float(values.get(n, 1.0)) for n in c.free}
+        dead = [i for i, g in gains.items() if g < DEAD_GAIN]
+        if not dead:
+            return None
+        rest = [g for i, g in gains.items() if i not in dead]
+        return (f"thruster{'s' if len(dead) > 1 else ''} {', '.join(map(str, dead))} give{'' if len(dead) > 1 else 's'} "
+                "no thrust (a dead unit)" + (f"; the other gains {min(rest):.2f}-{max(rest):.2f}" if rest else ""))
+    i = c.tags["unit"]
+    g = float(values.get(f"thruster_gain_{i}", 1.0))
+    if c.tags.get("reversed"):
+        return f"thruster {i} pushes the wrong way (mounted or wired reversed), at {abs(g):.2f} of its curve"
+    if g < DEAD_GAIN:
+        return f"thruster {i} gives no thrust (gain {g:.3f}: a dead unit)"
+    return None
 
 
 def _bottom(z_max):

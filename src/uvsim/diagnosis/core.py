@@ -35,7 +35,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from uvsim.checkpoint import Checkpoint, fingerprint
-from uvsim.diagnosis.candidates import BASE_MODEL, EFFECTS, Candidate
+from uvsim.diagnosis.candidates import BASE_MODEL, EFFECTS, Candidate, plain_answer
 from uvsim.diagnosis.decision import (LEVEL, MIN_RELATIVE, VAL_LEVEL, WALD_P, alternative_challenger,
                                       blocked_fallback, inertia_challenger, open_loop_verdict, parsimonious,
                                       richer_challenger, simplest_sufficient, still_needed)
@@ -283,7 +283,8 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
                 params[n]["before"] = veh.parameters().get(n, 1.0)
             base_rep = {"variant": c.variant, "notes": c.notes, "parameters": params}
         else:
-            effects_rep.append({"effect": c.effect, "variant": c.variant, "notes": c.notes, "parameters": params})
+            effects_rep.append({"effect": c.effect, "variant": c.variant, "notes": c.notes, "parameters": params,
+                                "answer": plain_answer(c, values)})
     at_noise = val_cur["per_entry"] <= AT_NOISE
     names = [c.effect for c in accepted if c.effect != BASE_MODEL]
     base_msg = ""
@@ -294,7 +295,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     if names:
         confidence = "high" if at_noise else "partial"
         msg = base_msg + (
-            f"{' + '.join(c.label for c in accepted if c.effect != BASE_MODEL)}: validation cost "
+            f"{' + '.join(plain_answer(c, values) or c.label for c in accepted if c.effect != BASE_MODEL)}: validation cost "
             f"{val_given['per_entry']:.2f} -> {val_cur['per_entry']:.2f} squared noise sigmas per residual. "
             + ("The residual is now at the noise level." if at_noise else
                "Something the catalogue does not explain remains (the cost is above the noise level)."))

@@ -24,7 +24,7 @@ from uvsim.errors import CalibrationError, UvsimError, VehicleError
 from uvsim.fitting import fit
 from uvsim.fitting.equation_error import EquationError, motion_or_why
 from uvsim.fitting.evaluate import open_loop
-from uvsim.fitting.parameters import FreeParameter, ParameterSpace, default_bounds
+from uvsim.fitting.parameters import GAIN_RANGE, FreeParameter, ParameterSpace, default_bounds
 from uvsim.fitting.verdict import score
 from uvsim.forces import make_term
 from uvsim.measurements import measurements_for
@@ -205,7 +205,7 @@ class Selector:
         veh_c = veh0.with_effects([{"type": "coupled_damping", **{t: 0.0 for t in terms}}]) if terms else veh0
         gains = [f"thruster_gain_{i + 1}" for i in range(veh0.n_thrusters)]
         lin = list(cur["free"]) + terms + (gains if any(c.effect == "thruster_gain" for c in cands) else [])
-        bnd = {**cur["bounds"], **{t: (-1e4, 1e4) for t in terms}, **{g: (0.05, 1.5) for g in gains}}
+        bnd = {**cur["bounds"], **{t: (-1e4, 1e4) for t in terms}, **{g: GAIN_RANGE for g in gains}}
         sp_l = self.space(veh_c, lin, bnd, vals0, vals0)
         J, rl = EquationError(veh_c, motions, sp_l, scale=ee0.scale).jacobian()
         J = J / sp_l.scale[:, None]  # per unit of each parameter
@@ -217,7 +217,8 @@ class Selector:
         for i, g in enumerate(gains):
             col = nb + len(terms) + i
             if col < J.shape[0]:
-                single[g] = ls_step(base, J[col], rl, [*cur["free"], g], {**vals0})
+                cp = base.project(J[col])  # the RSS grows by (g - g_hat)^2 |cp|^2 away from the optimum g_hat
+                single[g] = (*ls_step(base, J[col], rl, [*cur["free"], g], {**vals0}), float(cp @ cp))
         order = sorted(cands, key=lambda c: (c.effect != "tether", c.complexity if c.effect == "tether" else 0,
                                              c.variant != "3d"))
         res = self._screen_each(order, motions, cur, vals0, base, ee0.scale, single, rss0)
@@ -231,7 +232,13 @@ class Selector:
         res = []
         for c in cands:
             if c.effect == "thruster_gain" and len(c.free) == 1 and c.free[0] in single:
-                vals, rss = single[c.free[0]]
+                # one gain: the linearized optimum, held within the variant's range (a unit's gain
+                # >= 0, a reversed unit's <= 0), so a reversed thruster ranks its own variant first
+                vals, rss, curv = single[c.free[0]]
+                g_hat = vals[c.free[0]]
+                lo, hi = c.bounds[c.free[0]]
+                g = min(max(g_hat, lo), hi)
+                vals, rss = {**vals, c.free[0]: g}, rss + (g - g_hat) ** 2 * curv
                 res.append({"reduction": max(0.0, 1.0 - rss / rss0), "values": vals})
                 continue
             veh = cur["vehicle"].with_effects([c.spec]) if c.spec is not None else cur["vehicle"]

@@ -236,7 +236,11 @@ class ParameterSpace:
 POSITION_HALF_WIDTH = 0.05
 THRUSTER_POSITION_HALF_WIDTH = 0.05
 CURRENT_RANGE = (-1.0, 1.0)
-GAIN_RANGE = (0.05, 1.5)
+#: A thruster's gain: 0 (a dead unit, a physical answer, issue 48) to 1.5 (more than 1.5 times
+#: its measured curve points to a wrong curve); a unit pushing the wrong way (mounted or wired
+#: reversed) has a negative gain, fitted as a candidate of its own in REVERSED_GAIN_RANGE.
+GAIN_RANGE = (0.0, 1.5)
+REVERSED_GAIN_RANGE = (-1.5, 0.0)
 REVERSE_RANGE = (0.1, 1.5)
 
 
@@ -245,7 +249,7 @@ def default_bounds(name: str, value: float, margin: float) -> tuple[float, float
 
     * centre of gravity / buoyancy coordinates (``x_g`` ... ``z_b``) and thruster
       positions: ``value -+ max(0.05 m, margin |value|)``;
-    * thruster and generalized-force gains: (0.05, 1.5); reverse ratios: (0.1, 1.5)
+    * thruster and generalized-force gains: (0, 1.5), 0 being a dead unit; reverse ratios: (0.1, 1.5)
       (a unit delivering more than 1.5 times its measured curve points to a wrong curve);
     * current components: (-1, 1) m/s;
     * ``supply_voltage``: the voltages the shipped thrust-curve families were measured at

@@ -60,8 +60,9 @@ DOF_LETTERS = "XYZKMN"
 #: digits, e.g. 0.7071); beyond it the file is refused rather than normalised in silence, since
 #: the export writes the file's direction as given.
 DIRECTION_NORM_TOL = 1e-3
-#: Accepted range of a gain or reverse ratio in a vehicle file (a thruster delivering
-#: more than twice its measured curve is a unit error, not a calibration).
+#: Accepted range of a gain or reverse ratio in a vehicle file: 0 (a dead unit, or no reverse
+#: thrust) to 2 (a thruster delivering more than twice its measured curve is a unit error, not
+#: a calibration). A unit that pushes the wrong way is written with its direction reversed.
 FACTOR_RANGE = (0.0, 2.0)
 
 
@@ -71,8 +72,9 @@ def _factor(val, where: str) -> float:
     except (TypeError, ValueError):
         raise VehicleError(f"{where}: expected a number, got {val!r}") from None
     lo, hi = FACTOR_RANGE
-    if not (np.isfinite(v) and lo < v <= hi):
-        raise VehicleError(f"{where} = {val!r}: expected a factor in ({lo:g}, {hi:g}] (1 = as the thrust curve)")
+    if not (np.isfinite(v) and lo <= v <= hi):
+        raise VehicleError(f"{where} = {val!r}: expected a factor in [{lo:g}, {hi:g}] (1 = as the thrust curve, 0 = "
+                           "no thrust; a unit that pushes the wrong way: reverse its direction)")
     return v
 
 
@@ -157,7 +159,10 @@ class Actuators(ForceTerm):
                 continue
             u = units[i]
             if f"thruster_gain_{i + 1}" in own:
-                u["gain"] = own[f"thruster_gain_{i + 1}"]
+                g = own[f"thruster_gain_{i + 1}"]
+                if g < 0:  # pushes the wrong way (diagnosis' reversed unit): the same thrust, direction reversed
+                    u["direction"] = [-float(x) for x in u["direction"]]
+                u["gain"] = abs(g)
             if f"thruster_reverse_{i + 1}" in own:
                 u["reverse_ratio"] = own[f"thruster_reverse_{i + 1}"]
             for a, c in enumerate("xyz"):
@@ -179,7 +184,10 @@ class Actuators(ForceTerm):
             # a configuration matrix without units: keep gains / ratios in lists
             g = [own.get(f"thruster_gain_{i + 1}", float(self.gains[i])) for i in range(self.n_thrusters)]
             r = [own.get(f"thruster_reverse_{i + 1}", float(self.reverse[i])) for i in range(self.n_thrusters)]
-            spec["gains"], spec["reverse_ratios"] = g, r
+            if any(x < 0 for x in g) and "configuration_matrix" in spec:  # a reversed unit: its column negated
+                B = np.asarray(spec["configuration_matrix"], float) * np.where(np.asarray(g) < 0, -1.0, 1.0)
+                spec["configuration_matrix"] = B.tolist()
+            spec["gains"], spec["reverse_ratios"] = [abs(x) for x in g], r
         return build_actuators(spec, "thrusters")
 
     def prepare(self, params, n):
