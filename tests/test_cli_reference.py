@@ -31,3 +31,16 @@ def test_every_command_has_a_page_and_no_page_is_long():
     for command in ("simulate", "calibrate", "diagnose", "export", "import", "vehicle", "maneuver"):
         assert f"{command}.md" in pages and f"`uvsim {command}`" in pages["README.md"]
     assert all(len(t.splitlines()) <= 400 for t in pages.values())
+
+
+def test_the_command_line_starts_without_the_fitting_machinery():
+    """Every command's parser (``uvsim --help``) reads its defaults from light modules
+    (uvsim.fit_settings); importing the fits, scipy.signal and scipy.optimize cost 1.2 s of
+    every command's start (structure checked here; the time itself is not a test's business)."""
+    import subprocess
+
+    code = ("import sys, uvsim.cli as c; c.build_parser(); "
+            "print(' '.join(m for m in ('scipy.signal', 'scipy.optimize', 'scipy.stats', 'uvsim.fitting.fitter', "
+            "'uvsim.diagnosis.core', 'uvsim.calibration.calibrator') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    assert out == "", f"imported when the parser is built: {out}"

@@ -68,7 +68,7 @@ def test_space_never_proposes_a_non_physical_body():
 
 def test_default_bounds_by_family():
     assert default_bounds("z_b", -0.024, 0.5) == pytest.approx((-0.074, 0.026))
-    assert default_bounds("thruster_gain_3", 1.0, 0.5) == (0.05, 1.5)
+    assert default_bounds("thruster_gain_3", 1.0, 0.5) == (0.0, 1.5)  # 0: a dead unit (issue 48)
     assert default_bounds("thruster_reverse_1", 1.0, 0.5) == (0.1, 1.5)
     assert default_bounds("X_uu", -35.0, 0.5) == (-52.5, -17.5)
     with pytest.raises(CalibrationError, match="X_u is 0"):

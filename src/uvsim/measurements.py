@@ -57,6 +57,7 @@ from typing import Mapping
 
 import numpy as np
 
+from uvsim.fit_settings import SAMPLE_WEIGHTINGS  # noqa: F401 (its home: uvsim.fit_settings)
 from uvsim.errors import CalibrationError
 from uvsim.estimation.lag import first_order_lag, lag_time_constant
 from uvsim.estimation.noise import SampleKind, noise_sigma, sample_kind
@@ -375,10 +376,6 @@ def _noise_for(group: str, values: np.ndarray, native: np.ndarray) -> float:
     if group == "attitude":
         values = unwrap_angles(values)
     return noise_sigma(values, native)
-
-
-#: How the samples of channels logged at different rates are weighted (:func:`measurements_for`).
-SAMPLE_WEIGHTINGS = ("per_sample", "per_second")
 
 
 def check_sample_weighting(value) -> str:

@@ -49,31 +49,16 @@ from uvsim.fitting.parameters import cb_not_below_cg, default_bounds, physical_b
 from uvsim.latency import runs_for
 from uvsim.measurements import check_sample_weighting, check_signal_settings, measurements_for
 from uvsim.plausibility import check_runs, parse_allow
+from uvsim.fit_settings import DEFAULT_CONTINUITY, DEFAULT_HORIZONS, DEFAULT_SAMPLE_WEIGHTING  # noqa: F401
 from uvsim.schema import is_whole_number
 
 log = logging.getLogger("uvsim")
-#: Window lengths of the joint stage's continuation: 2 s windows, held nearly continuous by
-#: DEFAULT_CONTINUITY.  ``(2.0, None)`` adds a whole-run stage with each channel scaled by its own
-#: RMS error (:func:`uvsim.fitting.evaluate.judged_scales`), the least-squares form of the
-#: verdict's score; measured on the structural benchmark it called fewer fits better (44 of 50
-#: against 46) and took 1.7 times as long, so it is an option, not the default
-#: (docs/calibration_method.md, "A whole-run stage on the verdict's measure").
-DEFAULT_HORIZONS = (2.0,)
-#: Continuity factors of the joint stage's last horizon (:func:`uvsim.fitting.fit`): the
-#: continuity defects' sd is DEFECT_SIGMA x 0.05 (0.25 mm, 0.5 mrad/s ...), so that what the
-#: fit improves is close to the free simulation the result check compares (docs/calibration.md,
-#: "Continuity"; the soft default of diagnosis let a fit trade open-loop depth for windowed cost).
-DEFAULT_CONTINUITY = (0.05,)
 #: The joint stage stops when an iteration lowers the cost by less than this fraction of it
 #: (:func:`uvsim.fitting.fit`'s ``ftol``). 1e-5 of a cost of N noise-normalized residuals is far
 #: below the cost's own sampling spread (sqrt(2N)); with the tight continuity above, ``fit``'s
 #: 1e-6 spent 16 more iterations on the shipped tank dataset for changes in the 4th digit
 #: (25 iterations, 30.5 s, against 9 and 13.3 s; docs/records/calibration.md, "Speed of the paper-size calibration").
 JOINT_FTOL = 1e-5
-#: How samples of channels logged at different rates count (:func:`uvsim.measurements.measurements_for`):
-#: per second of log, so that a 10 Hz depth is not outweighed tenfold by a 100 Hz IMU whose
-#: model errors are as correlated (docs/calibration_sensors.md, "Sample weighting").
-DEFAULT_SAMPLE_WEIGHTING = "per_second"
 
 
 class Calibrator:

@@ -15,7 +15,7 @@ import platform
 
 def register(sub) -> None:
     from uvsim.benchmarks.calibration_structural import REAL_LOG_FREE, REAL_LOG_LATENCY, REAL_LOG_SUPPLY
-    from uvsim.fitting.objective import LOSSES
+    from uvsim.fit_settings import LOSSES
 
     p = sub.add_parser("bench", help="measure simulator / calibration speed; 'bench diagnose': scenario benchmark")
     p.add_argument("suite", nargs="?", choices=["diagnose", "diagnose-structural", "calibrate-structural"],

@@ -26,9 +26,9 @@ from uvsim.errors import UvsimError
 from uvsim.fitting.verdict import EXIT_CODES
 
 def register(sub) -> None:
-    from uvsim.calibration.calibrator import DEFAULT_SAMPLE_WEIGHTING
-    from uvsim.fitting.objective import LOSSES
-    from uvsim.measurements import SAMPLE_WEIGHTINGS
+    from uvsim.fit_settings import DEFAULT_SAMPLE_WEIGHTING
+    from uvsim.fit_settings import LOSSES
+    from uvsim.fit_settings import SAMPLE_WEIGHTINGS
 
     p = sub.add_parser("calibrate", help="fit a vehicle model to logged runs (seed 000 GA per DOF + joint "
                                          "prediction-error fit of all runs)",
@@ -142,7 +142,7 @@ def parse_bounds(text: str | None) -> dict | None:
 
 def parse_horizons(text: str | None):
     """``"2,6"`` -> ``(2.0, 6.0)``; ``whole`` -> None (whole runs); None -> the Calibrator's default."""
-    from uvsim.calibration.calibrator import DEFAULT_HORIZONS
+    from uvsim.fit_settings import DEFAULT_HORIZONS
 
     if not text:
         return DEFAULT_HORIZONS
@@ -161,7 +161,7 @@ def parse_horizons(text: str | None):
 
 def parse_continuity(text: str | None):
     """``"1,0.05"`` -> ``(1.0, 0.05)``; None -> the Calibrator's default."""
-    from uvsim.calibration.calibrator import DEFAULT_CONTINUITY
+    from uvsim.fit_settings import DEFAULT_CONTINUITY
     from uvsim.fitting.objective import continuity_factors
 
     if not text:

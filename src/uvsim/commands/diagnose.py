@@ -19,7 +19,7 @@ from uvsim.fitting.verdict import table as verdict_table
 
 def register(subparsers) -> None:
     from uvsim.diagnosis.candidates import EFFECTS
-    from uvsim.diagnosis.core import DEFAULT_HORIZON
+    from uvsim.fit_settings import DEFAULT_HORIZON
 
     p = subparsers.add_parser(
         "diagnose", help="trace the residual of a model to missing effects, fit them, report before/after",

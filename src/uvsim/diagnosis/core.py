@@ -34,6 +34,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from uvsim.fit_settings import DEFAULT_HORIZON  # noqa: F401 (its home: uvsim.fit_settings)
 from uvsim.checkpoint import Checkpoint, fingerprint
 from uvsim.diagnosis.candidates import BASE_MODEL, EFFECTS, Candidate, plain_answer
 from uvsim.diagnosis.decision import (LEVEL, MIN_RELATIVE, VAL_LEVEL, WALD_P, alternative_challenger,
@@ -59,7 +60,6 @@ RESUME_NEEDS = "dataset, vehicle and settings (--retune, --only, --noise, --weig
 #: Validation cost per residual entry (in squared noise sigmas) below which the model
 #: is "at the noise level" (confidence "high").
 AT_NOISE = 1.5
-DEFAULT_HORIZON = 3.0
 #: The base-model variants fitted before any effect (issue 22, "thrust model first": a curve
 #: mismatch is absorbed before actuator faults are judged).  The hydrodynamic re-tunes compete
 #: with the effects from step 1 on: fitted first they absorb the drag of a tether or the pull of

@@ -25,8 +25,6 @@ gyro-derived angle rate), which matters when the vehicle turns fast.
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import minimize_scalar
-from scipy.signal import lfilter
 
 from uvsim.errors import CalibrationError
 from uvsim.estimation.noise import sample_kind
@@ -53,6 +51,8 @@ def first_order_lag(t: np.ndarray, x: np.ndarray, tau: float, y0=None) -> np.nda
     out[..., 0, :] = y0
     if np.ptp(dt) <= UNIFORM_RTOL * max(float(np.median(dt)), 1e-300):
         a = float(np.exp(-dt[0] / tau))
+        from scipy.signal import lfilter  # here, not at import (0.6 s of every command's start)
+
         out[..., 1:, :], _ = lfilter([1.0 - a], [1.0, -a], x[..., 1:, :], axis=-2, zi=(a * y0)[..., None, :])
         return out
     a = np.exp(-dt / tau)
@@ -123,6 +123,8 @@ def estimate_attitude_lag(runs, *, max_lag: float = MAX_LAG_S) -> dict:
     if not max_lag > 0:
         raise CalibrationError(f"max_lag must be > 0, got {max_lag!r}")
     def best(pcs):
+        from scipy.optimize import minimize_scalar  # here, not at import (0.4 s of every command's start)
+
         res = minimize_scalar(lambda tau: _sse(tau, pcs), bounds=(0.0, max_lag), method="bounded",
                               options={"xatol": 1e-4})
         return float(res.x)

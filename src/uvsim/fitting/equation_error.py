@@ -31,7 +31,6 @@ from functools import lru_cache
 import numpy as np
 from scipy.ndimage import convolve1d
 from scipy.optimize import least_squares
-from scipy.signal import savgol_coeffs, savgol_filter
 
 from uvsim.blas import single_thread
 from uvsim.errors import CalibrationError
@@ -99,11 +98,15 @@ CHUNK_ROWS = 25000
 def _sg(x, win, deriv=0, dt=1.0, axis=-2, mode="interp"):
     if mode != "interp":  # what savgol_filter does for these modes, with the coefficients cached
         return convolve1d(x, _sg_coeffs(win, deriv, float(dt)), axis=axis, mode=mode)
+    from scipy.signal import savgol_filter  # here, not at import (0.6 s of every command's start)
+
     return savgol_filter(x, win, POLYORDER, deriv=deriv, delta=dt, axis=axis, mode=mode)
 
 
 @lru_cache(maxsize=256)
 def _sg_coeffs(win: int, deriv: int, dt: float) -> np.ndarray:
+    from scipy.signal import savgol_coeffs
+
     return savgol_coeffs(win, POLYORDER, deriv=deriv, delta=dt)
 
 

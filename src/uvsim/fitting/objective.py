@@ -43,6 +43,7 @@ import numpy as np
 
 from uvsim.blas import single_thread
 from uvsim.errors import CalibrationError
+from uvsim.fit_settings import LOSSES  # noqa: F401 (its home: uvsim.fit_settings)
 from uvsim.fitting.nodes import NodeModel
 from uvsim.fitting.windows import apply_tangent, layout, padded_runs, tangent_difference, whole_runs
 from uvsim.latency import runs_for
@@ -93,9 +94,6 @@ def acc_bias_sd(vehicle) -> float:
 FILL = 30.0
 #: Largest number of simulated rows per batched call (memory; throughput is flat above ~500).
 MAX_ROWS = 6000
-#: Loss functions of the measurement residuals (``loss=``, as scipy.optimize.least_squares
-#: names them): "linear" (least squares) or "huber".
-LOSSES = ("linear", "huber")
 #: Huber threshold, in noise sigmas of the normalized residual: beyond it a residual costs
 #: linearly (Huber 1964; 1.345 sigma gives 95 % efficiency on Gaussian noise, a larger value
 #: leaves honest noise alone and bounds only spikes, dropouts and model-error bursts).
