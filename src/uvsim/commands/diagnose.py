@@ -11,8 +11,8 @@ import json
 from pathlib import Path
 
 from uvsim.commands import lag_option, parse_pairs
-from uvsim.commands.checks import (add_allow_argument, check_outputs, check_runs_at_door, diagnosis_problems,
-                                   remove_checkpoints, say)
+from uvsim.commands.checks import (add_allow_argument, check_outputs, check_runs_at_door, diagnosis_caveats,
+                                   diagnosis_problems, remove_checkpoints, say)
 from uvsim.fitting.verdict import EXIT_CODES
 from uvsim.fitting.verdict import table as verdict_table
 
@@ -188,8 +188,9 @@ def run(args) -> int:
     status = "worse" if problems else (mv["status"] if mv is not None else "better")
     keep = status in ("better", "trade-off")
     why = "; ".join(problems) if problems else (mv["message"] if mv is not None else "the model is unchanged")
+    caveats = diagnosis_caveats(rep, diag.validation)
     rep["status"] = {"ok": status == "better", "verdict": status, "exit_code": EXIT_CODES[status], "why": why,
-                     "problems": problems, "vehicle_written": bool(keep and args.out)}
+                     "problems": problems, "caveats": caveats, "vehicle_written": bool(keep and args.out)}
     if args.json_out:
         Path(args.json_out).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json_out).write_text(json.dumps(rep, indent=2, default=float))
@@ -205,7 +206,8 @@ def run(args) -> int:
         save_fixed_vehicle(diag, args.out)
         print(f"corrected vehicle: {args.out}")
     remove_checkpoints(ckpt, args.resume)  # finished: every fit is in the report
-    print(f"VERDICT (exit {EXIT_CODES[status]}) {why if problems else (mv['message'] if mv else why)}")
+    print(f"VERDICT (exit {EXIT_CODES[status]}) {why if problems else (mv['message'] if mv else why)}"
+          + "".join(f"; {c}" for c in caveats))
     if status != "better":
         say("diagnose", f"verdict {status}: {why}" + ("" if keep or not args.out else
                                                       f"; no corrected vehicle was written to {args.out}"))
