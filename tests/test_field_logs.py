@@ -1,9 +1,14 @@
-"""Issue 48, diagnosis on field logs: what an autopilot hides is not a reason to stop.
+"""Issue 48, diagnosis on field logs.
 
-A model flown open loop against a log of a vehicle under depth or heading hold drifts away
-from the data; the diagnosis still tries the catalogue and judges the corrected model against
-the given one, and says where the given model left the data, as a caveat, not a refusal."""
+* What an autopilot hides is not a reason to stop: a model flown open loop against a log of a
+  vehicle under depth or heading hold drifts away from the data; the diagnosis still tries the
+  catalogue, judges the corrected model against the given one, and says where the given model
+  left the data, as a caveat, not a refusal.
+* Clocks as they are: jittered stamps keep the equation-error screening on."""
 from __future__ import annotations
+
+import numpy as np
+import pytest
 
 from contract_data import SHIPPED_DATASET
 from uvsim.commands.checks import EXPLODE_FACTOR, _spread, diagnosis_caveats, diagnosis_problems
@@ -36,3 +41,40 @@ def test_a_corrected_model_that_leaves_the_data_where_the_given_one_did_not_is_r
     probs = diagnosis_problems(rep, val)
     assert probs and all("where the starting model's did not" in p for p in probs)
     assert diagnosis_caveats(rep, val) == []
+
+
+def _jittered(tmp_path, jitter=0.008):
+    from uvsim.scenarios import generate, sample_scenario
+
+    spec = sample_scenario(5, profile="diagnose", n_runs=10, duration=[8, 10], rate_hz=20.0, input_kind="pwm",
+                           effects=[{"type": "current", "magnitude": 0.15}], time_jitter=jitter)
+    return generate(spec, tmp_path / "jit")
+
+
+def test_jittered_stamps_keep_the_equation_error_on(tmp_path):
+    """Before: 'time stamps are not uniform ... the Savitzky-Golay derivative needs uniform
+    sampling' for every run, and the screening was off (issue 48, clocks as they are)."""
+    from uvsim.fitting.equation_error import motion_or_why
+
+    ds = read_dataset(_jittered(tmp_path))
+    assert not np.allclose(np.diff(ds.runs[0].t), np.median(np.diff(ds.runs[0].t)), rtol=0.01)
+    for run in ds.runs:
+        motion, why = motion_or_why(run)
+        assert motion is not None and why is None, why
+
+
+@pytest.mark.slow
+def test_a_current_under_jittered_stamps_is_named_by_the_screening(tmp_path):
+    """8 ms of stamp jitter at 20 Hz: before, the screening was off and the diagnosis named
+    current (horizontal) + a spurious ballast; now the screening runs and names the 3-D current."""
+    from uvsim.diagnosis import diagnose
+    from uvsim.scenarios import load_truth
+
+    out = _jittered(tmp_path)
+    truth = load_truth(out)["effects"][0]["velocity_ned"]
+    rep = diagnose(out).report
+    assert all(st["screening"]["available"] for st in rep["steps"])
+    (e,) = rep["effects"]
+    assert e["effect"] == "current"
+    got = [e["parameters"][f"current_{c}"]["value"] for c in "ned" if f"current_{c}" in e["parameters"]]
+    assert np.allclose(got, truth[:len(got)], atol=0.01) and len(got) == 3

@@ -4,7 +4,7 @@ A *gap* is a stretch of a run in which nothing was measured for longer than the 
 sampling explains: a logger that stopped for a third of a second, rows deleted from a
 file, a converter that wrote the inputs on and left the sensor cells empty.  No method can
 use such a stretch as it is: the Savitzky-Golay derivatives of the equation-error screening
-need uniformly sampled complete signals (:mod:`uvsim.estimation.derivatives`), and a
+need complete signals (:mod:`uvsim.estimation.derivatives`), and a
 simulation that runs through it holds the inputs, or follows inputs no measurement checks.
 Before this module, a run with a 0.36 s gap silently dropped out of the diagnosis' screening.
 

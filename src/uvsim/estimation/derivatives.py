@@ -5,16 +5,18 @@ obtained by differentiating the *smoothed* signal with a Savitzky-Golay filter
 (:func:`scipy.signal.savgol_filter` with ``deriv=1`` or ``2``): a local
 least-squares polynomial of order ``polyorder`` over a window of ``window_s``
 seconds is fitted around each sample and differentiated analytically, which
-smooths and differentiates in one step (Savitzky & Golay 1964).  It needs
-uniformly sampled data without gaps, so runs with non-uniform time stamps or
-missing samples raise :class:`uvsim.errors.CalibrationError` instead of being
-resampled silently.
+smooths and differentiates in one step (Savitzky & Golay 1964).  On stamps that
+are not uniform (a topside log's clock jitter) the local fits use each window's
+actual time offsets (:mod:`uvsim.estimation.savgol`); nothing is resampled.
+Missing samples (NaN) raise :class:`uvsim.errors.CalibrationError`: a derivative
+is not taken across a gap.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from uvsim.errors import CalibrationError
+from uvsim.estimation.savgol import is_uniform, savgol_on_stamps
 from uvsim.kinematics import quat_to_rotation
 
 #: Default smoothing window (s) and polynomial order.  0.5 s at 50 Hz is 25
@@ -22,15 +24,6 @@ from uvsim.kinematics import quat_to_rotation
 #: ~1-2 s time constants of the tank runs.
 DEFAULT_WINDOW_S = 0.5
 DEFAULT_POLYORDER = 3
-
-
-def _uniform_dt(t: np.ndarray, what: str) -> float:
-    d = np.diff(np.asarray(t, float))
-    dt = float(np.median(d))
-    if not np.all(np.abs(d - dt) <= 0.01 * dt):
-        raise CalibrationError(f"{what}: time stamps are not uniform (dt {d.min():.4g}..{d.max():.4g} s); "
-                               "the Savitzky-Golay derivative needs uniform sampling")
-    return dt
 
 
 def smooth_derivative(t: np.ndarray, x: np.ndarray, *, deriv: int = 1, window_s: float = DEFAULT_WINDOW_S,
@@ -42,7 +35,11 @@ def smooth_derivative(t: np.ndarray, x: np.ndarray, *, deriv: int = 1, window_s:
     x = np.asarray(x, float)
     if not np.all(np.isfinite(x)):
         raise CalibrationError(f"{what}: has missing (NaN) samples; cannot differentiate across gaps")
-    dt = _uniform_dt(t, what)
+    t = np.asarray(t, float)
+    d = np.diff(t)
+    if d.size and not np.all(d > 0):
+        raise CalibrationError(f"{what}: time stamps do not increase; cannot differentiate")
+    dt = float(np.median(d)) if d.size else 1.0
     n = x.shape[0]
     win = int(round(window_s / dt)) | 1
     win = max(win, polyorder + 2 + (polyorder + 2 + 1) % 2)
@@ -50,6 +47,8 @@ def smooth_derivative(t: np.ndarray, x: np.ndarray, *, deriv: int = 1, window_s:
         win = n if n % 2 else n - 1
     if win <= polyorder:
         raise CalibrationError(f"{what}: {n} samples are too few for a degree-{polyorder} Savitzky-Golay derivative")
+    if not is_uniform(t):  # jittered stamps: the local fits on the actual time offsets
+        return savgol_on_stamps(t, x, win, polyorder, deriv)
     from scipy.signal import savgol_filter  # here, not at import: scipy.signal costs 0.6 s of every command's start
 
     return savgol_filter(x, win, polyorder, deriv=deriv, delta=dt, axis=0, mode="interp")

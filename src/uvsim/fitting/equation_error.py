@@ -32,6 +32,7 @@ import numpy as np
 from scipy.ndimage import convolve1d
 from scipy.optimize import least_squares
 
+from uvsim.estimation.savgol import is_uniform, savgol_on_stamps
 from uvsim.blas import single_thread
 from uvsim.errors import CalibrationError
 from uvsim.estimation.derivatives import body_acceleration, body_velocity
@@ -111,8 +112,8 @@ def _sg_coeffs(win: int, deriv: int, dt: float) -> np.ndarray:
 
 
 def measured_motion(run, *, window_s: float = WINDOW_S) -> Motion | None:
-    """The :class:`Motion` of ``run``, or None when the log allows no DOF (non-uniform
-    time, gaps, too short, or neither full velocities nor full rates); why:
+    """The :class:`Motion` of ``run``, or None when the log allows no DOF (gaps, too short,
+    or neither full velocities nor full rates; jittered stamps are fine); why:
     :func:`motion_or_why`."""
     return motion_or_why(run, window_s=window_s)[0]
 
@@ -146,13 +147,18 @@ def motion_or_why(run, *, window_s: float = WINDOW_S) -> tuple[Motion | None, st
                       f"its {window_s:g} s Savitzky-Golay window")
     y = np.zeros((n, 13))
     pos = run.position
+    uniform = is_uniform(t)
+
+    def smooth(x):  # jittered stamps: the local fits on the actual time offsets (uvsim.estimation.savgol)
+        return _sg(x, win, axis=0) if uniform else savgol_on_stamps(t, x, win, POLYORDER)
+
     for j in range(3):
         col = pos[:, j]
         if np.isfinite(col).all():
-            y[:, j] = _sg(col, win, axis=0)
+            y[:, j] = smooth(col)
     e = unwrap_angles(run.euler)
     e = np.where(np.isfinite(e), e, 0.0)
-    y[:, 3:7] = euler_to_quat(_sg(e, win, axis=0))
+    y[:, 3:7] = euler_to_quat(smooth(e))
     y[:, 7:13] = np.where(np.isfinite(nu), nu, 0.0)
     valid = np.ones(n, bool)
     half = win // 2
@@ -180,8 +186,8 @@ class EquationError:
     def __init__(self, vehicle, motions, space, *, M0=None, scale=None):
         self.vehicle, self.motions, self.space = vehicle, [m for m in motions if m is not None], space
         if not self.motions:
-            raise CalibrationError("no run allows an equation-error fit (need uniformly sampled, complete "
-                                   "position + attitude, or velocities and rates)")
+            raise CalibrationError("no run allows an equation-error fit (need complete position + attitude, or "
+                                   "velocities and rates, without gaps)")
         self.M0 = np.asarray(vehicle.M if M0 is None else M0, float)
         self.scale = None
         if scale is None:
