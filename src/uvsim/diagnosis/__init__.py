@@ -9,7 +9,7 @@ error before and after.  ``uvsim diagnose`` is its command line.
 """
 from __future__ import annotations
 
-import importlib
+from uvsim.lazy_imports import lazy_getattr
 
 #: Imported when first used (PEP 562): the command line reads the catalogue's names
 #: (``uvsim.diagnosis.candidates``) without importing the diagnosis itself.
@@ -17,8 +17,4 @@ _LAZY = {"Diagnosis": "uvsim.diagnosis.core", "diagnose": "uvsim.diagnosis.core"
          "save_fixed_vehicle": "uvsim.diagnosis.core"}
 __all__ = list(_LAZY)
 
-
-def __getattr__(name):
-    if name in _LAZY:
-        return getattr(importlib.import_module(_LAZY[name]), name)
-    raise AttributeError(f"module 'uvsim.diagnosis' has no attribute {name!r}")
+__getattr__ = lazy_getattr(__name__, _LAZY)

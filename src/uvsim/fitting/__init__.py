@@ -18,7 +18,7 @@
   seeds the candidates of a diagnosis;
 * :mod:`~uvsim.fitting.compare` - block-bootstrap comparison of models on validation runs.
 """
-import importlib
+from uvsim.lazy_imports import lazy_getattr
 
 #: The package's names, imported when first used (PEP 562), so that importing one light
 #: submodule (``uvsim.fitting.parameters``, ``uvsim.fitting.verdict``) does not import the
@@ -28,8 +28,4 @@ _LAZY = {"FitResult": "uvsim.fitting.fitter", "fit": "uvsim.fitting.fitter", "id
          "make_space": "uvsim.fitting.parameters"}
 __all__ = list(_LAZY)
 
-
-def __getattr__(name):
-    if name in _LAZY:
-        return getattr(importlib.import_module(_LAZY[name]), name)
-    raise AttributeError(f"module 'uvsim.fitting' has no attribute {name!r}")
+__getattr__ = lazy_getattr(__name__, _LAZY)
