@@ -226,9 +226,16 @@ RULE_CASES = {
                                 "uncertainty: unknown key 'X_uq' (did you mean"),
     "cb_not_below_cg": (lambda d: mutate(d, "rigid_body.r_b", [0, 0, 0.024]),
                         "rigid_body.r_b: the centre of buoyancy (z_b = 0.024 m) lies 0.024 m below the centre of gravity"),
-    "mass_matrix_positive_definite": (
+    # the inertia is about the body origin: a CG 0.5 m below it leaves too little about the CG
+    "mass_matrix_positive_definite": (lambda d: mutate(d, "rigid_body.r_g", [0, 0, 0.5]),
+                                      "veh.yaml: M = M_RB + M_A is not positive definite"),
+    "added_mass_positive_semidefinite": (
         lambda d: mutate(d, "added_mass", {"matrix": (np.eye(6) + 60 * (np.ones((6, 6)) - np.eye(6))).tolist()}),
-        "veh.yaml: M = M_RB + M_A is not positive definite"),
+        "added_mass: M_A is not positive semi-definite"),
+    "water_density": (lambda d: mutate(d, "environment.rho", 1.025),
+                      "environment.rho: 1.025 kg/m^3 is not a water density; expected 900..1250 kg/m^3"),
+    "gravity_in_m_per_s2": (lambda d: mutate(d, "environment.g", 32.17),
+                            "environment.g = 32.17: expected m/s^2 within 0.1..25"),
 }
 
 

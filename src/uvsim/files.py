@@ -27,6 +27,24 @@ class OutputPathError(UvsimError, ValueError):
     """An output path (``--out``, ``--json``, ``--checkpoint``, ``--plots``, ...) cannot be written."""
 
 
+#: Byte-order marks of encodings other than UTF-8 (codecs module), by name.
+_BOMS = ((b"\xff\xfe\x00\x00", "UTF-32"), (b"\x00\x00\xfe\xff", "UTF-32"), (b"\xff\xfe", "UTF-16"),
+         (b"\xfe\xff", "UTF-16"))
+
+
+def not_text(head: bytes) -> str | None:
+    """Why the bytes ``head`` (the start of a file) are not UTF-8 text, or None: a UTF-16/32
+    byte-order mark (Excel's "Unicode text", PowerShell's default), or NUL bytes (binary data; a
+    file of NULs would otherwise read as an empty table)."""
+    for bom, name in _BOMS:
+        if head.startswith(bom):
+            return f"it is {name}-encoded; save it as UTF-8"
+    nul = head.find(b"\x00")
+    if nul >= 0:
+        return f"byte {nul} is a NUL byte: binary data"
+    return None
+
+
 def read_text(path, *, error: type = UvsimError, what: str = "file") -> str:
     """The UTF-8 text of ``path``; every failure raises ``error`` naming the file.
 
@@ -47,6 +65,9 @@ def read_text(path, *, error: type = UvsimError, what: str = "file") -> str:
         raise error(f"{p}: permission denied reading the {what}") from None
     except OSError as exc:
         raise error(f"{p}: cannot read the {what}: {exc.strerror or exc}") from None
+    why = not_text(raw[:4096])
+    if why:
+        raise error(f"{p}: not a text file ({why}); expected a {what} in UTF-8 text")
     try:
         return raw.decode("utf-8")
     except UnicodeDecodeError as exc:

@@ -11,6 +11,7 @@ import re
 import numpy as np
 import pandas as pd
 
+from uvsim.constants import PWM_RANGE_US  # noqa: F401 (re-exported: the log format's PWM range)
 from uvsim.errors import LogFormatError
 from uvsim.kinematics import attitude_error_angle, euler_to_quat
 from uvsim.log_aliases import check_aliases
@@ -33,13 +34,10 @@ VOLTAGE_COLUMN = "voltage"
 MEASURED_COLUMNS = (POSITION_COLUMNS + (DEPTH_COLUMN,) + QUAT_COLUMNS + EULER_COLUMNS + VELOCITY_COLUMNS
                     + RATE_COLUMNS + ACCEL_COLUMNS)
 
-#: Accepted ESC command range, microseconds.  Hobby/RC ESCs take 1000-2000 us
-#: pulses with 1500 us neutral; the Blue Robotics BlueESC is specified for
-#: 1000-2000 us and the Basic ESC for 1100-1900 us (Blue Robotics forum,
-#: discuss.bluerobotics.com/t/380 and /t/712).  A value outside 1000-2000 us
-#: is not a command any of these ESCs understands (e.g. 0 = "no pulse", or a
-#: column logged in percent or in normalized units), so it is rejected.
-PWM_RANGE_US = (1000.0, 2000.0)
+#: Highest ``voltage`` accepted, V: the column feeds the thrust curves of PWM-driven ESCs (1000-2000 us),
+#: rated up to 12S LiPo (50.4 V) for hobby ESCs and 7-20 V for the Blue Robotics T200; 100 V leaves
+#: room, and a voltage logged in millivolts (16000) is refused instead of read as 16 kV.
+MAX_BATTERY_VOLTAGE = 100.0
 #: Tolerance on |q| - 1 for logged quaternions: beyond it a run is rejected.
 QUAT_NORM_TOL = 1e-2
 #: Quaternions are divided by their norm; when |q| - 1 exceeds this in some row (more
@@ -240,6 +238,13 @@ def _check_voltage_column(v: np.ndarray, source: str) -> None:
         raise LogFormatError(
             f"{source}: column 'voltage', {_row(i, source)}: {float(v[i])!r} V is not a positive battery voltage"
         )
+    high = np.flatnonzero(v > MAX_BATTERY_VOLTAGE)  # NaN compares False
+    if high.size:
+        i = int(high[0])
+        raise LogFormatError(
+            f"{source}: column 'voltage', {_row(i, source)}: {float(v[i]):g} V is above {MAX_BATTERY_VOLTAGE:g} V, "
+            "more than any PWM thruster's battery; expected volts (a value in millivolts is 1000 x too large)"
+        )
 
 
 def _extra_column_notes(df: pd.DataFrame, input_columns, source: str) -> list[str]:
@@ -251,6 +256,17 @@ def _extra_column_notes(df: pd.DataFrame, input_columns, source: str) -> list[st
     if not extra:
         return []
     return [f"{source}: column{'s' if len(extra) > 1 else ''} not in the log format, not used: {', '.join(extra)}"]
+
+
+def _empty_column_notes(empty, source: str) -> list[str]:
+    """A note naming the named columns that are entirely empty and so count as absent (removed
+    from the run's table): a column the user logged and meant to be read is not dropped without a
+    word.  The nameless ``Unnamed: N`` column of a trailing comma holds nothing and is not named."""
+    named = [str(c) for c in empty if not str(c).startswith("Unnamed:")]
+    if not named:
+        return []
+    return [f"{source}: column{'s' if len(named) > 1 else ''} {', '.join(named)} entirely empty, not used "
+            "(counts as absent)"]
 
 
 def _quaternion_notes(df: pd.DataFrame, source: str) -> list[str]:

@@ -22,13 +22,14 @@ import pandas as pd
 import yaml
 
 from uvsim.errors import LogFormatError
-from uvsim.files import load_yaml
+from uvsim.files import load_yaml, not_text
 from uvsim.gaps import split_runs
 from uvsim.kinematics import euler_to_quat, quat_to_euler
 from uvsim.log_columns import (  # noqa: F401  (the column names are part of this module's interface)
     ACCEL_COLUMNS, ATTITUDE_CONSISTENCY_TOL, DEPTH_COLUMN, EULER_COLUMNS, FORCE_COLUMNS, INPUT_KINDS,
     MEASURED_COLUMNS, POSITION_COLUMNS, PWM_RANGE_US, QUAT_COLUMNS, QUAT_NORM_TOL, QUAT_NOTE_TOL, RATE_COLUMNS,
-    VELOCITY_COLUMNS, VOLTAGE_COLUMN, FORMAT_COLUMNS, _extra_column_notes, _quaternion_notes, _validate)
+    VELOCITY_COLUMNS, VOLTAGE_COLUMN, FORMAT_COLUMNS, _empty_column_notes, _extra_column_notes, _quaternion_notes,
+    _validate)
 from uvsim.schema import check_keys, require_mapping
 
 DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw", "mixed")
@@ -50,10 +51,19 @@ def _check_choice(value, allowed, what: str, source: str, none_ok: bool = True):
     return value
 
 
+#: Largest run weight accepted (weights are relative): at a million to one the lighter runs already
+#: count below 1e-12 of the cost (weights enter squared), and 1e300 overflowed the squared weighted
+#: residuals to inf (numpy overflow warnings, a fit of nothing).
+MAX_RUN_WEIGHT = 1e6
+
+
 def _check_weight(weight, source: str) -> float:
     ok = isinstance(weight, (int, float, np.integer, np.floating)) and not isinstance(weight, bool)
     if not ok or not math.isfinite(float(weight)) or float(weight) <= 0:
         raise LogFormatError(f"{source}: weight {weight!r} must be a positive finite number")
+    if float(weight) > MAX_RUN_WEIGHT:
+        raise LogFormatError(f"{source}: weight {weight!r} is above {MAX_RUN_WEIGHT:g}; weights are relative (1 is "
+                             "every run alike): scale them down")
     return float(weight)
 
 
@@ -97,7 +107,8 @@ class Run:
         self.split = _check_choice(self.split, SPLITS, "split", src, none_ok=False)
         self.weight = _check_weight(self.weight, src)
         self.data, self.empty_columns, self._kind, self._input_columns = _validate(self.data, src)
-        self.notes = _quaternion_notes(self.data, src) + _extra_column_notes(self.data, self._input_columns, src)
+        self.notes = (_quaternion_notes(self.data, src) + _extra_column_notes(self.data, self._input_columns, src)
+                      + _empty_column_notes(self.empty_columns, src))
 
     def derived(self, data: pd.DataFrame, *, name: str | None = None) -> "Run":
         """A copy of this run with ``data`` in place of its table, not validated again: for
@@ -360,6 +371,11 @@ def read_run(path, *, dof=None, weight=1.0, split="train", n_thrusters: int | No
         raise LogFormatError(f"{path}: run file does not exist (or is not a file)")
     if suffix == ".csv":
         try:
+            with open(path, "rb") as fh:
+                why = not_text(fh.read(4096))
+            if why:
+                raise LogFormatError(f"{path}: not a text CSV file ({why}); expected a CSV file with a header "
+                                     "row (docs/log_format.md)")
             header = _csv_header(path)
             if len(header) == 1:
                 for sep, name in ((";", "semicolon"), ("\t", "tab"), ("|", "vertical bar")):

@@ -410,7 +410,11 @@ def check_signal_settings(noise=None, weights=None) -> None:
     positive noise level or a non-negative weight, in ``noise`` and ``weights`` ({name: value},
     groups or channels); the fits call it before any work."""
     known = list(GROUPS) + list(CHANNEL_GROUP)
-    for what, d in (("noise", dict(noise or {})), ("weights", dict(weights or {}))):
+    from uvsim.schema import require_mapping
+
+    for what, d in (("noise", require_mapping(noise, "noise", error=CalibrationError, example="{'depth': 0.01}")),
+                    ("weights", require_mapping(weights, "weights", error=CalibrationError,
+                                                example="{'position': 1.0, 'depth': 0.0}"))):
         for k in sorted(set(d) - set(known)):
             raise CalibrationError(f"{what}: unknown signal {k!r}{did_you_mean(k, known)}; "
                                    f"expected groups {list(GROUPS)} or channels {list(CHANNEL_GROUP)}")

@@ -117,7 +117,10 @@ class Model:
         if n is None:
             n = max(sizes) if sizes else 1
         for k, v in overrides.items():
-            a = np.asarray(v, dtype=float)
+            try:
+                a = np.asarray(v, dtype=float)
+            except (TypeError, ValueError):
+                raise VehicleError(f"parameter {k}: expected a number or an array of length {n}, got {v!r}"[:300]) from None
             if a.ndim > 1 or (a.ndim == 1 and a.size not in (1, n)):
                 raise VehicleError(f"parameter {k}: expected a number or an array of length {n}, got shape {a.shape}")
             if not np.all(np.isfinite(a)):
@@ -216,13 +219,13 @@ class Model:
         """Initial state ``(n, n_y)``; ``pos`` (3,) or (n, 3), ``q`` (4,) or (n, 4), ``nu`` (6,) or (n, 6)."""
         n = self.n
         y = np.zeros((n, self.n_y))
-        y[:, POS] = np.zeros(3) if pos is None else pos
-        y[:, QUAT] = np.array([1.0, 0, 0, 0]) if q is None else q
+        y[:, POS] = np.zeros(3) if pos is None else _initial(pos, 3, n, "pos0", "NED position, m")
+        y[:, QUAT] = np.array([1.0, 0, 0, 0]) if q is None else _initial(q, 4, n, "q0", "unit quaternion qw..qz")
         qn = np.linalg.norm(y[:, QUAT], axis=1)
         if np.any(np.abs(qn - 1) > 1e-3):
             raise SimulationError(f"initial quaternion is not unit norm (|q| = {qn.min():.4f}..{qn.max():.4f})")
         y[:, QUAT] /= qn[:, None]
-        y[:, NU] = np.zeros(6) if nu is None else nu
+        y[:, NU] = np.zeros(6) if nu is None else _initial(nu, 6, n, "nu0", "body velocity u, v, w, p, q, r")
         u0 = np.zeros((n, 0)) if u0 is None else np.broadcast_to(u0, (n, np.shape(u0)[-1]))
         for i, t in enumerate(self.terms):
             if t.n_states:
@@ -368,3 +371,17 @@ class Model:
         zb = y[..., 2] + np.einsum("...j,j->...", R[..., 2, :], r_b)
         B = self.params["B"] if np.ndim(self.params["B"]) == 0 else self.params["B"][0]
         return T - self.weight[0] * zg + B * zb
+
+
+def _initial(value, k: int, n: int, where: str, what: str) -> np.ndarray:
+    """An initial-state part ``(k,)`` or ``(n, k)`` of finite numbers, else a SimulationError naming
+    ``where`` (a NaN velocity would otherwise surface as an integration blow-up)."""
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        a = None
+    if a is None or a.shape not in ((k,), (n, k)) or not np.all(np.isfinite(a)):
+        got = "not numbers" if a is None else f"shape {a.shape}" if a.shape not in ((k,), (n, k)) else "non-finite values"
+        raise SimulationError(f"{where}: expected {k} finite numbers ({what}) or an array of shape ({n}, {k}), "
+                              f"got {got}: {str(value)[:80]}")
+    return a

@@ -32,7 +32,9 @@ Checks (name: what is flagged):
     ``roll`` outside [-pi, pi] or ``pitch`` outside [-pi/2, pi/2] (ZYX Euler angles,
     ``ANGLE_TOL`` of slack): angles in degrees.
 ``position-range``
-    ``z`` or ``depth`` deeper than the deepest ocean (``MAX_DEPTH``): millimetres.
+    ``z`` or ``depth`` deeper than the deepest ocean (``MAX_DEPTH``): millimetres; a position
+    beyond half the Earth's circumference (``MAX_POSITION``); a ``depth`` above ``MIN_DEPTH``
+    (a negative absolute pressure): a sign flip.
 ``accel-units``
     The median magnitude of the accelerometer specific force is not near ``g`` (a
     vehicle at rest reads (0, 0, -g)): accelerations logged in g.
@@ -71,6 +73,12 @@ MAX_RATE = 10.0
 ANGLE_TOL = 0.05
 #: Deeper than the Challenger Deep (~10 935 m, the deepest point of the ocean), m.
 MAX_DEPTH = 11000.0
+#: Farthest a local NED position (``x``, ``y``, ``z``) may be from its origin, m: half the Earth's
+#: circumference (2.0e7 m), so that UTM coordinates (northings up to 1e7 m) still pass.
+MAX_POSITION = 2.0e7
+#: Shallowest depth a pressure sensor can read, m: absolute pressure cannot be negative, so its depth
+#: (p - p_surface) / (rho g) stays above -p_surface / (rho g) = -101325 / (1000 x 9.81) = -10.3 m.
+MIN_DEPTH = -10.5
 #: Implied speeds and rates are differences over this time span (s), so that sensor
 #: noise (mm, mrad) divided by a short interval is not mistaken for motion.
 LAG_S = 0.1
@@ -92,7 +100,8 @@ CHECKS = {
     "speed": f"speeds above {MAX_SPEED:g} m/s (positions in mm or cm?)",
     "angular-rate": f"angular rates above {MAX_RATE:g} rad/s (angles in degrees?)",
     "angle-range": "roll outside [-pi, pi] or pitch outside [-pi/2, pi/2] (degrees?)",
-    "position-range": f"z or depth below {MAX_DEPTH:g} m (millimetres?)",
+    "position-range": f"z or depth below {MAX_DEPTH:g} m (millimetres?), a position beyond {MAX_POSITION:g} m or a "
+                      f"depth above {MIN_DEPTH:g} m",
     "accel-units": "median accelerometer magnitude far from g (logged in g?)",
     "z-as-depth": "z without x and y beside a declared pressure sensor (its reading belongs in depth)",
     "pwm-range": "PWM outside the vehicle's thrust-curve range (cannot be allowed)",
@@ -241,6 +250,21 @@ def _check_translation(run) -> list[Finding]:
             out.append(Finding("position-range", (
                 f"{_src(run)}: column {c!r}, {_row(run, i)}: {x[i]:.6g} m is deeper than the deepest ocean "
                 f"({MAX_DEPTH:g} m); expected metres (positions in millimetres?)")))
+            continue
+        far = np.flatnonzero(np.abs(x) > MAX_POSITION)
+        if far.size:
+            i = int(far[0])
+            out.append(Finding("position-range", (
+                f"{_src(run)}: column {c!r}, {_row(run, i)}: {x[i]:.6g} m is farther than half the Earth's "
+                f"circumference ({MAX_POSITION:g} m) from the origin; expected a local NED position in metres")))
+            continue
+        above = np.flatnonzero(x < MIN_DEPTH) if c == DEPTH_COLUMN else ()
+        if len(above):
+            i = int(above[0])
+            out.append(Finding("position-range", (
+                f"{_src(run)}: column {c!r}, {_row(run, i)}: depth {x[i]:.6g} m is more than {-MIN_DEPTH:g} m above "
+                f"the surface, where a pressure sensor would read a negative absolute pressure; expected depth in "
+                f"metres, positive down (a sign flip, or a pressure not converted to depth?)")))
             continue
         out.append(_over_limit(run, c, _implied_rate(t, x, k), MAX_SPEED, "speed", "m/s",
                                "expected metres (positions in millimetres or centimetres?)", implied=True))

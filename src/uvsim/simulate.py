@@ -18,9 +18,10 @@ from typing import Any, Mapping
 import numpy as np
 
 from uvsim.errors import SimulationError
-from uvsim.schema import did_you_mean
+from uvsim.schema import did_you_mean, whole_number
 from uvsim.kinematics import euler_to_quat, quat_to_euler, quat_to_rotation, unwrap_angles
 from uvsim.model import NU, POS, QUAT, Model
+from uvsim.vehicle_schema import check_current_speed
 
 #: Speeds beyond which a trajectory is declared blown up (m/s or rad/s): far above
 #: anything an underwater vehicle does (hydrobatic AUVs reach ~5 m/s, seed 003 V-C).
@@ -110,6 +111,27 @@ def _check_time(t: np.ndarray, where: str) -> None:
         raise SimulationError(f"{where}: time must be strictly increasing (row {i}: t = {t[i]} after {t[i - 1]})")
 
 
+#: Most RK4 steps per sample interval (``substeps``).  RK4's error per unit time falls as h^4, so at
+#: 100 substeps of a 50 Hz log (a 0.2 ms step, 2000 times shorter than the BlueROV2's fastest time
+#: constant, 0.4 s) it is 1e-13 of the one-step error, at float64 rounding; more only costs time
+#: (1000 substeps of a 4 s run took 16 s; ``--substeps 100000000`` would have integrated for days).
+MAX_SUBSTEPS = 100
+
+
+def check_substeps(substeps) -> int:
+    """``substeps`` checked: a whole number 1..MAX_SUBSTEPS (not truncated, not clipped)."""
+    return whole_number(substeps, "substeps", minimum=1, maximum=MAX_SUBSTEPS, error=SimulationError,
+                        hint=f" (RK4 steps per sample interval; beyond {MAX_SUBSTEPS} the step's error is below rounding)")
+
+
+def _check_time_values(t, where: str) -> np.ndarray:
+    """``t`` as a float array; text or other non-numbers are a SimulationError naming ``where``."""
+    try:
+        return np.asarray(t, dtype=float)
+    except (TypeError, ValueError):
+        raise SimulationError(f"{where}: expected sample times in s (numbers), got {str(t)[:80]}") from None
+
+
 def _rk4_loop(model: Model, T: np.ndarray, U: np.ndarray, y0: np.ndarray, substeps: int, on_blowup: str,
               progress=None, accel: np.ndarray | None = None, V: np.ndarray | None = None) -> np.ndarray:
     """Core RK4 loop.  ``T`` (n, n_t) times, ``U`` (n, n_t, k) inputs, ``y0`` (n, n_y),
@@ -117,6 +139,7 @@ def _rk4_loop(model: Model, T: np.ndarray, U: np.ndarray, y0: np.ndarray, subste
     ``accel`` (n, n_t, 6), if given, receives ``nu_dot`` at every sample: the model's
     acceleration at the sample's state with that sample's (held) input, i.e. the first
     RK4 stage of the step that starts there (what an accelerometer at that time sees)."""
+    substeps = check_substeps(substeps)
     with np.errstate(all="ignore"):  # blow-ups are detected below and reported, not warned about
         return _rk4_steps(model, T, U, y0, substeps, on_blowup, progress, V, accel)
 
@@ -223,7 +246,7 @@ def simulate(vehicle, t, inputs, *, input_kind: str = "force", pos0=None, q0=Non
     -------
     SimulationResult
     """
-    t = np.asarray(t, dtype=float)
+    t = _check_time_values(t, "t")
     _check_time(t, "t")
     U = np.asarray(inputs, dtype=float)
     if U.ndim == 1:
@@ -239,9 +262,11 @@ def simulate(vehicle, t, inputs, *, input_kind: str = "force", pos0=None, q0=Non
     V = _check_voltage(voltage, t.shape)
     y0 = model.initial_state(pos0, q0, nu0, U[0][None, :])
     check_method(method)
+    for name, tol in (("rtol", rtol), ("atol", atol)):
+        if not (isinstance(tol, (int, float, np.floating)) and np.isfinite(tol) and tol > 0):
+            raise SimulationError(f"{name} {tol!r}: expected a positive tolerance (solve_ivp would change it in silence)")
     if method.lower() == "rk4":
-        if substeps < 1:
-            raise SimulationError(f"substeps must be >= 1, got {substeps}")
+        check_substeps(substeps)
         Y = _rk4_loop(model, t[None, :], U[None], y0, substeps, on_blowup, V=None if V is None else V[None])[0]
     else:
         Y = _solve_ivp(model, t, U, y0[0], method, rtol, atol, on_blowup, V)
@@ -274,6 +299,7 @@ def _make_model(vehicle, overrides, input_kind, current, n=None) -> Model:
             c = np.asarray(current, dtype=float)
             if c.shape != (3,) or not np.all(np.isfinite(c)):
                 raise SimulationError(f"current: expected 3 finite numbers (N, E, D m/s), got {current!r}")
+            check_current_speed(c, f"current {c.tolist()}", SimulationError)  # as --current and current_ned
             ov.update(current_n=c[0], current_e=c[1], current_d=c[2])
     return Model(vehicle, ov, n=n, input_kind=input_kind, current=cur_fn)
 
@@ -326,7 +352,7 @@ def simulate_batch(vehicle, t, inputs, *, input_kind: str = "force", y0=None, po
     -------
     SimulationResult with ``y`` of shape (n, n_t, n_y).
     """
-    T = np.asarray(t, dtype=float)
+    T = _check_time_values(t, "t")
     U = np.asarray(inputs, dtype=float)
     if U.ndim == 2:
         U = U[None]
@@ -396,6 +422,22 @@ def _initial_value(t: np.ndarray, a: np.ndarray, window_s: float) -> np.ndarray:
     return out
 
 
+def check_initial_window(window_s, duration: float | None = None, where: str = "initial window") -> float:
+    """``window_s`` checked: finite, >= 0 and, given the run's ``duration``, not longer than it (the fit
+    would silently use the whole run); a SimulationError naming ``where`` otherwise."""
+    try:
+        w = float(window_s)
+    except (TypeError, ValueError):
+        w = float("nan")
+    if not (np.isfinite(w) and w >= 0):
+        raise SimulationError(f"{where} {window_s!r}: expected a finite number of seconds >= 0 (0: the first "
+                              "measured sample)")
+    if duration is not None and w > duration:
+        raise SimulationError(f"{where} {w:g} s is longer than the run ({duration:.3g} s); expected a few tenths "
+                              f"of a second at its start (calibration uses {INITIAL_WINDOW_S:g} s), or 0")
+    return w
+
+
 def initial_state_from_run(run, *, initial_velocity: str = "zero", window_s: float = 0.0, sensors=None
                            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Initial state of a logged run from what it measured (partial initial state).
@@ -413,6 +455,7 @@ def initial_state_from_run(run, *, initial_velocity: str = "zero", window_s: flo
     :mod:`uvsim.estimation.derivatives`)."""
     if initial_velocity not in INITIAL_VELOCITY_MODES:
         raise SimulationError(f"initial_velocity {initial_velocity!r}: expected one of {INITIAL_VELOCITY_MODES}")
+    check_initial_window(window_s)
     t = run.t
     pos = _initial_value(t, run.position, window_s)
     pos0 = np.where(np.isfinite(pos), pos, 0.0)

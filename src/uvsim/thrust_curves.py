@@ -36,6 +36,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from uvsim.constants import PWM_RANGE_US
 from uvsim.curve_checks import as_1d, check_curve_keys, finite_number, number_pair, readonly_array
 from uvsim.errors import SimulationError, VehicleError
 from uvsim.schema import did_you_mean
@@ -214,6 +215,13 @@ class TabulatedThrustCurve(ThrustCurve):
             raise VehicleError(
                 f"{source}: pwm must be strictly increasing, but pwm[{i}]={pwm[i]:g} and "
                 f"pwm[{i + 1}]={pwm[i + 1]:g}"
+            )
+        lo_us, hi_us = PWM_RANGE_US
+        if pwm[0] < lo_us or pwm[-1] > hi_us:
+            bad = pwm[0] if pwm[0] < lo_us else pwm[-1]
+            raise VehicleError(
+                f"{source}: pwm {bad:g} is outside the ESC command range {lo_us:g}..{hi_us:g} us; expected "
+                f"microseconds (a table in ms or in percent is a unit slip: 1.5 ms = 1500 us)"
             )
         if not np.all(np.diff(thrust) >= 0):
             i = int(np.argmax(~(np.diff(thrust) >= 0)))

@@ -15,7 +15,7 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from uvsim.constants import G, MAX_CURRENT_SPEED
+from uvsim.constants import G, GRAVITY_RANGE, MAX_CURRENT_SPEED, WATER_DENSITY_RANGE
 from uvsim.errors import VehicleError
 from uvsim.rigid_body import inertia_tensor
 from uvsim.schema import finite_number, require_mapping, unknown_key_message
@@ -323,6 +323,17 @@ def added_mass_diagonal_non_negative(v: dict, ctx: Context) -> None:
                            "(M_A = -diag(X_udot, ...) in SNAME sign)")
 
 
+def added_mass_positive_semidefinite(v: dict, ctx: Context) -> None:
+    """M_A is positive semi-definite: the fluid's kinetic energy 1/2 nu^T M_A nu is never negative
+    (Fossen 2021 sec. 6.3.1, ideal fluid, body at rest)."""
+    MA = added_mass_matrix(v)
+    ev = np.linalg.eigvalsh(0.5 * (MA + MA.T))
+    if ev.min() < -1e-9 * max(1.0, np.abs(MA).max()):
+        raise VehicleError(f"{ctx.where}: M_A is not positive semi-definite (eigenvalues {np.round(ev, 6)}): the "
+                           "fluid's kinetic energy 1/2 nu^T M_A nu would be negative for some motion; check the "
+                           "off-diagonal entries of 'matrix' (their size and sign)")
+
+
 def imu_bias_only_on_imu(raw: Mapping, ctx: Context) -> None:
     """The bias specs ``gyro_bias_sd``, ``acc_bias_sd`` belong to the imu only."""
     for key in IMU_BIAS_SPECS:
@@ -351,6 +362,34 @@ def check_current_speed(current, where: str, error: type = VehicleError) -> None
     if speed > MAX_CURRENT_SPEED:
         raise error(f"{where}: {speed:.3g} m/s is faster than any current a vehicle is flown in (at most "
                     f"{MAX_CURRENT_SPEED:g} m/s); expected m/s (1 kn = 0.514 m/s)")
+
+
+def check_water_density(rho, where: str, error: type = VehicleError) -> float:
+    """``rho`` (kg/m^3) within WATER_DENSITY_RANGE, else ``error`` naming ``where``; the vehicle files'
+    ``environment.rho``, ``uvsim hydro --rho`` and ``uvsim import --water`` share it."""
+    lo, hi = WATER_DENSITY_RANGE
+    try:
+        x = float(rho)
+    except (TypeError, ValueError):
+        raise error(f"{where}: expected a water density in kg/m^3 (a number), got {rho!r}") from None
+    if not lo <= x <= hi:
+        hint = f"; {x:g} looks like a specific gravity or g/cm^3: give {1000 * x:g} kg/m^3" if 0.9 <= x <= 1.25 else ""
+        raise error(f"{where}: {x:g} kg/m^3 is not a water density; expected {lo:g}..{hi:g} kg/m^3 (fresh water "
+                    f"1000, sea water 1025){hint}")
+    return x
+
+
+def water_density(v: dict, ctx: Context) -> None:
+    """``rho`` is a water density in kg/m^3 (900..1250, uvsim.constants.WATER_DENSITY_RANGE)."""
+    check_water_density(v["rho"], ctx.at("rho"))
+
+
+def gravity_in_m_per_s2(v: dict, ctx: Context) -> None:
+    """``g`` is within 0.1..25 m/s^2 (uvsim.constants.GRAVITY_RANGE): 32.2 is ft/s^2, 981 cm/s^2."""
+    lo, hi = GRAVITY_RANGE
+    if not lo <= v["g"] <= hi:
+        raise VehicleError(f"{ctx.at('g')} = {v['g']:g}: expected m/s^2 within {lo:g}..{hi:g} (Earth 9.81; "
+                           "32.2 is ft/s^2, 981 cm/s^2)")
 
 
 def current_a_current(v: dict, ctx: Context) -> None:
@@ -415,9 +454,11 @@ _SECTION = "{file}: '{key}' section missing or not a mapping"
 
 ENVIRONMENT = Section({
     # uvsim.constants.G: standard gravity (CGPM 1901), the value every shipped file states
-    "g": Field("number", default=G, positive=True, unit="m/s^2", meaning="gravitational acceleration"),
+    "g": Field("number", default=G, positive=True, unit="m/s^2", meaning="gravitational acceleration",
+               rules=(gravity_in_m_per_s2,)),
     # nominal fresh water: the loader's default since the first release (RHO_FRESH is 998 at 20 degC)
-    "rho": Field("number", default=1000.0, positive=True, unit="kg/m^3", meaning="water density"),
+    "rho": Field("number", default=1000.0, positive=True, unit="kg/m^3", meaning="water density",
+                 rules=(water_density,)),
     "current_ned": Field("vec3", default=(0.0, 0.0, 0.0), unit="m/s",
                          meaning="constant ocean current, NED (parameters current_n, current_e, current_d)"),
 }, rules=(current_a_current,))
@@ -445,7 +486,7 @@ ADDED_MASS = Section({
        for i, (k, dof) in enumerate(zip(ADDED_MASS_NAMES, ("surge", "sway", "heave", "roll", "pitch", "yaw")))},
     "matrix": Field("matrix6", meaning="full symmetric M_A, positive convention (default zeros)"),
     "convention": Field("any", meaning="free text on the sign convention (not read)"),
-}, rules=(added_mass_symmetric, added_mass_diagonal_non_negative))
+}, rules=(added_mass_symmetric, added_mass_diagonal_non_negative, added_mass_positive_semidefinite))
 
 SENSOR = Section({
     "position": Field("vec3", unit="m", meaning="where the sensor is, body frame"),

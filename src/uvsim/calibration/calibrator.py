@@ -50,7 +50,7 @@ from uvsim.latency import runs_for
 from uvsim.measurements import check_sample_weighting, check_signal_settings, measurements_for
 from uvsim.plausibility import check_runs, parse_allow
 from uvsim.fit_settings import DEFAULT_CONTINUITY, DEFAULT_HORIZONS, DEFAULT_SAMPLE_WEIGHTING  # noqa: F401
-from uvsim.schema import is_whole_number
+from uvsim.schema import check_workers, real_number, whole_number
 
 log = logging.getLogger("uvsim")
 #: The joint stage stops when an iteration lowers the cost by less than this fraction of it
@@ -216,10 +216,7 @@ class Calibrator:
                           seeded_sigma=float(self.seeded_sigma), seed=int(self.seed))
 
     def _workers(self) -> int:
-        w = 1 if self.workers is None else int(self.workers)
-        if w < 1:
-            raise CalibrationError(f"workers must be >= 1, got {self.workers}")
-        return w
+        return 1 if self.workers is None else check_workers(self.workers, "workers", error=CalibrationError)
 
     def _hook(self, evaluator):
         if self.dask:
@@ -250,12 +247,37 @@ class Calibrator:
         return [measurements_for(r, self.initial_vehicle_, noise=self.noise, weights=weights,
                                  attitude_lag=self.lag_["tau"], **kw) for r in runs]
 
+    def _check_settings(self) -> None:
+        """The numeric and on/off settings, before any work: whole numbers are not truncated, strings
+        not parsed, ranges not clipped (each a CalibrationError naming the setting)."""
+        err = CalibrationError
+        if not 0 < real_number(self.margin, "margin", error=err) < 1:
+            raise err(f"margin {self.margin!r}: expected a fraction between 0 and 1 (0.5 = +-50 %)")
+        if self.ga_channels not in ("own", "all"):
+            raise err(f"ga_channels {self.ga_channels!r}: expected 'own' or 'all'")
+        whole_number(self.population, "population", minimum=2, error=err)
+        whole_number(self.generations, "generations", minimum=0, error=err)
+        whole_number(self.tournament, "tournament", minimum=1, error=err)
+        # random.seed(-1) is random.seed(1) (Python seeds with |n|) and numpy refuses negative seeds
+        whole_number(self.seed, "seed", minimum=0, error=err, hint="; the same seed gives the same result")
+        whole_number(self.max_iter, "max_iter", minimum=1, error=err)
+        whole_number(self.batch_rows, "batch_rows", minimum=1, error=err)
+        check_workers(self.workers, "workers", error=err, none_ok=True)
+        for name in ("crossover", "mutation", "mutation_indpb", "mutation_sigma", "seeded_fraction", "seeded_sigma",
+                     "low_speed_exponent"):
+            real_number(getattr(self, name), name, error=err)  # not NaN, inf or text (GASettings checks ranges)
+        for name in ("refine", "gyro_bias", "attitude_bias", "acc_bias", "screen", "prior", "progress"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise err(f"{name} {getattr(self, name)!r}: expected True or False (a string such as 'no' is true "
+                          "in Python)")
+
     # ------------------------------------------------------------------ fit
     def fit(self, dataset, vehicle=None) -> "Calibrator":
         """Fit to ``dataset`` (a :class:`uvsim.logs.Dataset`, a dataset directory or a
         list of Runs) starting from ``vehicle`` (name, file or Vehicle; default the
         manifest's vehicle, also a file beside the manifest).  Returns self."""
         t0 = time.perf_counter()
+        self._check_settings()  # before reading the runs, not after the GA
         ds = as_dataset(dataset)
         veh = resolve_vehicle(vehicle, ds)
         check_runs(ds.runs, veh, parse_allow(self.allow, "allow"))  # units, sampling, PWM range
@@ -267,16 +289,6 @@ class Calibrator:
         check_loss(self.loss)
         check_sample_weighting(self.sample_weighting)
         check_signal_settings(self.noise, self.signal_weights)  # before the GA, not after it
-        if not 0 < float(self.margin) < 1:
-            raise CalibrationError(f"margin {self.margin!r}: expected a fraction between 0 and 1 (0.5 = +-50 %)")
-        if self.ga_channels not in ("own", "all"):
-            raise CalibrationError(f"ga_channels {self.ga_channels!r}: expected 'own' or 'all'")
-        for name in ("population", "generations", "tournament", "seed", "max_iter", "workers"):
-            value = getattr(self, name)
-            if value is None and name == "workers":
-                continue
-            if not is_whole_number(value):
-                raise CalibrationError(f"{name} {value!r}: expected a whole number (not truncated in silence)")
         horizons = self._horizons()
         self._continuity()  # a bad value is an error before the GA, not after it
         base = veh.parameters()

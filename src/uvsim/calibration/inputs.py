@@ -22,7 +22,12 @@ def as_dataset(data) -> Dataset:
         return data
     if isinstance(data, (str, Path)):
         return read_dataset(data)
-    runs = list(data)
+    from uvsim.logs import Run
+
+    runs = list(data) if isinstance(data, (list, tuple)) else None
+    if runs is None or not all(isinstance(r, Run) for r in runs):
+        raise CalibrationError(f"dataset: expected a dataset directory, a uvsim.logs.Dataset or a list of "
+                               f"uvsim.logs.Run, got {type(data).__name__} {data!r}"[:300])
     if not runs:
         raise CalibrationError("no runs given")
     return Dataset(path=Path("."), vehicle=None, description="runs given in memory", runs=runs)

@@ -78,9 +78,9 @@ def parse_dofs(dofs) -> list[str]:
     """A list of DOF names from "surge,yaw" or a sequence; validated."""
     if dofs is None:
         return list(CALIBRATION_DOFS)
-    if isinstance(dofs, str):
-        dofs = [d.strip() for d in dofs.split(",") if d.strip()]
-    dofs = list(dofs)
+    from uvsim.calibration.selection import split_names
+
+    dofs = split_names(dofs, "dofs")
     bad = [d for d in dofs if d not in DOF_PARAMETERS]
     if bad or not dofs:
         raise CalibrationError(f"dof(s) {bad or dofs!r}: expected a non-empty subset of {', '.join(CALIBRATION_DOFS)}")

@@ -42,13 +42,16 @@ def _did_you_mean(name: str, known: Iterable[str]) -> str:
     return f"; did you mean {', '.join(close)}?" if close else ""
 
 
-def split_names(spec) -> list[str]:
-    """``"a, b"`` or a sequence -> list of non-empty names."""
+def split_names(spec, option: str = "names") -> list[str]:
+    """``"a, b"`` or a sequence of strings -> list of non-empty names; anything else (a number,
+    a mapping) is a :class:`CalibrationError` naming ``option``."""
     if spec is None:
         return []
     if isinstance(spec, str):
         spec = spec.split(",")
-    return [str(s).strip() for s in spec if str(s).strip()]
+    if not (isinstance(spec, (list, tuple)) and all(isinstance(s, str) for s in spec)):
+        raise CalibrationError(f"{option} {spec!r}: expected names, as 'a,b' or a list of strings")
+    return [s.strip() for s in spec if s.strip()]
 
 
 def expand_names(spec, known: Sequence[str], option: str = "free") -> list[str]:
@@ -57,7 +60,7 @@ def expand_names(spec, known: Sequence[str], option: str = "free") -> list[str]:
     parameter is a :class:`CalibrationError` naming the closest known names."""
     known = list(known)
     out: list[str] = []
-    for item in split_names(spec):
+    for item in split_names(spec, option):
         hits = [k for k in known if fnmatch.fnmatchcase(k, item)]
         if not hits and item == "supply_voltage":
             raise CalibrationError(f"{option}: supply_voltage is a parameter only of thrusters whose curve depends "
@@ -73,8 +76,10 @@ def expand_names(spec, known: Sequence[str], option: str = "free") -> list[str]:
 
 def check_bounds(bounds: Mapping | None, known: Mapping[str, float]) -> dict:
     """Validated ``{name: (low, high)}`` (module docstring)."""
+    from uvsim.schema import require_mapping
+
     out = {}
-    for k, b in (bounds or {}).items():
+    for k, b in require_mapping(bounds, "bounds", error=CalibrationError, example="{'X_u': (-1.0, -0.01)}").items():
         if k not in known:
             raise CalibrationError(f"bounds: unknown parameter {k!r}{_did_you_mean(k, known)}")
         try:

@@ -95,7 +95,12 @@ def _suite(args, run) -> dict | None:
     """Run a scenario benchmark (``run(progress)``) with ``--results`` checked; print its JSON
     and return None with ``--json``, else print the machine line and return its output."""
     from uvsim.commands.checks import check_outputs
+    from uvsim.errors import UvsimError
+    from uvsim.schema import check_workers, whole_number
 
+    # scenario seeds are numpy seeds (non-negative); refused here, not by numpy after the first scenario
+    whole_number(args.seed, "--seed", minimum=0, error=UvsimError)
+    check_workers(args.workers, "--workers", error=UvsimError)
     check_outputs({"--results": args.results})
     out = run(None if args.json else (lambda m: print(m, flush=True)))
     if args.json:

@@ -14,6 +14,7 @@ import numpy as np
 
 from uvsim.constants import NU_WATER, RHO_SEA
 from uvsim.errors import HydroError
+from uvsim.vehicle_schema import check_water_density
 
 
 def register(subparsers) -> None:
@@ -65,10 +66,13 @@ def _run_coefficients(args) -> int:
     from uvsim.hydro.coefficients import quadratic_damping
     if args.name is not None:
         raise HydroError(f"unexpected extra argument {args.name!r} (did you mean 'uvsim hydro table NAME'?)")
+    check_water_density(args.rho, "--rho", HydroError)
     body = _body(args, args.target)
     if args.re is not None:
         re = args.re
     elif args.speed is not None:
+        if not (np.isfinite(args.speed) and args.speed > 0):
+            raise HydroError(f"--speed must be a positive speed in m/s, got {args.speed}")
         re = body.re_from_speed(args.speed)
     else:
         raise HydroError("give --re (length Reynolds number) or --speed (m/s)")

@@ -68,7 +68,7 @@ def _run(args) -> int:
     from uvsim.gaps import split_run
     from uvsim.latency import delay_inputs
     from uvsim.logs import read_run, write_run
-    from uvsim.simulate import check_method, simulate_run
+    from uvsim.simulate import check_initial_window, check_method, check_substeps, simulate_run
     from uvsim.vehicle import load_vehicle
 
     if args.out is None and not args.compare:
@@ -78,9 +78,12 @@ def _run(args) -> int:
     if args.compare and not args.plot:  # the shipped runs live in the installed package: never write beside them
         base = Path(args.out) if args.out else Path(Path(args.run).stem)
         args.plot = str(base.with_name(base.stem + "_compare.png"))
+    check_substeps(args.substeps)
+    check_initial_window(args.initial_window, where="--initial-window")
     check_outputs({"--out": args.out, "--plot": args.plot}, inputs={"--run": args.run, "--vehicle": args.vehicle})
     veh = load_vehicle(_vehicle_for(args))
     run = read_run(args.run)
+    check_initial_window(args.initial_window, float(run.t[-1] - run.t[0]), "--initial-window")
     segments = split_run(run)  # a run with gaps: each segment from its own first measured state (uvsim.gaps)
     check_runs_at_door("simulate", segments, veh, args.allow)
     pieces = []

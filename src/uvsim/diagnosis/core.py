@@ -51,7 +51,7 @@ from uvsim.latency import runs_for
 from uvsim.logs import Dataset, read_dataset
 from uvsim.measurements import check_signal_settings
 from uvsim.plausibility import check_runs, parse_allow
-from uvsim.schema import is_whole_number
+from uvsim.schema import check_workers, is_whole_number
 from uvsim.vehicle import load_vehicle
 
 #: What a resumed diagnosis must keep equal (for the checkpoint's mismatch message).
@@ -157,6 +157,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     for name, value in (("max_effects", max_effects), ("top", top), ("max_iter", max_iter), ("workers", workers)):
         if not (is_whole_number(value) and value >= 1):
             raise CalibrationError(f"{name} must be a positive integer (1 or more), got {value!r}")
+    check_workers(workers, "workers", error=CalibrationError)  # and not more processes than the machine runs
     if not (horizon is None or (np.isfinite(horizon) and horizon > 0)):
         raise CalibrationError(f"horizon must be a positive number of seconds, got {horizon!r}")
     train, val, split_note = _split(dataset)

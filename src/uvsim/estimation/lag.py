@@ -174,4 +174,10 @@ def attitude_lag_setting(runs, setting="auto") -> dict:
         tau = est["tau"] if est["tau"] is not None and est["tau"] > LAG_MIN_SAMPLES * dt else 0.0
         return {**est, "tau": float(tau), "estimated_tau": est["tau"],
                 "source": "estimated from the gyro and the logged angles"}
-    return {"tau": lag_time_constant(setting, expected="a time constant >= 0 s or 'auto'"), "source": "given"}
+    tau = lag_time_constant(setting, expected="a time constant >= 0 s or 'auto'")
+    longest = max((float(r.t[-1] - r.t[0]) for r in runs), default=float("inf"))
+    if tau > longest:  # the logged angles would barely move over any run: a unit slip (ms?) or a typo
+        raise CalibrationError(f"attitude_lag {setting!r}: a filter lag of {tau:g} s is longer than the longest run "
+                               f"({longest:.3g} s), so the logged angles would hardly follow the motion; expected "
+                               "the attitude filter's time constant in s (typically 0.01-1 s), 'auto' or 0")
+    return {"tau": tau, "source": "given"}

@@ -255,6 +255,12 @@ def _run_arrays(run, inputs, input_kind, pos0, voltage):
     return t, np.asarray(inputs, float).reshape(t.size, -1), input_kind or "force", pos0, voltage
 
 
+#: Most physics steps of a replay, refused before any work: the replay steps in Python at about
+#: 0.2 ms a step (the standard 60 s maneuver at Gazebo's 1 ms: 60 000 steps, 12 s), so 1e6 steps
+#: are about 3 minutes; ``--physics-step 1e-9`` asked for 6e10 steps (four months).
+MAX_REPLAY_STEPS = 1_000_000
+
+
 def replay_check(vehicle, run, inputs=None, *, input_kind: str | None = None, target: str = "gz-sim",
                  added_mass: str = "fluid", physics_step: float = DEFAULT_STEP, pos0=None, q0=None, voltage=None,
                  text: str | None = None, patch_coriolis: bool = False) -> ReplayResult:
@@ -298,6 +304,12 @@ def replay_check(vehicle, run, inputs=None, *, input_kind: str | None = None, ta
     t, U, kind, pos0, voltage = _run_arrays(run, inputs, input_kind, pos0, voltage)
     if not (np.isfinite(physics_step) and 0 < physics_step <= 0.1):
         raise VehicleError(f"physics_step {physics_step!r}: expected seconds in (0, 0.1]")
+    steps = float(t[-1] - t[0]) / physics_step
+    if steps > MAX_REPLAY_STEPS:
+        raise VehicleError(f"physics_step {physics_step:g} s: {steps:.3g} steps over the {t[-1] - t[0]:g} s replayed "
+                           f"(about {steps * 2e-4 / 3600:.2g} h); at most {MAX_REPLAY_STEPS:.0e}: use a step of at least "
+                           f"{float(t[-1] - t[0]) / MAX_REPLAY_STEPS:.2g} s (Gazebo's default is {DEFAULT_STEP:g} s) or a "
+                           "shorter run")
     if veh.effects:
         raise VehicleError(f"{veh.source}: effects {[e.kind for e in veh.effects]} have no counterpart in {target}; "
                            "the replay would compare two different models")

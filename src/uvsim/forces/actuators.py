@@ -465,6 +465,10 @@ def build_actuators(spec, where: str) -> Actuators:
             raise VehicleError(f"{where}: thrusters.gains / reverse_ratios: expected {n} values each")
     else:
         raise VehicleError(f"{where}: thrusters: expected 'units' or 'configuration_matrix'")
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:  # every message, input column and report names a thruster by its name
+        raise VehicleError(f"{where}: thrusters: name(s) {twice} given to more than one thruster; expected one name "
+                           "per thruster")
     if np.linalg.matrix_rank(B) == 0:
         raise VehicleError(f"{where}: thrusters: allocation matrix is zero")
     if all(c is None for c in curves):

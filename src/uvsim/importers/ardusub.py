@@ -36,6 +36,8 @@ from pathlib import Path
 import numpy as np
 
 from uvsim.errors import LogFormatError
+from uvsim.schema import whole_number
+from uvsim.vehicle_schema import check_water_density
 from uvsim.importers import require
 from uvsim.importers.timeline import Stream
 
@@ -164,6 +166,8 @@ def read_ardusub(path, *, water: str | float | None = None, surface_pressure: fl
     imu_instance : which IMU (DataFlash IMU.I) gives rates and accelerations.
     """
     path = Path(path)
+    whole_number(imu_instance, "imu_instance (--imu)", minimum=0, error=LogFormatError,
+                 hint="; DataFlash numbers its IMUs 0, 1, 2")
     if surface_pressure is not None:
         _check_surface_pressure(surface_pressure)
     if not path.is_file():
@@ -205,8 +209,7 @@ def _density(water, params, where) -> tuple[float, str]:
         rho = float(water)
     except (TypeError, ValueError):
         raise LogFormatError(f"{where}: water {water!r}: expected fresh, salt or a density in kg/m^3") from None
-    if not 900.0 <= rho <= 1100.0:
-        raise LogFormatError(f"{where}: water density {rho:g} kg/m^3 is not a water density (900..1100)")
+    check_water_density(rho, f"{where}: water density", LogFormatError)
     return rho, f"given density {rho:g} kg/m^3"
 
 
@@ -284,6 +287,10 @@ def _bin_streams(path, msgs, water, surface_pressure, imu_instance) -> ArduSubLo
         "pitch": np.radians(_arr(att, "Pitch", f"{w}: ATT")),
         "yaw": _wrap(np.radians(_arr(att, "Yaw", f"{w}: ATT")))}, notes=["deg -> rad; yaw wrapped to (-pi, pi]"])]
     imu = [m for m in msgs["IMU"] if int(m.get("I", 0)) == imu_instance]
+    have = sorted({int(m.get("I", 0)) for m in msgs["IMU"]})
+    if have and not imu:  # not a silent drop of the rates and accelerations
+        raise LogFormatError(f"{w}: IMU instance {imu_instance} (--imu) is not in the log; it has IMU "
+                             f"{', '.join(map(str, have))}: choose one of those")
     if imu:
         src = f"IMU[I={imu_instance}].GyrX..GyrZ (rad/s), AccX..AccZ (m/s^2)"
         streams.append(Stream("imu", src, _arr(imu, "TimeUS", f"{w}: IMU") / 1e6, {
