@@ -74,12 +74,22 @@ def check_sign(name: str, lo: float, hi: float) -> None:
                                    f"thrust curves were measured at, {vlo:g}..{vhi:g} V (nothing is extrapolated)")
 
 
+def split_names(spec, option: str = "names") -> list[str]:
+    """``"a, b"`` or a sequence of strings -> list of non-empty names; anything else (a number,
+    a mapping) is a :class:`CalibrationError` naming ``option``."""
+    if spec is None:
+        return []
+    if isinstance(spec, str):
+        spec = spec.split(",")
+    if not (isinstance(spec, (list, tuple)) and all(isinstance(s, str) for s in spec)):
+        raise CalibrationError(f"{option} {spec!r}: expected names, as 'a,b' or a list of strings")
+    return [s.strip() for s in spec if s.strip()]
+
+
 def parse_dofs(dofs) -> list[str]:
     """A list of DOF names from "surge,yaw" or a sequence; validated."""
     if dofs is None:
         return list(CALIBRATION_DOFS)
-    from uvsim.calibration.selection import split_names
-
     dofs = split_names(dofs, "dofs")
     bad = [d for d in dofs if d not in DOF_PARAMETERS]
     if bad or not dofs:

@@ -25,7 +25,7 @@ from typing import Iterable, Mapping, Sequence
 import numpy as np
 
 from uvsim.blas import single_thread
-from uvsim.calibration.params import DOF_PARAMETERS, EFFECTIVE_INERTIA, check_sign
+from uvsim.calibration.params import DOF_PARAMETERS, EFFECTIVE_INERTIA, check_sign, split_names  # noqa: F401
 from uvsim.errors import CalibrationError
 
 #: Rigid-body moments of inertia: fixed in the joint stage unless freed (decoupled data
@@ -40,18 +40,6 @@ EXCITATION_REL_SIGMA = 0.5
 def _did_you_mean(name: str, known: Iterable[str]) -> str:
     close = difflib.get_close_matches(name, list(known), n=3, cutoff=0.6)
     return f"; did you mean {', '.join(close)}?" if close else ""
-
-
-def split_names(spec, option: str = "names") -> list[str]:
-    """``"a, b"`` or a sequence of strings -> list of non-empty names; anything else (a number,
-    a mapping) is a :class:`CalibrationError` naming ``option``."""
-    if spec is None:
-        return []
-    if isinstance(spec, str):
-        spec = spec.split(",")
-    if not (isinstance(spec, (list, tuple)) and all(isinstance(s, str) for s in spec)):
-        raise CalibrationError(f"{option} {spec!r}: expected names, as 'a,b' or a list of strings")
-    return [s.strip() for s in spec if s.strip()]
 
 
 def expand_names(spec, known: Sequence[str], option: str = "free") -> list[str]:
