@@ -15,6 +15,7 @@ import pytest
 import yaml
 
 import uvsim.vehicle_schema as vs
+import uvsim.vehicle_rules as vehicle_rules
 from uvsim.errors import VehicleError
 from uvsim.forces import make_term
 from uvsim.forces.actuators import build_actuators
@@ -270,7 +271,7 @@ def test_the_imu_may_state_only_its_bias_specs():
 
 def test_principal_moments_use_the_vehicles_inertia_tensor():
     i = {"I_xx": 0.3, "I_yy": 0.4, "I_zz": 0.5, "I_xy": 0.05, "I_xz": -0.02, "I_yz": 0.01}
-    np.testing.assert_allclose(vs._principal_moments(i), np.linalg.eigvalsh(inertia_tensor(*i.values())), rtol=1e-15)
+    np.testing.assert_allclose(vehicle_rules._principal_moments(i), np.linalg.eigvalsh(inertia_tensor(*i.values())), rtol=1e-15)
 
 
 # ----------------------------------------------------------------------------- keys
@@ -318,13 +319,18 @@ def test_plugin_fields_name_the_builders_the_loader_calls():
         assert getattr(importlib.import_module(module), attr) is fn
 
 
-def test_the_schema_module_imports_downhill():
-    tree = ast.parse((ROOT / "src" / "uvsim" / "vehicle_schema.py").read_text())
+def _uvsim_imports(name: str) -> set:
+    tree = ast.parse((ROOT / "src" / "uvsim" / name).read_text())
     modules = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
     modules |= {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
+    return {m for m in modules if m.startswith("uvsim")}
+
+
+def test_the_schema_module_imports_downhill():
     # (uvsim.rigid_body: the inertia tensor's formula, Fossen eq. 3.34; it imports no uvsim module)
-    assert {m for m in modules if m.startswith("uvsim")} <= {"uvsim.errors", "uvsim.schema", "uvsim.constants",
-                                                              "uvsim.rigid_body"}
+    low = {"uvsim.errors", "uvsim.schema", "uvsim.constants", "uvsim.rigid_body"}
+    assert _uvsim_imports("vehicle_rules.py") <= low
+    assert _uvsim_imports("vehicle_schema.py") <= low | {"uvsim.vehicle_rules"}
     rb = ast.parse((ROOT / "src" / "uvsim" / "rigid_body.py").read_text())
     assert not any(isinstance(n, (ast.Import, ast.ImportFrom)) and "uvsim" in ast.dump(n) for n in ast.walk(rb))
 

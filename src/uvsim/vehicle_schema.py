@@ -1,7 +1,8 @@
-"""The vehicle file's schema: every section, field and physical rule in one place.
+"""The vehicle file's schema: every section and field in one place.
 
 Each section of a vehicle file is a :class:`Section` of :class:`Field` s (kind, required or
-default, sign, bounds, unit, meaning) with its physical rules, named functions, beside it.
+default, sign, bounds, unit, meaning) with its physical rules beside it (named functions of
+:mod:`uvsim.vehicle_rules`).
 :func:`validate_vehicle_dict` walks it (unknown keys with a did-you-mean, missing fields,
 types, finiteness, signs, bounds, then the rules) into the plain dict :mod:`uvsim.vehicle`
 builds the vehicle from; plug-in sections are left to the builders their fields name.
@@ -15,32 +16,17 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from uvsim.constants import G, GRAVITY_RANGE, MAX_CURRENT_SPEED, WATER_DENSITY_RANGE
+from uvsim.constants import G
 from uvsim.errors import VehicleError
-from uvsim.rigid_body import inertia_tensor
 from uvsim.schema import finite_number, require_mapping, unknown_key_message
+from uvsim.vehicle_rules import (  # noqa: F401 (the rules and their constants, re-exported)
+    ADDED_MASS_NAMES, INERTIA_NAMES, SENSOR_NAMES, MAX_SENSOR_OFFSET, POINT_REACH, MAX_LATENCY, IMU_BIAS_SPECS,
+    BUOYANCY_RATIO, Context, buoyancy_near_weight, inertia_positive_definite,
+    inertia_triangle_inequality, added_mass_matrix, added_mass_symmetric, added_mass_diagonal_non_negative,
+    added_mass_positive_semidefinite, imu_bias_only_on_imu, sensor_position_given, sensor_on_the_vehicle,
+    check_current_speed, check_water_density, water_density, gravity_in_m_per_s2, current_a_current,
+    vehicle_parameter_names, mass_matrix_positive_definite, points_on_the_vehicle, cb_not_below_cg)
 
-ADDED_MASS_NAMES = ("X_udot", "Y_vdot", "Z_wdot", "K_pdot", "M_qdot", "N_rdot")
-INERTIA_NAMES = ("I_xx", "I_yy", "I_zz", "I_xy", "I_xz", "I_yz")
-#: Sensors whose position on the body enters a measurement model (docs/log_format.md):
-#: ``imu`` (the accelerometer: specific force at that point), ``pressure`` (the ``depth``
-#: column is the depth of that point), ``dvl`` (``u, v, w`` are the velocity of that point).
-SENSOR_NAMES = ("imu", "pressure", "dvl")
-#: Largest sensor offset from the body origin accepted, m (a sensor is on the vehicle).
-MAX_SENSOR_OFFSET = 10.0
-#: ``r_g``, ``r_b`` and thruster positions lie within this many length scales (m / rho)^(1/3) of
-#: the body origin: a slender hull of length/diameter 20 reaches 4 scales at its ends, a value in
-#: millimetres thousands.
-POINT_REACH = 10.0
-#: Largest ``sensors.latency`` accepted, s: an autopilot's sensor and telemetry path is tens of
-#: milliseconds (ArduSub logs); half a second is a clock error, not a latency.
-MAX_LATENCY = 0.5
-#: the IMU's bias specs: key -> (unit, largest plausible value (exclusive), what it is)
-IMU_BIAS_SPECS = {"gyro_bias_sd": ("rad/s", 1.0, "a MEMS gyro's in-run bias (0.001-0.05 rad/s)"),
-                  "acc_bias_sd": ("m/s^2", 2.0, "a MEMS accelerometer's offset (0.01-0.8 m/s^2)")}
-#: Buoyancy / weight accepted (exclusive) unless B = 0: a neutrally trimmed ROV is near 1;
-#: a buoyancy given in kg (a factor g too small) or a weight in N as the mass falls outside.
-BUOYANCY_RATIO = (0.2, 5.0)
 FILE_STEM = "<file stem>"  # the default of ``name``: the file's name without ``.yaml``
 _ABSENT = object()  # a field neither given nor defaulted: left out of the validated dict
 
@@ -84,24 +70,6 @@ class Section:
     @property
     def shown(self) -> Mapping[str, Field]:  # the fields as the docs list them
         return {"<parameter>": self.each} if self.each else self.fields
-
-
-@dataclass(frozen=True)
-class Context:
-    """Where a section is (file, dotted path, key) and what its rules may need."""
-
-    file: str
-    path: str
-    key: str
-    root: dict  # the top level's values so far (for rules across sections)
-    vehicle: Any = None  # the built vehicle (after-build rules)
-
-    @property
-    def where(self) -> str:  # "file: section.sub", the file alone at the top level
-        return f"{self.file}: {self.path}" if self.path else self.file
-
-    def at(self, key: str) -> str:  # "file: section.key", "file: key" at the top level
-        return f"{self.where}.{key}" if self.path else f"{self.file}: {key}"
 
 
 def _join(path: str, key: str) -> str:
@@ -264,189 +232,13 @@ def validate_built_vehicle(d: Mapping, source: str, vehicle) -> dict:
     return _walk(VEHICLE, d, ctx, only=lambda f: f.after_build, rules=VEHICLE.built_rules)
 
 
-# ----------------------------------------------------------------------------- rules
+# ----------------------------------------------------------------------------- a rule of the walk
 def required_sections_given(raw: Mapping, ctx: Context) -> None:
     """The required sections (``rigid_body``, ``added_mass``, ``damping``) are mappings."""
     for key, fld in VEHICLE.fields.items():
         if fld.required and not isinstance(raw.get(key), dict):
             raise _expected(fld, key, ctx)
 
-
-def buoyancy_near_weight(v: dict, ctx: Context) -> None:
-    """``buoyancy`` is 0 or between 0.2 and 5 times the weight m g (a value in kg is caught)."""
-    b, mg = v["buoyancy"], v["mass"] * ctx.root["environment"]["g"]
-    if not BUOYANCY_RATIO[0] < b / mg < BUOYANCY_RATIO[1] and b > 0:
-        raise VehicleError(f"{ctx.at('buoyancy')} = {b} N is {b / mg:.2f} times the weight m g = {mg:.1f} N; "
-                           "expected a value near the weight for an underwater vehicle (check units: buoyancy "
-                           "is a force in N)")
-
-
-def _principal_moments(v: Mapping) -> np.ndarray:
-    """Eigenvalues of the inertia tensor I_b (:func:`uvsim.rigid_body.inertia_tensor`)."""
-    return np.linalg.eigvalsh(inertia_tensor(*(v[k] for k in INERTIA_NAMES)))
-
-
-def inertia_positive_definite(v: dict, ctx: Context) -> None:
-    """The inertia tensor is positive definite."""
-    ev = _principal_moments(v)
-    if ev.min() <= 0:
-        raise VehicleError(f"{ctx.where}: the inertia tensor is not positive definite (eigenvalues {ev})")
-
-
-def inertia_triangle_inequality(v: dict, ctx: Context) -> None:
-    """The principal moments satisfy the triangle inequality (a physical body)."""
-    ev = _principal_moments(v)
-    if ev[0] + ev[1] < ev[2] * (1 - 1e-9):
-        raise VehicleError(f"{ctx.where}: principal moments {ev} violate the triangle inequality (non-physical body)")
-
-
-def added_mass_matrix(v: Mapping) -> np.ndarray:
-    """M_A (6, 6) of a validated ``added_mass``: ``matrix`` (or zeros), named entries on its diagonal."""
-    MA = np.array(v["matrix"], float) if "matrix" in v else np.zeros((6, 6))
-    for i, k in enumerate(ADDED_MASS_NAMES):
-        if k in v:
-            MA[i, i] = v[k]
-    return MA
-
-
-def added_mass_symmetric(v: dict, ctx: Context) -> None:
-    """``matrix`` is symmetric (an ideal-fluid added-mass matrix is)."""
-    MA = v.get("matrix")
-    if MA is not None and not np.allclose(MA, MA.T, atol=1e-9 * max(1.0, np.abs(MA).max())):
-        raise VehicleError(f"{ctx.at('matrix')}: must be symmetric (an ideal-fluid added-mass matrix is)")
-
-
-def added_mass_diagonal_non_negative(v: dict, ctx: Context) -> None:
-    """The diagonal of M_A (matrix and named entries) is non-negative: positive magnitudes."""
-    if np.any(np.diag(added_mass_matrix(v)) < 0):
-        raise VehicleError(f"{ctx.where}: diagonal added mass must be given as positive magnitudes "
-                           "(M_A = -diag(X_udot, ...) in SNAME sign)")
-
-
-def added_mass_positive_semidefinite(v: dict, ctx: Context) -> None:
-    """M_A is positive semi-definite: the fluid's kinetic energy 1/2 nu^T M_A nu is never negative
-    (Fossen 2021 sec. 6.3.1, ideal fluid, body at rest)."""
-    MA = added_mass_matrix(v)
-    ev = np.linalg.eigvalsh(0.5 * (MA + MA.T))
-    if ev.min() < -1e-9 * max(1.0, np.abs(MA).max()):
-        raise VehicleError(f"{ctx.where}: M_A is not positive semi-definite (eigenvalues {np.round(ev, 6)}): the "
-                           "fluid's kinetic energy 1/2 nu^T M_A nu would be negative for some motion; check the "
-                           "off-diagonal entries of 'matrix' (their size and sign)")
-
-
-def imu_bias_only_on_imu(raw: Mapping, ctx: Context) -> None:
-    """The bias specs ``gyro_bias_sd``, ``acc_bias_sd`` belong to the imu only."""
-    for key in IMU_BIAS_SPECS:
-        if key in raw and ctx.key != "imu":
-            raise VehicleError(f"{ctx.at(key)}: only the imu has a gyro and an accelerometer")
-
-
-def sensor_position_given(raw: Mapping, ctx: Context) -> None:
-    """A sensor states its ``position``; the imu may instead carry only its bias specs."""
-    if not ("position" in raw or (ctx.key == "imu" and any(k in raw for k in IMU_BIAS_SPECS))):
-        raise VehicleError(f"{ctx.at('position')}: missing (expected [x, y, z], m, body frame)")
-
-
-def sensor_on_the_vehicle(v: dict, ctx: Context) -> None:
-    """A sensor ``position`` is within MAX_SENSOR_OFFSET (10 m) of the body origin."""
-    pos = v.get("position")
-    if pos is not None and np.linalg.norm(pos) > MAX_SENSOR_OFFSET:
-        raise VehicleError(f"{ctx.at('position')} {pos.tolist()} is more than {MAX_SENSOR_OFFSET:g} m "
-                           "from the body origin (expected metres, body frame)")
-
-
-def check_current_speed(current, where: str, error: type = VehicleError) -> None:
-    """Raise ``error`` naming ``where`` when the current vector (N, E, D, m/s) is faster than
-    MAX_CURRENT_SPEED; the vehicle files' ``current_ned`` and ``simulate --current`` share it."""
-    speed = float(np.linalg.norm(current))
-    if speed > MAX_CURRENT_SPEED:
-        raise error(f"{where}: {speed:.3g} m/s is faster than any current a vehicle is flown in (at most "
-                    f"{MAX_CURRENT_SPEED:g} m/s); expected m/s (1 kn = 0.514 m/s)")
-
-
-def check_water_density(rho, where: str, error: type = VehicleError) -> float:
-    """``rho`` (kg/m^3) within WATER_DENSITY_RANGE, else ``error`` naming ``where``; the vehicle files'
-    ``environment.rho``, ``uvsim hydro --rho`` and ``uvsim import --water`` share it."""
-    lo, hi = WATER_DENSITY_RANGE
-    try:
-        x = float(rho)
-    except (TypeError, ValueError):
-        raise error(f"{where}: expected a water density in kg/m^3 (a number), got {rho!r}") from None
-    if not lo <= x <= hi:
-        hint = f"; {x:g} looks like a specific gravity or g/cm^3: give {1000 * x:g} kg/m^3" if 0.9 <= x <= 1.25 else ""
-        raise error(f"{where}: {x:g} kg/m^3 is not a water density; expected {lo:g}..{hi:g} kg/m^3 (fresh water "
-                    f"1000, sea water 1025){hint}")
-    return x
-
-
-def water_density(v: dict, ctx: Context) -> None:
-    """``rho`` is a water density in kg/m^3 (900..1250, uvsim.constants.WATER_DENSITY_RANGE)."""
-    check_water_density(v["rho"], ctx.at("rho"))
-
-
-def gravity_in_m_per_s2(v: dict, ctx: Context) -> None:
-    """``g`` is within 0.1..25 m/s^2 (uvsim.constants.GRAVITY_RANGE): 32.2 is ft/s^2, 981 cm/s^2."""
-    lo, hi = GRAVITY_RANGE
-    if not lo <= v["g"] <= hi:
-        raise VehicleError(f"{ctx.at('g')} = {v['g']:g}: expected m/s^2 within {lo:g}..{hi:g} (Earth 9.81; "
-                           "32.2 is ft/s^2, 981 cm/s^2)")
-
-
-def current_a_current(v: dict, ctx: Context) -> None:
-    """``current_ned`` is at most 5 m/s (uvsim.constants.MAX_CURRENT_SPEED): faster is knots or km/h."""
-    cur = v.get("current_ned")
-    if cur is not None:
-        check_current_speed(cur, f"{ctx.at('current_ned')} {np.asarray(cur).tolist()}")
-
-
-def vehicle_parameter_names(ctx: Context) -> list:
-    """The keys of ``uncertainty``: the built vehicle's parameter names (``parameters()``)."""
-    return list(ctx.vehicle.parameters())
-
-
-def mass_matrix_positive_definite(v: dict, ctx: Context) -> None:
-    """The built vehicle's ``M = M_RB + M_A`` is positive definite."""
-    M = ctx.vehicle.M
-    ev = np.linalg.eigvalsh(0.5 * (M + M.T))
-    if ev.min() <= 0:
-        raise VehicleError(f"{ctx.file}: M = M_RB + M_A is not positive definite (eigenvalues {np.round(ev, 6)})")
-
-
-def points_on_the_vehicle(v: dict, ctx: Context) -> None:
-    """``r_g``, ``r_b`` and thruster positions lie within 10 length scales (m / rho)^(1/3) of the origin.
-
-    POINT_REACH sets the 10: a point given in mm lies 1000 times too far and is refused here
-    (it would otherwise show up as a time constant too short for the runs' sampling)."""
-    veh = ctx.vehicle
-    rho = float(getattr(veh, "rho", 1000.0))
-    scale = (float(veh.mass) / rho) ** (1.0 / 3.0)
-    reach = POINT_REACH * scale
-    points = [("rigid_body.r_g", veh.r_g), ("rigid_body.r_b", veh.r_b)]
-    pos = getattr(getattr(veh, "actuators", None), "positions", None)
-    if pos is not None:
-        names = list(getattr(veh.actuators, "names", [])) or [str(i + 1) for i in range(len(pos))]
-        points += [(f"thrusters.units[{i}] ({names[i]}).position", p) for i, p in enumerate(pos)]
-    for where, p in points:
-        d = float(np.linalg.norm(p))
-        if d > reach:
-            raise VehicleError(f"{ctx.file}: {where} {np.round(np.asarray(p, float), 6).tolist()} is {d:.3g} m from "
-                               f"the body origin, more than {POINT_REACH:g} x the vehicle's length scale "
-                               f"(m / rho)^(1/3) = {scale:.3g} m; expected metres (a value in mm is 1000 x too far)")
-
-
-def cb_not_below_cg(v: dict, ctx: Context) -> None:
-    """The centre of buoyancy is not below the centre of gravity (``z_b <= z_g``, z down).
-
-    With buoyancy, a CB below the CG turns the restoring moment ``(W r_g - B r_b) x k``
-    (docs/model.md, "Restoring"; Fossen 2021 sec. 4.1) into an upsetting one: the vehicle
-    capsizes. It is almost always a sign slip (z is positive down, docs/model.md)."""
-    veh = ctx.vehicle
-    below = float(veh.r_b[2]) - float(veh.r_g[2])
-    if float(veh.buoyancy) > 0 and below > 1e-9:
-        raise VehicleError(f"{ctx.file}: rigid_body.r_b: the centre of buoyancy (z_b = {float(veh.r_b[2]):.4g} m) lies "
-                           f"{below:.4g} m below the centre of gravity (z_g = {float(veh.r_g[2]):.4g} m); the vehicle "
-                           "would capsize. z is positive down (docs/model.md): a CB above the CG has the smaller z, "
-                           "e.g. r_b: [0, 0, -0.02] with r_g: [0, 0, 0]")
 
 
 # ----------------------------------------------------------------------------- the schema
@@ -586,5 +378,5 @@ def schema_markdown() -> str:
         (f"`{_join(path, k)}`", _KINDS[f.kind], _presence(f), _limits(f), f.unit, f.meaning)
         for path, sec in blocks for k, f in sec.shown.items()])
     rules = _table(("section or field", "rule", "checks"), [r for path, sec in blocks for r in _rule_rows(path, sec)])
-    return (f"{fields}\n\nRules (functions of `uvsim.vehicle_schema`; a field's run right after it, a "
+    return (f"{fields}\n\nRules (functions of `uvsim.vehicle_rules`; a field's run right after it, a "
             f"section's after all its fields, `M` once the vehicle is built):\n\n{rules}\n")
