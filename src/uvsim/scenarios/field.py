@@ -60,8 +60,9 @@ SUBSTEPS = 2
 #: +15 %"; Orjales et al. 2025 Table 2 vs 5 differ by up to 20 % between two estimates), damping x
 #: U(0.8, 1.2), inertia x U(0.95, 1.05) (ours).
 ADDED_MASS_FACTOR, DAMPING_SPREAD, INERTIA_SPREAD = (1.10, 1.20), 0.2, 0.05
-#: Runs per dataset and their length, s (ours: a 10-minute session cut into dives).
-N_TRAIN, N_VALIDATION, RUN_SECONDS, PAUSE_SECONDS = 4, 2, (50.0, 70.0), (10.0, 40.0)
+#: Runs per dataset and their length, s (ours: a 5-8 minute session cut into dives, short enough
+#: for a diagnosis of a few minutes).
+N_TRAIN, N_VALIDATION, RUN_SECONDS, PAUSE_SECONDS = 4, 2, (30.0, 45.0), (10.0, 40.0)
 #: Starting depth, m (a harbour or a lake shore: 1.5-5 m).
 START_DEPTH = (1.5, 5.0)
 #: Share of runs flown in DEPTH HOLD (the others in STABILIZE).
@@ -197,7 +198,7 @@ def sample_field(seed: int, case: str | None = None, *, duration=None, n_train: 
         bias = [float(rng.uniform(*GYRO_BIAS) * rng.choice([-1, 1])) for _ in range(3)]
         gaps = []
         for _ in range(int(rng.integers(DVL_DROPOUTS[0], DVL_DROPOUTS[1] + 1))):
-            a = float(rng.uniform(2.0, dur - 2.0))
+            a = float(rng.uniform(min(2.0, 0.25 * dur), max(dur - 2.0, 0.5 * dur)))
             gaps.append([round(a, 2), round(a + float(rng.uniform(*DVL_DROPOUT_S)), 2)])
         runs.append({"name": f"{'val' if split == 'validation' else 'dive'}_{i + 1:02d}", "split": split,
                      "session_start": round(t_start, 2), "depth0": depth0 if i == 0 else _u(rng, START_DEPTH, 2),
