@@ -121,7 +121,7 @@ class Filter:
         th_a = np.arctan2(ax, np.sqrt(ay * ay + az * az))
         phi = phi + self.alpha * wrap(phi_a - phi)
         th = th + self.alpha * (th_a - th)
-        self.rpy = np.array([phi, th, wrap(psi)])
+        self.rpy = np.array([wrap(phi), th, wrap(psi)])
         return self.rpy
 
 

@@ -131,7 +131,10 @@ def _fault(rng, case: str, start_depth: float) -> dict:
     if case == "clean":
         return {}
     if case in ("dead", "reversed", "weak", "fouled", "tilted_thruster"):
-        k = int(rng.integers(1, 9))
+        # a reversed unit is a horizontal one (1-4): with a vertical unit reversed the roll/pitch
+        # loop has positive feedback on it and the vehicle flips at once (seen in the generator:
+        # roll past 180 deg within 2 s), which a pilot notices before any session is logged
+        k = int(rng.integers(1, 5 if case == "reversed" else 9))
         d = {"thruster": k}
         if case == "dead":
             d["gain"] = 0.0
