@@ -5,7 +5,11 @@ differ from the model in structure (:mod:`uvsim.benchmarks.calibration_structura
 
 ``uvsim bench diagnose --scenarios N --seed S [--two-effects M] [--results FILE]``: the
 diagnosis on randomized scenarios from the independent truth model
-(:mod:`uvsim.benchmarks.scenarios`, docs/diagnose.md)."""
+(:mod:`uvsim.benchmarks.scenarios`, docs/diagnose.md).
+
+``uvsim bench diagnose-field --scenarios N --seed S [--workers W] [--only CASES]``: the diagnosis
+on field-like logs of an ArduSub-flown BlueROV2 Heavy (:mod:`uvsim.benchmarks.field_logs`,
+docs/diagnose.md "Field logs")."""
 from __future__ import annotations
 
 import json
@@ -18,10 +22,12 @@ def register(sub) -> None:
     from uvsim.fit_settings import LOSSES
 
     p = sub.add_parser("bench", help="measure simulator / calibration speed; 'bench diagnose': scenario benchmark")
-    p.add_argument("suite", nargs="?", choices=["diagnose", "diagnose-structural", "calibrate-structural"],
+    p.add_argument("suite", nargs="?",
+                   choices=["diagnose", "diagnose-structural", "diagnose-field", "calibrate-structural"],
                    default=None,
                    help="'diagnose': diagnose randomized scenarios; 'diagnose-structural': scenarios whose data "
-                        "differ from the model in structure, N per class; 'calibrate-structural': calibrate N such "
+                        "differ from the model in structure, N per class; 'diagnose-field': N field-like logs of an "
+                        "ArduSub-flown BlueROV2 Heavy, one case after another; 'calibrate-structural': calibrate N such "
                         "datasets and compare with the start model (default: the speed figures)")
     p.add_argument("--loss", choices=LOSSES, default="linear",
                    help="(calibrate-structural) the calibration's --loss")
@@ -51,7 +57,8 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--quick", action="store_true", help="smaller problems (a smoke test, not the recorded figures)")
     p.add_argument("--only", default=None, help="comma-separated areas (core, hydro, sam, calibration, diagnosis; "
-                                                 "calibrate-realsensor runs only when named)")
+                                                 "calibrate-realsensor runs only when named); diagnose-structural: "
+                                                 "classes; diagnose-field: cases (clean, dead, reversed, ...)")
     p.set_defaults(func=_run)
 
 
@@ -65,6 +72,8 @@ def _run(args) -> int:
         return _structural(args)
     if args.suite == "calibrate-structural":
         return _calibrate_structural(args)
+    if args.suite == "diagnose-field":
+        return _field(args)
     mods = available()
     if args.only:
         want = [a.strip() for a in args.only.split(",") if a.strip()]
@@ -171,6 +180,32 @@ def _structural(args) -> int:
     print("largest open-loop worsening of a logged group by an accepted candidate: "
           + ("none accepted" if w is None else f"{100 * w:+.1f} %")
           + f"; accepted candidates worsening a group by > 10 %: {s['accepted_candidates_worsening_a_group_over_10pct']}")
+    return 0
+
+
+def _field(args) -> int:
+    from uvsim.benchmarks.field_logs import run_benchmark
+
+    cases = [c.strip() for c in args.only.split(",") if c.strip()] if args.only else None
+    out = _suite(args, lambda say: run_benchmark(args.scenarios, args.seed, cases=cases, workers=args.workers,
+                                                 results=args.results, progress=say))
+    if out is None:
+        return 0
+    s = out["summary"]
+
+    def frac(a, b):
+        return f"{a}/{b}" + (f" ({100 * a / b:.0f} %)" if b else "")
+
+    print(f"cases: {s['cases']} (seed {args.seed}); diagnosed {frac(s['diagnosed'], s['cases'])}")
+    print(f"single effects: right set named {frac(s['single_named'], s['single_effects'])}; named with validation "
+          f"fixed {frac(s['single_named_and_fixed'], s['single_effects'])}; dead named dead "
+          f"{frac(s['dead_named_dead'], s['dead'])}; reversed named reversed "
+          f"{frac(s['reversed_named_reversed'], s['reversed'])}")
+    print(f"clean logs: {s['clean']}, with false effects {s['clean_with_false_effects']} "
+          f"({s['false_effects_on_clean']} effects); outside the catalogue: not explained "
+          f"{frac(s['outside_not_explained'], s['outside'])}")
+    print("per case: " + ", ".join(f"{c} {d['right']}/{d['n']}" for c, d in s["per_case"].items()))
+    print(f"seconds per case: mean {s['seconds_mean']:.0f}, max {s['seconds_max']:.0f}")
     return 0
 
 
