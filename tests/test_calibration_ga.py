@@ -113,6 +113,7 @@ def test_dask_missing_is_a_clear_error(monkeypatch):
 
 
 @pytest.mark.skipif(importlib.util.find_spec("distributed") is None, reason="needs dask.distributed")
+@pytest.mark.slow  # end to end: starts a local dask cluster (make test-all)
 def test_dask_local_identical_to_serial(serial):
     par = _fit(seed=5, dask="local", workers=2)
     assert par.params_ == serial.params_

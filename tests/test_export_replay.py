@@ -148,6 +148,7 @@ def test_default_gz_replay_follows_uvsim_and_plugin_mode_does_not():
     assert ok.attitude_rad < 0.002 and bad.attitude_rad > 100 * ok.attitude_rad, (ok.summary(), bad.summary())
 
 
+@pytest.mark.slow  # end to end: 60 s replayed under the UUV plugin (make test-all)
 def test_uuv_replay_follows_uvsim():
     """UUV Simulator's HMFossen with its filtered acceleration: 15 s of the maneuver within 1 cm
     and 1 mrad of uvsim at 0.5 ms; without the filter (alpha = 1) closer still."""
