@@ -305,3 +305,17 @@ def test_compare_never_writes_beside_the_shipped_run(tmp_path, monkeypatch, caps
     assert main(["simulate", "--vehicle", "bluerov2_heavy", "--run", str(RUN), "--compare"]) == 0
     assert (tmp_path / "heave_01_compare.png").is_file() and not beside.exists()
     assert "plot -> heave_01_compare.png" in capsys.readouterr().out
+
+
+def test_a_voltage_column_the_vehicle_cannot_use_is_said(tmp_path, capsys):
+    """Before: a run's voltage with a curve that does not depend on it (t200_16v) was read and
+    ignored in silence."""
+    from contract_data import shipped_run
+
+    df = shipped_run("heave_01.csv", 4.0)
+    df["voltage"] = 15.2
+    run = tmp_path / "R.csv"
+    df.to_csv(run, index=False)
+    assert main(["simulate", "--vehicle", "bluerov2_heavy", "--run", str(run), "--out", str(tmp_path / "s.csv")]) == 0
+    err = capsys.readouterr().err
+    assert "the voltage column of R is not used" in err and "voltage_table" in err

@@ -69,9 +69,23 @@ def check_runs_at_door(command: str, runs, vehicle, allow_text: str | None) -> l
     lines = [f"warning (allowed {f.check}): {f.message}" for f in check_runs(runs, vehicle, allow)]
     # the segments of a run cut at a gap share its notes (uvsim.gaps): each is said once
     lines += [f"note: {n}" for n in dict.fromkeys(n for r in runs for n in r.notes)]
+    lines += unused_voltage_notes(runs, vehicle)
     for line in lines:
         say(command, line)
     return lines
+
+
+def unused_voltage_notes(runs, vehicle) -> list[str]:
+    """A note when PWM runs log the battery voltage and the vehicle's thrust curves do not
+    depend on it (the column is read and then not used: said, not silent)."""
+    act = getattr(vehicle, "actuators", None)
+    logged = [r.name for r in runs if r.has_voltage and r.input_kind == "pwm"]
+    if not logged or act is None or not act.curves or act.voltage_dependent:
+        return []
+    more = f", ... ({len(logged)} runs)" if len(logged) > 3 else ""
+    return [f"note: the voltage column of {', '.join(logged[:3])}{more} is not used: the vehicle's thrust curves do "
+            "not depend on the supply voltage (a battery-aware curve does: curve: {voltage_table: t200, "
+            "nominal_voltage: 16}, docs/thrusters.md)"]
 
 
 def _spread(runs) -> dict[str, float]:
