@@ -322,8 +322,8 @@ def _gain(k):
     return out
 
 
-#: A fitted gain below this is "no thrust": the dead-unit answer (a unit at 2 % of its curve
-#: gives under 1 N of a T200's 51 N, below what a tank log resolves).
+#: A fitted gain below this is "no thrust": the dead-unit answer (2 % of a T200's 51.5 N at full
+#: command, Blue Robotics' 16 V data, is about 1 N: no more than a tether's or a current's pull).
 DEAD_GAIN = 0.02
 
 

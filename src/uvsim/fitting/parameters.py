@@ -283,7 +283,7 @@ def cb_not_below_cg(name: str, bounds: tuple[float, float], values, free,
                     explicit: bool = False) -> tuple[float, float]:
     """``bounds`` of ``name`` with the physical limit of the centre of buoyancy: ``z_b``
     never goes below the centre of gravity (``z_b <= z_g``, z down; the vehicle file's rule
-    :func:`uvsim.vehicle_schema.cb_not_below_cg`), so a fit cannot end in a vehicle that
+    :func:`uvsim.vehicle_rules.cb_not_below_cg`), so a fit cannot end in a vehicle that
     capsizes. Applies when ``z_g`` is held (not in ``free``); the default ranges are cut at
     ``z_g``, ``explicit`` bounds (the user's) that reach below it are an error."""
     if name != "z_b" or "z_g" in free:
