@@ -252,7 +252,7 @@ def test_cli_import_then_simulate_compare(tmp_path, capsys):
     assert "T4_rear_left" in capsys.readouterr().err
 
 
-def test_tlog_compares_and_bin_calibrates(tmp_path, capsys):
+def test_tlog_compares_and_bin_calibrates(tmp_path, capsys, monkeypatch):
     """The pairings the other end-to-end tests leave out: the .tlog through
     `simulate --compare`, the .BIN through `calibrate` (a fitted vehicle, or the verdict's
     refusal on this surface log; never a traceback)."""
@@ -260,7 +260,9 @@ def test_tlog_compares_and_bin_calibrates(tmp_path, capsys):
     assert main(["import", "ardusub", str(TLOG), "--out", str(tl), "--adapt-vehicle"]) == 0
     run = sorted(tl.glob("*.csv"))[0]
     capsys.readouterr()
+    monkeypatch.chdir(tmp_path)  # the figure's default place is the working directory
     assert main(["simulate", "--run", str(run), "--compare"]) == 0
+    assert (tmp_path / f"{run.stem}_compare.png").is_file()
     text = capsys.readouterr().out
     for ch in ("depth", "roll", "pitch", "RMSE", "Fit %"):
         assert ch in text
