@@ -3,42 +3,26 @@ its generator is written apart from the fitting code, its own verdict can say "w
 its scenarios differ from the model in structure."""
 from __future__ import annotations
 
-import ast
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import uvsim.scenarios
+from generator_imports import ALLOWED, fitting_modules_loaded, uvsim_imports_outside_scenarios
 from uvsim.benchmarks.calibration_structural import judge, run_one, scenario
-
-#: What the truth generator may import from uvsim: errors, file helpers and the log writer.
-ALLOWED = {"uvsim.errors", "uvsim.files", "uvsim.logs"}
-
 
 def test_the_generator_imports_nothing_from_the_fitting_code():
     pkg = Path(uvsim.scenarios.__file__).parent
-    used = set()
     # the field-log generator of issue 48 (field.py, autopilot.py) is held to the same rule
     assert {"field.py", "autopilot.py"} <= {f.name for f in pkg.glob("*.py")}
-    for f in pkg.glob("*.py"):
-        for node in ast.walk(ast.parse(f.read_text())):
-            if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("uvsim"):
-                used.add(node.module)
-            elif isinstance(node, ast.Import):
-                used.update(a.name for a in node.names if a.name.startswith("uvsim"))
-    outside = {m for m in used if not m.startswith("uvsim.scenarios")}
+    outside = set().union(*(uvsim_imports_outside_scenarios(f) for f in pkg.glob("*.py")))
     assert outside <= ALLOWED, outside - ALLOWED
     # and at run time: generating a dataset loads no fitting, calibration or measurement module
-    code = ("import sys, tempfile, pathlib; from uvsim.scenarios import generate, sample_scenario; "
-            "d = tempfile.mkdtemp(); generate(sample_scenario(3, profile='realsensor', n_runs=1, n_validation=1, "
-            "duration=3, rate_hz=100.0), pathlib.Path(d) / 'ds'); "
-            "print(sorted(m for m in sys.modules if m.startswith(('uvsim.fitting', 'uvsim.calibration', "
-            "'uvsim.measurements', 'uvsim.diagnosis', 'uvsim.thrusters'))))")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
-    assert out.strip() == "[]", out
+    assert fitting_modules_loaded(
+        "from uvsim.scenarios import generate, sample_scenario; d = tempfile.mkdtemp(); "
+        "generate(sample_scenario(3, profile='realsensor', n_runs=1, n_validation=1, duration=3, rate_hz=100.0), "
+        "pathlib.Path(d) / 'ds')") == []
 
 
 def test_scenarios_are_20_to_40_percent_off_and_half_on_another_curve():

@@ -3,7 +3,6 @@ an ArduSub-like closed loop whose logs ``uvsim diagnose`` reads as they are, wri
 the fitting code."""
 from __future__ import annotations
 
-import ast
 import copy
 import subprocess
 import sys
@@ -13,12 +12,11 @@ import numpy as np
 import pytest
 import yaml
 
+from generator_imports import ALLOWED, fitting_modules_loaded, uvsim_imports_outside_scenarios
 from uvsim.scenarios import autopilot as ap
 from uvsim.scenarios import field
 from uvsim.scenarios.vehicle_data import load_vehicle_data
 
-#: What the generator may import from uvsim (as tests/test_calibration_structural.py).
-ALLOWED = {"uvsim.errors", "uvsim.files", "uvsim.logs"}
 SMALL = dict(duration=15.0, n_train=2, n_validation=1, log_hz=10.0)
 
 
@@ -46,22 +44,13 @@ def dataset(tmp_path_factory):
 def test_the_generator_imports_nothing_from_the_fitting_code():
     pkg = Path(field.__file__).parent
     for f in (pkg / "field.py", pkg / "autopilot.py"):
-        used = set()
-        for node in ast.walk(ast.parse(f.read_text())):
-            if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("uvsim"):
-                used.add(node.module)
-            elif isinstance(node, ast.Import):
-                used.update(a.name for a in node.names if a.name.startswith("uvsim"))
-        outside = {m for m in used if not m.startswith("uvsim.scenarios")}
+        outside = uvsim_imports_outside_scenarios(f)
         assert outside <= ALLOWED, (f.name, outside - ALLOWED)
-    code = ("import sys, tempfile, pathlib; from uvsim.scenarios.field import generate_field, sample_field; "
-            "generate_field(sample_field(1, 'dead', duration=3.0, n_train=1, n_validation=1), "
-            "pathlib.Path(tempfile.mkdtemp()) / 'ds'); "
-            "print(sorted(m for m in sys.modules if m.startswith(('uvsim.fitting', 'uvsim.calibration', "
-            "'uvsim.measurements', 'uvsim.diagnosis', 'uvsim.thrusters'))))")
     # (uvsim.model and uvsim.simulate are loaded by ``import uvsim`` itself; the sources above use neither)
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
-    assert out.strip() == "[]", out
+    assert fitting_modules_loaded(
+        "from uvsim.scenarios.field import generate_field, sample_field; "
+        "generate_field(sample_field(1, 'dead', duration=3.0, n_train=1, n_validation=1), "
+        "pathlib.Path(tempfile.mkdtemp()) / 'ds')") == []
 
 
 def test_the_mixer_is_ardusubs_vectored_6dof_frame():
