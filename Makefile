@@ -10,7 +10,7 @@ TEST   := $(VENV)/.installed-test
 $(BASE): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e .
+	$(PY) -m pip install --quiet -e ".[fast]"
 	touch $(BASE)
 
 $(TEST): $(BASE)

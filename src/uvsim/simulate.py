@@ -19,6 +19,9 @@ import numpy as np
 
 from uvsim.errors import SimulationError
 from uvsim.schema import did_you_mean, whole_number
+from uvsim.kernels import compiled_advance
+from uvsim.kernels.plan import compiled_plan
+from uvsim.kernels.run import blowup_message, rk4_compiled
 from uvsim.kinematics import euler_to_quat, quat_to_euler, quat_to_rotation, unwrap_angles
 from uvsim.model import NU, POS, QUAT, Model
 from uvsim.vehicle_schema import check_current_speed
@@ -162,6 +165,10 @@ def _check_voltage(voltage, shape: tuple, where: str = "voltage") -> np.ndarray 
 
 
 def _rk4_steps(model, T, U, y0, substeps, on_blowup, progress, V=None, accel=None):
+    advance = compiled_advance()
+    plan = None if advance is None else compiled_plan(model)
+    if plan is not None:  # the compiled kernel (uvsim.kernels), where installed and the model allows
+        return rk4_compiled(advance, plan, model, T, U, y0, substeps, on_blowup, progress, V, accel, BLOWUP_SPEED)
     n, n_t = T.shape
     Y = np.empty((n, n_t, model.n_y))
     y = y0.copy()
@@ -200,10 +207,7 @@ def _rk4_steps(model, T, U, y0, substeps, on_blowup, progress, V=None, accel=Non
             if bad.any():
                 j = int(np.argmax(bad))
                 if on_blowup == "raise":
-                    raise SimulationError(
-                        f"integration blew up in trajectory {j} by t = {T[j, i + 1]:.3f} s (non-finite state or "
-                        f"speed above {BLOWUP_SPEED:g}); check the parameters, the inputs or use a smaller step (substeps)"
-                    )
+                    raise SimulationError(blowup_message(j, T[j, i + 1], BLOWUP_SPEED))
                 alive &= fin
                 y[bad] = np.nan
                 Y[bad, : i + 2] = np.where(np.isfinite(Y[bad, : i + 2]), Y[bad, : i + 2], np.nan)

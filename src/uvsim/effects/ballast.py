@@ -27,7 +27,7 @@ import numpy as np
 
 from uvsim.effects.base import Effect, Field
 from uvsim.forces import register
-from uvsim.rigid_body import cross
+from uvsim.rigid_body import cross, skew
 
 
 @register("ballast")
@@ -56,6 +56,14 @@ class Ballast(Effect):
         w = self.p(params, "weight", n)
         r = np.stack([self.p(params, k, n) for k in ("x", "y", "z")], -1)
         return w, r
+
+    def kernel_part(self, prep):
+        # [w k; r x w k] = k G with G = [w I, S(w r)^T] (as the restoring term's)
+        w, r = prep
+        G = np.zeros((w.size, 3, 6))
+        G[:, [0, 1, 2], [0, 1, 2]] = w[:, None]
+        G[:, :, 3:] = np.swapaxes(skew(w[:, None] * np.broadcast_to(r, (w.size, 3))), 1, 2)
+        return ("restoring", G)
 
     def forces(self, ctx, prep):
         w, r = prep

@@ -44,6 +44,9 @@ class Current(Effect):
         Field("d", "m/s", -MAX_CURRENT, MAX_CURRENT, 0.0, "the down component of the water current"),
     )
 
+    def kernel_part(self, prep):
+        return ("none",)  # the model's current_n/e/d, which the compiled kernel has too
+
     def forces(self, ctx, prep):
         # acts through nu_r in the model's damping and added-mass terms (see module docstring)
         return np.zeros((ctx.nu.shape[0], 6))

@@ -67,6 +67,7 @@ import copy
 import numpy as np
 
 from uvsim.bilinear import matvec
+from uvsim.forces.actuators import repeat_rows
 from uvsim.effects.base import Effect, Field
 from uvsim.errors import SimulationError, VehicleError
 from uvsim.forces import register
@@ -100,6 +101,20 @@ class _ActuatorEffect(Effect):
         fc = self._act.delivered(ctx.u, ctx.input_kind, cache["act"], ctx.voltage)
         cache["u"], cache["v"], cache["fc"] = ctx.u, ctx.voltage, fc
         return fc
+
+    def _extra(self, fc, prep, repeat: int):
+        """This effect's change of the delivered thrusts ``fc`` (m, k) (rows repeated ``repeat``
+        times per prepared row); effects without states only."""
+        raise NotImplementedError
+
+    def held_along(self, U, kind, prep, V=None, rows=None):
+        """Generalized force (n, m, 6) over inputs ``U`` (n, m, k) (ForceTerm.kernel_part)."""
+        n, m, k = U.shape
+        fc = self._act.delivered(U.reshape(n * m, k), kind, prep["act"], None if V is None else V.reshape(n * m),
+                                 repeat=m)
+        f = self._extra(fc, prep, m)
+        tau = f if kind == "force" else matvec(repeat_rows(prep["act"]["B"], m, 2), f)
+        return tau.reshape(n, m, 6)
 
     def to_tau(self, ctx, f, prep):
         """Generalized force of per-thruster forces ``f`` (or ``f`` itself for force inputs),
@@ -191,9 +206,15 @@ class ThrustAsymmetry(_ActuatorEffect):
         prep["ratio"] = self.p(params, "ratio", n)[:, None]
         return prep
 
+    def kernel_part(self, prep):
+        return ("held",)
+
+    def _extra(self, fc, prep, repeat):
+        return (repeat_rows(prep["ratio"], repeat, 0) - 1.0) * np.minimum(fc, 0.0)
+
     def forces(self, ctx, prep):
         fc = self.commanded(ctx, prep)
-        return self.to_tau(ctx, (prep["ratio"] - 1.0) * np.minimum(fc, 0.0), prep)
+        return self.to_tau(ctx, self._extra(fc, prep, 1), prep)
 
 
 @register("thrust_scale")
@@ -209,6 +230,12 @@ class ThrustScale(_ActuatorEffect):
         prep["scale"] = self.p(params, "scale", n)[:, None]
         return prep
 
+    def kernel_part(self, prep):
+        return ("held",)
+
+    def _extra(self, fc, prep, repeat):
+        return (repeat_rows(prep["scale"], repeat, 0) - 1.0) * fc
+
     def forces(self, ctx, prep):
         fc = self.commanded(ctx, prep)
-        return self.to_tau(ctx, (prep["scale"] - 1.0) * fc, prep)
+        return self.to_tau(ctx, self._extra(fc, prep, 1), prep)

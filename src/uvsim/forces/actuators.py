@@ -288,8 +288,8 @@ class Actuators(ForceTerm):
         (:mod:`uvsim.effects.thrusters`: lag, asymmetry, scale) act on this, so that a weak
         unit's lag lags its weak thrust.  ``prep``: :meth:`prepare`'s for n rows; each row stands
         for ``repeat`` consecutive rows of ``u`` (m = n * repeat)."""
-        gain, rev = _rows(prep["gain"], repeat, 1), _rows(prep["rev"], repeat, 1)
-        fg, fr = _rows(prep["fgain"], repeat, 1), _rows(prep["frev"], repeat, 1)
+        gain, rev = repeat_rows(prep["gain"], repeat, 1), repeat_rows(prep["rev"], repeat, 1)
+        fg, fr = repeat_rows(prep["fgain"], repeat, 1), repeat_rows(prep["frev"], repeat, 1)
         if kind == "force":
             tau = u
             if self.matrix is not None and (gain is not None or rev is not None):
@@ -298,28 +298,63 @@ class Actuators(ForceTerm):
                 # and summed back
                 if prep["B_pinv"] is None:  # B is fixed for the prepared rows: once
                     prep["B_pinv"] = np.linalg.pinv(prep["B"])
-                f = _scaled(matvec(_rows(prep["B_pinv"], repeat, 2), tau), gain, rev)
-                tau = matvec(_rows(prep["B"], repeat, 2), f)
+                f = _scaled(matvec(repeat_rows(prep["B_pinv"], repeat, 2), tau), gain, rev)
+                tau = matvec(repeat_rows(prep["B"], repeat, 2), f)
             return tau if fg is None and fr is None else _scaled(tau, fg, fr)
         if self.matrix is None:
             raise SimulationError(f"inputs are per-thruster {kind} but the vehicle defines no thrusters")
+        return _scaled(self._curve_thrusts(u, kind, prep, voltage, repeat), gain, rev)
+
+    def _curve_thrusts(self, u, kind, prep, voltage, repeat: int = 1):
+        """The curves' thrusts (m, k) for per-thruster inputs ``u`` (m, k), at ``voltage`` (m,)
+        or, where the run logged none, the fitted ``supply_voltage``."""
         volt = voltage
-        sv = _rows(prep["supply"], repeat, 0)  # one fitted voltage (0-d) or one per row (n,)
+        sv = repeat_rows(prep["supply"], repeat, 0)  # one fitted voltage (0-d) or one per row (n,)
         if sv is not None:  # the fitted supply where the run logged no voltage
             volt = (np.broadcast_to(sv, (u.shape[0],)) if volt is None
                     else np.where(np.isnan(np.asarray(volt, float)), sv, volt))
-        return _scaled(self.thrusts(u, kind, prep["groups"], volt), gain, rev)
+        return self.thrusts(u, kind, prep["groups"], volt)
+
+    def generalized(self, u, kind, prep, voltage=None, repeat: int = 1):
+        """The generalized force (m, 6) the units deliver for inputs ``u`` (m, k)
+        (:meth:`delivered`, then the allocation matrix for per-thruster inputs); ``prep`` and
+        ``repeat`` as there.  It depends on the input, the voltage and the parameters only, so
+        it is held over a sample interval with the input (the compiled RK4 takes it per
+        interval: :meth:`kernel_part`)."""
+        d = self.delivered(u, kind, prep, voltage, repeat)
+        return d if kind == "force" else matvec(repeat_rows(prep["B"], repeat, 2), d)
+
+    def held_along(self, U, kind, prep, V=None, rows=None):
+        """:meth:`generalized` for ``n`` trajectories of ``m`` samples: ``U`` (n, m, k),
+        ``V`` (n, m) or None; returns (n, m, 6).  With ``rows`` (:func:`distinct_histories`
+        of the whole run) the thrust curves are evaluated once per distinct input history: a
+        fit's parameter sets share their runs' inputs.  The same numbers as
+        :meth:`generalized` on the rows."""
+        n, m, k = U.shape
+        flat_v = None if V is None else V.reshape(n * m)
+        if kind == "force" or self.matrix is None or np.ndim(prep["supply"]) != 0:
+            rows = None
+        if rows is None:
+            return self.generalized(U.reshape(n * m, k), kind, prep, flat_v, repeat=m).reshape(n, m, 6)
+        first, inv = rows
+        try:
+            f = self._curve_thrusts(U[first].reshape(-1, k), kind, prep, None if V is None else V[first].reshape(-1))
+        except SimulationError:  # name the trajectory of the whole batch
+            return self.generalized(U.reshape(n * m, k), kind, prep, flat_v, repeat=m).reshape(n, m, 6)
+        f = f.reshape(first.size, m, k)[inv].reshape(n * m, k)
+        f = _scaled(f, repeat_rows(prep["gain"], m, 1), repeat_rows(prep["rev"], m, 1))
+        return matvec(repeat_rows(prep["B"], m, 2), f).reshape(n, m, 6)
+
+    def kernel_part(self, prep):
+        # a subclass (SAM's command inputs) may read the state: the numpy path
+        return ("held",) if type(self) is Actuators else None
 
     def forces(self, ctx, prep):
         u = ctx.u
         # inputs are held over a sample interval: the four RK4 stages share the array object
         if prep["u"] is u and prep["v"] is ctx.voltage:
             return prep["f"]
-        d = self.delivered(u, ctx.input_kind, prep, ctx.voltage)
-        if ctx.input_kind == "force":
-            tau = d
-        else:
-            tau = matvec(prep["B"], d)
+        tau = self.generalized(u, ctx.input_kind, prep, ctx.voltage)
         prep["u"], prep["v"], prep["f"] = u, ctx.voltage, tau
         return tau
 
@@ -339,7 +374,22 @@ class Actuators(ForceTerm):
         return {"type": "actuators"}
 
 
-def _rows(a, repeat: int, shared_ndim: int):
+def distinct_histories(U, V):
+    """``(first, inverse)`` with ``U[first][inverse] == U`` (and ``V`` likewise, NaN equal to
+    NaN) for input histories ``U`` (n, m, k), or None when every row differs."""
+    n = U.shape[0]
+    flat = U.reshape(n, -1)
+    if V is not None:
+        flat = np.concatenate([flat, np.nan_to_num(V.reshape(n, -1), nan=-1.0)], axis=1)
+    w = np.random.default_rng(0).standard_normal(flat.shape[1])  # a fingerprint, checked below
+    _, first, inv = np.unique(flat @ w, return_index=True, return_inverse=True)
+    inv = np.asarray(inv).ravel()
+    if first.size == n or not np.array_equal(flat, flat[first[inv]]):
+        return None
+    return first, inv
+
+
+def repeat_rows(a, repeat: int, shared_ndim: int):
     """``a`` with each per-row entry (leading axis n) repeated ``repeat`` times; None, or an
     array of ``shared_ndim`` dimensions (one value for every row), as it is."""
     if a is None or repeat == 1 or np.ndim(a) == shared_ndim:

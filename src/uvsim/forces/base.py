@@ -116,6 +116,17 @@ class ForceTerm:
     def forces(self, ctx: Context, prep: Any) -> np.ndarray:
         raise NotImplementedError
 
+    def kernel_part(self, prep: Any):
+        """This term's form in the compiled RK4 (:mod:`uvsim.kernels`), or None (the default):
+        a plug-in the compiled kernel does not know runs on the numpy path, which stays the
+        reference.  Known forms: ``("restoring", G)`` (a force ``k G`` linear in the body's
+        down axis ``k``, G (3, 6) or (n, 3, 6)), ``("diagonal", D_L, D_Q)``,
+        ``("coupled", D_L, D_Q)``, ``("none",)`` (no force of its own) and ``("held",)``:
+        a force fixed over each sample interval by the input, which the term computes in
+        numpy by ``held_along(U (n, m, k), kind, prep, V (n, m) or None, rows) -> (n, m, 6)``
+        (``rows``: :func:`uvsim.forces.actuators.distinct_histories`, or None)."""
+        return None
+
     def state_derivative(self, ctx: Context, prep: Any, x: np.ndarray) -> np.ndarray:
         return np.zeros((ctx.nu.shape[0], 0))
 

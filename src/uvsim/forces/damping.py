@@ -71,6 +71,9 @@ class DiagonalDamping(ForceTerm):
         DQ = np.stack([np.broadcast_to(np.asarray(params[k], float), (n,)) for k in QUADRATIC_NAMES], -1)
         return DL, DQ
 
+    def kernel_part(self, prep):
+        return ("diagonal", *prep)
+
     def forces(self, ctx, prep):
         DL, DQ = prep
         nr = ctx.nu_r
@@ -120,6 +123,9 @@ class CoupledDamping(ForceTerm):
                         M[:, i, j] = params[key]
             mats.append(M)
         return mats
+
+    def kernel_part(self, prep):
+        return ("coupled", *prep)
 
     def forces(self, ctx, prep):
         DL, DQ = prep

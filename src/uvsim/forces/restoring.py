@@ -45,6 +45,9 @@ class Restoring(ForceTerm):
         shared = bool(np.all(G == G[:1]))
         return B, r_b, (G[0] if shared else G)
 
+    def kernel_part(self, prep):
+        return ("restoring", prep[2])
+
     def forces(self, ctx, prep):
         B, r_b, G = prep
         k = ctx.R[:, 2, :]  # NED down axis in body coordinates, (n, 3)

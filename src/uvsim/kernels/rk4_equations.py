@@ -1,0 +1,238 @@
+"""The rigid-body RK4 of :mod:`uvsim.model` written for a compiler (issue 46, item 3).
+
+Plain Python on scalars and small arrays, so that numba compiles these functions as they are
+(:mod:`uvsim.kernels.numba_rk4`), and so that they also run uncompiled (slowly) where numba is
+not installed, which is how the tests check the packing of parameters without it.
+
+What the functions cover is what :func:`uvsim.kernels.plan.compiled_plan` accepts: a model with
+no term states, no mass changes and no time-varying current, whose forces are
+
+* restoring, ``tau_g = k G`` with ``k = R^T e_3`` (:mod:`uvsim.forces.restoring`, Fossen 2021
+  eq. 4.6 written linear in ``k``);
+* diagonal and coupled damping on ``nu_r`` (:mod:`uvsim.forces.damping`, seed 000 eq. 7-9,
+  paper sign);
+* actuators, whose force is held over each sample interval with the input (it depends on the
+  input, the voltage and parameters only): computed by :class:`uvsim.forces.actuators.Actuators`
+  itself, in numpy, and passed in as ``tau_act``;
+* a constant NED current (seed 000 eq. 1-2; the split Coriolis form of :meth:`Model.rhs`).
+
+The equations are :meth:`uvsim.model.Model.rhs`'s, in the same order and the same homogeneous
+form of the rotation (:func:`uvsim.bilinear.rot_qrate`), and :func:`advance` is
+:func:`uvsim.simulate._rk4_steps`'s loop: ``tests/test_kernels.py`` holds the two to 1e-10 on
+states and accelerations for random parameter sets, inputs and currents.  Symbols as in
+Fossen 2021: ``nu = [u, v, w, p, q, r]``, ``M = M_RB + M_A``, ``C(nu) nu = [w x a; v x a + w x b]``
+with ``[a; b] = M nu`` (eq. 3.46).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+# --- layout of one parameter row ``th`` ------------------------------------------------------
+O_MINV = 0     # (M_RB + M_A)^-1, row-major 6x6
+O_M = 36       # M = M_RB + M_A
+O_MRB = 72     # M_RB (with the terms' fixed masses)
+O_MA = 108     # M_A
+O_G = 144      # restoring: tau_g[j] = sum_i k_i G[i, j], G (3, 6) row-major
+O_DL = 162     # diagonal damping, linear (6), paper sign
+O_DQ = 168     # diagonal damping, quadratic (6)
+O_CL = 174     # coupled damping, linear 6x6 row-major
+O_CQ = 210     # coupled damping, quadratic 6x6
+O_VC = 246     # constant current, NED (3), m/s
+N_TH = 249
+
+
+def rhs(y, tau_act, th, has_current, has_coupled, out, tau):
+    """State derivative of one trajectory into ``out`` (13,): state ``y`` (13,), the held
+    actuator force ``tau_act`` (6,), parameters ``th`` (N_TH,); ``tau`` (6,) is scratch."""
+    qw = y[3]
+    qx = y[4]
+    qy = y[5]
+    qz = y[6]
+    # rotation body -> NED, the homogeneous form of uvsim.bilinear.rot_qrate
+    ww = qw * qw
+    xx = qx * qx
+    yy = qy * qy
+    zz = qz * qz
+    xy = qx * qy
+    xz = qx * qz
+    yz = qy * qz
+    wx = qw * qx
+    wy = qw * qy
+    wz = qw * qz
+    R00 = ww + xx - yy - zz
+    R01 = 2 * (xy - wz)
+    R02 = 2 * (xz + wy)
+    R10 = 2 * (xy + wz)
+    R11 = ww - xx + yy - zz
+    R12 = 2 * (yz - wx)
+    R20 = 2 * (xz - wy)
+    R21 = 2 * (yz + wx)
+    R22 = ww - xx - yy + zz
+    u = y[7]
+    v = y[8]
+    w = y[9]
+    p = y[10]
+    q = y[11]
+    r = y[12]
+    nu = (u, v, w, p, q, r)
+    # current seen from the body: nu_r = nu - [R^T v_c; 0], nu_c_dot = [-omega x R^T v_c; 0]
+    ur = u
+    vr = v
+    wr = w
+    c0 = 0.0
+    c1 = 0.0
+    c2 = 0.0
+    if has_current:
+        vn = th[O_VC]
+        ve = th[O_VC + 1]
+        vd = th[O_VC + 2]
+        b0 = vn * R00 + ve * R10 + vd * R20
+        b1 = vn * R01 + ve * R11 + vd * R21
+        b2 = vn * R02 + ve * R12 + vd * R22
+        ur = u - b0
+        vr = v - b1
+        wr = w - b2
+        c0 = -(q * b2 - r * b1)
+        c1 = -(r * b0 - p * b2)
+        c2 = -(p * b1 - q * b0)
+    nr = (ur, vr, wr, p, q, r)
+    for j in range(6):
+        # restoring (k = third row of R), then diagonal damping (paper sign), then actuators
+        t = R20 * th[O_G + j] + R21 * th[O_G + 6 + j] + R22 * th[O_G + 12 + j]
+        t = t + (th[O_DL + j] + th[O_DQ + j] * abs(nr[j])) * nr[j]
+        if has_coupled:
+            for i in range(6):
+                t = t + th[O_CL + 6 * j + i] * nr[i] + th[O_CQ + 6 * j + i] * (abs(nr[i]) * nr[i])
+        tau[j] = t + tau_act[j]
+    if has_current:
+        _coriolis_sub(tau, nu, th, O_MRB)
+        _coriolis_sub(tau, nr, th, O_MA)
+        cd = (c0, c1, c2)
+        for j in range(6):
+            tau[j] = tau[j] + th[O_MA + 6 * j] * cd[0] + th[O_MA + 6 * j + 1] * cd[1] + th[O_MA + 6 * j + 2] * cd[2]
+    else:
+        _coriolis_sub(tau, nu, th, O_M)
+    for j in range(6):
+        s = 0.0
+        for i in range(6):
+            s = s + th[O_MINV + 6 * j + i] * tau[i]
+        out[7 + j] = s
+    # kinematics: p_dot = R nu_1, q_dot = 1/2 q (x) [0, omega] (seed 003 eq. 1-4)
+    out[0] = R00 * u + R01 * v + R02 * w
+    out[1] = R10 * u + R11 * v + R12 * w
+    out[2] = R20 * u + R21 * v + R22 * w
+    out[3] = -0.5 * (qx * p + qy * q + qz * r)
+    out[4] = 0.5 * (qw * p + qy * r - qz * q)
+    out[5] = 0.5 * (qw * q + qz * p - qx * r)
+    out[6] = 0.5 * (qw * r + qx * q - qy * p)
+
+
+def _coriolis_sub(tau, nu, th, o):
+    """``tau -= C(nu) nu`` with ``[a; b] = M nu`` for the 6x6 ``M`` at ``th[o:o + 36]``."""
+    a0 = 0.0
+    a1 = 0.0
+    a2 = 0.0
+    b0 = 0.0
+    b1 = 0.0
+    b2 = 0.0
+    for i in range(6):
+        a0 = a0 + th[o + i] * nu[i]
+        a1 = a1 + th[o + 6 + i] * nu[i]
+        a2 = a2 + th[o + 12 + i] * nu[i]
+        b0 = b0 + th[o + 18 + i] * nu[i]
+        b1 = b1 + th[o + 24 + i] * nu[i]
+        b2 = b2 + th[o + 30 + i] * nu[i]
+    u = nu[0]
+    v = nu[1]
+    w = nu[2]
+    p = nu[3]
+    q = nu[4]
+    r = nu[5]
+    tau[0] = tau[0] - (q * a2 - r * a1)
+    tau[1] = tau[1] - (r * a0 - p * a2)
+    tau[2] = tau[2] - (p * a1 - q * a0)
+    tau[3] = tau[3] - ((v * a2 - w * a1) + (q * b2 - r * b1))
+    tau[4] = tau[4] - ((w * a0 - u * a2) + (r * b0 - p * b2))
+    tau[5] = tau[5] - ((u * a1 - v * a0) + (p * b1 - q * b0))
+
+
+def advance(y, T, TAU, TH, substeps, has_current, has_coupled, Y, ACC, want_acc, i0, n_t, speed_max, first_bad):
+    """RK4 over ``m`` sample intervals for every row, in place.
+
+    ``y`` (n, 13) the states at ``T[:, 0]`` (updated to ``T[:, m]``); ``T`` (n, m + 1) sample
+    times; ``TAU`` (n, m, 6) actuator forces held over each interval; ``TH`` (n, N_TH);
+    ``Y`` (n, m, 13) receives the states at ``T[:, 1:]``; ``ACC`` (n, m, 6) the acceleration at
+    each interval's start (first RK4 stage) when ``want_acc``.  ``i0`` is the global index of
+    the first interval and ``n_t`` the run's number of samples: as in ``_rk4_steps``, a row is
+    checked at every 16th interval and the last, and a row whose state is not finite or whose
+    speed reaches ``speed_max`` becomes NaN from then on (its non-finite earlier states NaN
+    too), with the interval recorded in ``first_bad`` (n,) (-1: never)."""
+    n = y.shape[0]
+    m = TAU.shape[1]
+    k1 = np.empty(13)
+    k2 = np.empty(13)
+    k3 = np.empty(13)
+    k4 = np.empty(13)
+    ys = np.empty(13)
+    yc = np.empty(13)
+    tau = np.empty(6)
+    for row in range(n):
+        th = TH[row]
+        for c in range(13):
+            yc[c] = y[row, c]
+        dead = first_bad[row] >= 0
+        last_check = -1
+        for i in range(m):
+            if dead:
+                for c in range(13):
+                    Y[row, i, c] = np.nan
+                if want_acc:
+                    for c in range(6):
+                        ACC[row, i, c] = np.nan
+                continue
+            h = (T[row, i + 1] - T[row, i]) / substeps
+            tau_act = TAU[row, i]
+            for sub in range(substeps):
+                rhs(yc, tau_act, th, has_current, has_coupled, k1, tau)
+                if want_acc and sub == 0:
+                    for c in range(6):
+                        ACC[row, i, c] = k1[7 + c]
+                for c in range(13):
+                    ys[c] = yc[c] + (0.5 * h) * k1[c]
+                rhs(ys, tau_act, th, has_current, has_coupled, k2, tau)
+                for c in range(13):
+                    ys[c] = yc[c] + (0.5 * h) * k2[c]
+                rhs(ys, tau_act, th, has_current, has_coupled, k3, tau)
+                for c in range(13):
+                    ys[c] = yc[c] + h * k3[c]
+                rhs(ys, tau_act, th, has_current, has_coupled, k4, tau)
+                for c in range(13):
+                    yc[c] = yc[c] + (h / 6.0) * (k1[c] + 2.0 * (k2[c] + k3[c]) + k4[c])
+                s = math.sqrt(yc[3] * yc[3] + yc[4] * yc[4] + yc[5] * yc[5] + yc[6] * yc[6])
+                for c in range(3, 7):
+                    yc[c] = yc[c] / s
+            for c in range(13):
+                Y[row, i, c] = yc[c]
+            g = i0 + i
+            if (g & 15) == 15 or g == n_t - 2:
+                ok = True
+                for c in range(13):
+                    if not math.isfinite(yc[c]):
+                        ok = False
+                for c in range(7, 13):
+                    if abs(yc[c]) >= speed_max:
+                        ok = False
+                if not ok:
+                    dead = True
+                    first_bad[row] = g
+                    for j in range(last_check + 1, i + 1):
+                        for c in range(13):
+                            if not math.isfinite(Y[row, j, c]):
+                                Y[row, j, c] = np.nan
+                    for c in range(13):
+                        yc[c] = np.nan
+                last_check = i
+        for c in range(13):
+            y[row, c] = yc[c]

@@ -1,0 +1,227 @@
+"""The compiled RK4 (uvsim.kernels) against the numpy path, the reference (issue 46, item 3).
+
+Random parameter sets, inputs of every kind, currents, coupled damping, per-row time grids,
+substeps and voltages: states and accelerations equal to 1e-10.  The uncompiled text of the
+equations is checked the same way, so the packing is tested where numba is not installed.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import uvsim
+from uvsim import kernels
+from uvsim.errors import SimulationError
+from uvsim.kernels import rk4_equations
+from uvsim.kernels.plan import compiled_plan, why_not_compiled
+from uvsim.model import Model
+from uvsim.vehicle import load_vehicle, vehicle_from_dict
+
+needs_numba = pytest.mark.skipif(not kernels.numba_installed(), reason="numba not installed (uvsim[fast])")
+
+TOL = 1e-10
+
+
+def _random_overrides(rng, n, k):
+    """Parameter sets that differ in every part the kernel packs (inertia, added mass, CG/CB,
+    damping, thruster gains and reverse ratios, buoyancy)."""
+    return {
+        "m": rng.uniform(10, 16, n), "B": rng.uniform(125, 140, n), "z_g": rng.uniform(0.0, 0.02, n),
+        "z_b": rng.uniform(-0.05, -0.02, n), "x_b": rng.uniform(-0.01, 0.01, n),
+        "I_xx": rng.uniform(0.2, 0.5, n), "I_xz": rng.uniform(-0.02, 0.02, n),
+        "X_u": rng.uniform(-5, -0.1, n), "Z_ww": rng.uniform(-120, -40, n),
+        "N_rr": rng.uniform(-2, -0.1, n), "K_p": rng.uniform(-1, -0.1, n),
+        **{f"thruster_gain_{i + 1}": rng.uniform(0.5, 1.2, n) for i in range(k)},
+        **{f"thruster_reverse_{i + 1}": rng.uniform(0.6, 1.0, n) for i in range(k)},
+    }
+
+
+def _coupled_vehicle(rng):
+    d = load_vehicle("bluerov2_heavy").to_dict()
+    DL = -np.diag([3.0, 4.0, 5.0, 0.4, 0.4, 0.3]) + 0.05 * rng.standard_normal((6, 6))
+    DQ = -np.diag([35.0, 43.0, 70.0, 0.4, 0.4, 0.4]) + 0.5 * rng.standard_normal((6, 6))
+    d["damping"] = {"type": "coupled", "linear": DL.tolist(), "quadratic": DQ.tolist()}
+    return vehicle_from_dict(d, source="test")
+
+
+def _both(fn):
+    out = {}
+    for name in ("numpy", "numba"):
+        with kernels.use(name):
+            out[name] = fn()
+    return out
+
+
+def _close(a, b, tol=TOL):
+    a, b = np.asarray(a), np.asarray(b)
+    assert np.array_equal(np.isnan(a), np.isnan(b))
+    ok = ~np.isnan(a)
+    assert np.max(np.abs(a[ok] - b[ok]), initial=0.0) <= tol * max(1.0, np.max(np.abs(b[ok]), initial=0.0))
+
+
+@needs_numba
+@pytest.mark.parametrize("kind", ["pwm", "thrust", "force"])
+def test_batched_states_and_accelerations_equal_numpy(kind):
+    rng = np.random.default_rng(1)
+    veh = load_vehicle("bluerov2_heavy")
+    n, t = 7, np.arange(0.0, 6.0, 0.02)
+    k = 6 if kind == "force" else 8
+    lo, hi = {"pwm": (1250, 1750), "thrust": (-30, 30), "force": (-20, 20)}[kind]
+    U = rng.uniform(lo, hi, (n, t.size, k))
+    U[:, :, :] = np.repeat(U[:, ::25], 25, axis=1)[:, :t.size]  # steps held 0.5 s: the vehicle moves
+    ov = _random_overrides(rng, n, 8)
+    if kind == "force":
+        ov = {k_: v for k_, v in ov.items() if not k_.startswith("thruster_")}
+    nu0 = rng.uniform(-0.3, 0.3, (n, 6))
+    r = _both(lambda: uvsim.simulate_batch(veh, t, U, input_kind=kind, overrides=ov, nu0=nu0,
+                                           return_acceleration=True))
+    assert np.abs(r["numpy"].y[:, -1, 7:]).max() > 0.05  # something happened
+    _close(r["numba"].y, r["numpy"].y)
+    _close(r["numba"].nu_dot, r["numpy"].nu_dot)
+
+
+@needs_numba
+def test_current_coupled_damping_substeps_and_per_row_grids():
+    rng = np.random.default_rng(2)
+    veh = _coupled_vehicle(rng)
+    n = 5
+    T = np.empty((n, 300))
+    for j in range(n):  # runs of different lengths, padded by repeating the last time
+        L = 200 + 20 * j
+        T[j, :L] = np.cumsum(rng.uniform(0.015, 0.025, L))
+        T[j, L:] = T[j, L - 1]
+    U = rng.uniform(-25, 25, (n, 300, 8))
+    ov = {"current_n": rng.uniform(-0.3, 0.3, n), "current_e": rng.uniform(-0.3, 0.3, n),
+          "current_d": rng.uniform(-0.1, 0.1, n), "D_L[0,0]": rng.uniform(-3, -0.1, n),
+          "D_Q[2,4]": rng.uniform(-1, 1, n)}
+    q0 = np.tile([0.95, 0.1, -0.2, 0.2], (n, 1))
+    q0 /= np.linalg.norm(q0, axis=1, keepdims=True)
+    r = _both(lambda: uvsim.simulate_batch(veh, T, U, input_kind="thrust", overrides=ov, q0=q0, substeps=3,
+                                           return_acceleration=True))
+    _close(r["numba"].y, r["numpy"].y)
+    _close(r["numba"].nu_dot, r["numpy"].nu_dot)
+
+
+@needs_numba
+def test_voltage_dependent_curve_and_fitted_supply():
+    d = load_vehicle("bluerov2_heavy").to_dict()
+    d["thrusters"] = dict(d["thrusters"], curve={"voltage_table": "t200", "nominal_voltage": 16.0})
+    veh = vehicle_from_dict(d, source="test")
+    rng = np.random.default_rng(3)
+    t = np.arange(0.0, 4.0, 0.02)
+    U = np.repeat(rng.uniform(1300, 1700, (3, 8, 8)), 25, axis=1)[:, :t.size]
+    V = rng.uniform(13, 17, (3, t.size))
+    V[1, 50:90] = np.nan  # not logged there: the fitted supply
+    ov = {"supply_voltage": np.array([14.0, 15.0, 16.5])}
+    r = _both(lambda: uvsim.simulate_batch(veh, t, U, input_kind="pwm", overrides=ov, voltage=V))
+    _close(r["numba"].y, r["numpy"].y)
+
+
+@needs_numba
+def test_shared_input_histories_give_the_same_numbers():
+    """A fit's rows share their runs' inputs: the curves are evaluated once per distinct history."""
+    rng = np.random.default_rng(4)
+    veh = load_vehicle("bluerov2_heavy")
+    t = np.arange(0.0, 3.0, 0.02)
+    runs = np.repeat(rng.uniform(1300, 1700, (2, 6, 8)), 25, axis=1)[:, :t.size]
+    idx = np.array([0, 1, 0, 1, 1, 0])
+    ov = _random_overrides(rng, idx.size, 8)
+    r = _both(lambda: uvsim.simulate_batch(veh, t, runs[idx], input_kind="pwm", overrides=ov))
+    _close(r["numba"].y, r["numpy"].y)
+
+
+@needs_numba
+def test_single_simulate_and_blowup_messages_agree():
+    veh = load_vehicle("bluerov2_heavy")
+    t = np.arange(0.0, 10.0, 0.05)
+    U = np.full((t.size, 6), 0.0)
+    U[:, 0] = 1e9  # absurd surge force: blows up
+    msgs = {}
+    for name in ("numpy", "numba"):
+        with kernels.use(name), pytest.raises(SimulationError, match="blew up") as exc:
+            uvsim.simulate(veh, t, U, input_kind="force")
+        msgs[name] = str(exc.value)
+    assert msgs["numba"] == msgs["numpy"]
+    # "nan": the blown-up row is NaN from the same check on (the 16th interval), the other
+    # row untouched.  Between the blow-up and the check the two may differ in which
+    # components of an infinite state are NaN (numpy's bilinear form multiplies zeros by inf)
+    UU = np.stack([U, np.zeros_like(U)])
+    r = _both(lambda: uvsim.simulate_batch(veh, t, UU, input_kind="force", on_blowup="nan"))
+    _close(r["numba"].y[1], r["numpy"].y[1])
+    a, b = r["numba"].y[0], r["numpy"].y[0]
+    assert np.isnan(a[17:]).all() and np.isnan(b[17:]).all()
+    both = np.isfinite(a) & np.isfinite(b)
+    assert both[0].all() and np.array_equal(a[both], b[both])
+
+
+def test_uncompiled_equations_match_the_numpy_path():
+    """The text numba compiles, run as plain Python: the packing is checked without numba."""
+    rng = np.random.default_rng(5)
+    veh = _coupled_vehicle(rng)
+    n, t = 3, np.arange(0.0, 0.6, 0.02)
+    U = rng.uniform(-20, 20, (n, t.size, 8))
+    ov = {k: v for k, v in _random_overrides(rng, n, 8).items() if k[0] not in "XYZKMN"}
+    ov.update({"current_n": rng.uniform(-0.3, 0.3, n), "D_Q[5,5]": rng.uniform(-1, -0.1, n)})
+    model = Model(veh, ov, n=n, input_kind="thrust")
+    plan = compiled_plan(model)
+    y0 = model.initial_state(nu=rng.uniform(-0.2, 0.2, (n, 6)))
+    with kernels.use("numpy"):
+        ref = uvsim.simulate_batch(veh, t, U, input_kind="thrust", y0=y0, model=model, return_acceleration=True)
+    from uvsim.kernels.run import rk4_compiled
+
+    acc = np.empty((n, t.size, 6))
+    Y = rk4_compiled(rk4_equations.advance, plan, model, np.tile(t, (n, 1)), U, y0, 1, "nan", None, None, acc,
+                     1e3)
+    _close(Y, ref.y)
+    _close(acc, ref.nu_dot)
+
+
+def test_models_the_kernel_cannot_run_say_why_and_run_on_numpy():
+    veh = load_vehicle("bluerov2_heavy").with_effects([{"type": "thruster_lag", "time_constant": 0.1}])
+    model = Model(veh, input_kind="pwm")
+    assert "states" in why_not_compiled(model) and compiled_plan(model) is None
+    tether = load_vehicle("bluerov2_heavy").with_effects([{"type": "tether", "stiffness": 1.0}])
+    assert "Tether" in why_not_compiled(Model(tether, input_kind="pwm"))
+    sam = Model("sam")
+    assert why_not_compiled(sam) is not None
+    assert why_not_compiled(Model("bluerov2_heavy", input_kind="pwm")) is None
+    t = np.arange(0.0, 1.0, 0.02)
+    res = uvsim.simulate(veh, t, np.full((t.size, 8), 1600.0), input_kind="pwm")  # whatever the setting
+    assert np.isfinite(res.y).all()
+
+
+def test_kernel_names_are_checked(monkeypatch):
+    with pytest.raises(SimulationError, match="unknown.*did you mean 'numba'"):
+        kernels.use("numbaa")
+    monkeypatch.setenv("UVSIM_KERNEL", "fortran")
+    with pytest.raises(SimulationError, match="UVSIM_KERNEL"):
+        kernels.current()
+    monkeypatch.setenv("UVSIM_KERNEL", "numpy")
+    assert kernels.current() == "numpy" and kernels.compiled_advance() is None
+    with kernels.use("auto"):
+        assert kernels.current() == "auto"
+    assert kernels.current() == "numpy"
+
+
+@needs_numba
+@pytest.mark.parametrize("kind", ["pwm", "force"])
+def test_effects_with_a_compiled_form_equal_numpy(kind):
+    """Ballast (a force linear in the down axis), current (through nu_r) and the thrust scale
+    and asymmetry (held over each interval) run compiled, with per-row effect parameters."""
+    rng = np.random.default_rng(6)
+    veh = load_vehicle("bluerov2_heavy").with_effects([
+        {"type": "ballast", "weight": 3.0, "x": 0.05, "z": 0.1, "mass": 0.3},
+        {"type": "current", "n": 0.1, "e": -0.05},
+        {"type": "thrust_scale", "scale": 0.9},
+        {"type": "thrust_asymmetry", "ratio": 0.7}])
+    n, t = 4, np.arange(0.0, 4.0, 0.02)
+    k = 8 if kind == "pwm" else 6
+    lo, hi = (1300, 1700) if kind == "pwm" else (-20, 20)
+    U = np.repeat(rng.uniform(lo, hi, (n, 8, k)), 25, axis=1)[:, :t.size]
+    names = uvsim.Model(veh).params
+    ov = {nm: rng.uniform(0.6, 1.1, n) for nm in names if nm.endswith(("scale", "ratio"))}
+    ov.update({nm: rng.uniform(1.0, 4.0, n) for nm in names if nm.endswith("weight")})
+    assert len(ov) == 3 and why_not_compiled(Model(veh, ov, n=n, input_kind=kind)) is None
+    r = _both(lambda: uvsim.simulate_batch(veh, t, U, input_kind=kind, overrides=ov, return_acceleration=True))
+    _close(r["numba"].y, r["numpy"].y)
+    _close(r["numba"].nu_dot, r["numpy"].nu_dot)
