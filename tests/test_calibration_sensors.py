@@ -86,6 +86,14 @@ def test_lagged_attitude_model_and_window_restarts():
     np.testing.assert_array_equal(p1[50:], p2[50:])
     np.testing.assert_allclose(p1[:, 0], logged, atol=2e-3)
     assert m.for_windows([0, 50]) is not m and measurements_for(run, None).for_windows([0, 50]).attitude_lag == 0
+    # windows of one length are filtered in one call: the same numbers as one by one (and with a
+    # batch of states and a last, shorter window), to round-off: one by one, each window's filter
+    # coefficient comes from its own first time step, equal on a uniform clock to the last bits
+    mw = m.for_windows([0, 40, 80, 120, 160, 185])
+    Y = np.stack([y, y2])
+    batched = mw.predict(Y)["attitude"]
+    object.__setattr__(mw, "_uniform", False)  # the one-by-one path
+    np.testing.assert_allclose(batched, mw.predict(Y)["attitude"], rtol=0, atol=1e-12)
     with pytest.raises(uvsim.errors.CalibrationError, match="attitude_lag"):
         measurements_for(run, None, attitude_lag=float("nan"))
 

@@ -59,7 +59,7 @@ import numpy as np
 
 from uvsim.fit_settings import SAMPLE_WEIGHTINGS  # noqa: F401 (its home: uvsim.fit_settings)
 from uvsim.errors import CalibrationError
-from uvsim.estimation.lag import first_order_lag, lag_time_constant
+from uvsim.estimation.lag import UNIFORM_RTOL, first_order_lag, lag_time_constant
 from uvsim.estimation.noise import SampleKind, noise_sigma, sample_kind
 from uvsim.accelerometer import _components, _specific_force, specific_force  # noqa: F401  (specific_force: re-exported)
 from uvsim.kinematics import (cross_components, down_axis_components, quat_to_euler,  # noqa: F401
@@ -150,6 +150,7 @@ class RunMeasurements:
     #: sample (:func:`per_second_factors`; empty: per sample)
     rate_factors: dict = field(default_factory=dict)
     _restart_cache: tuple | None = field(default=None, repr=False, compare=False)
+    _uniform: bool | None = field(default=None, repr=False, compare=False)
 
     # ------------------------------------------------------------------ structure
     @property
@@ -235,14 +236,38 @@ class RunMeasurements:
         start = self._restart_cache[1]
         if offset is not None:
             start = start - np.asarray(offset)[..., None, :]  # (..., R, 3)
-        bounds = list(rows) + [self.n]
+        bounds = np.array(list(rows) + [self.n])
         out = np.empty_like(euler)
-        for i, (a, b) in enumerate(zip(bounds[:-1], bounds[1:])):
-            x = unwrap_angles(euler[..., a:b, :], axis=-2)
-            y0 = np.where(np.isfinite(start[..., i, :]), start[..., i, :], x[..., 0, :])
-            y0 = x[..., 0, :] + wrap(y0 - x[..., 0, :])  # on the prediction's branch
-            out[..., a:b, :] = first_order_lag(self.t[a:b], x, self.attitude_lag, y0)
+        # segments of one length on one uniform clock (a windowed fit's windows) in one call:
+        # each segment is filtered on its own all the same (the same operations, to the bit)
+        lengths = np.diff(bounds)
+        same = np.flatnonzero(lengths == lengths[0])
+        i_run = int(same.size if np.array_equal(same, np.arange(same.size)) else 1)
+        if i_run > 1 and self._uniform_clock():
+            a, L = int(bounds[0]), int(lengths[0])
+            seg = euler[..., a:a + i_run * L, :].reshape(euler.shape[:-2] + (i_run, L, euler.shape[-1]))
+            out[..., a:a + i_run * L, :] = self._lag_segments(seg, start[..., :i_run, :], self.t[a:a + L]).reshape(
+                euler.shape[:-2] + (i_run * L, euler.shape[-1]))
+        else:
+            i_run = 0
+        for i in range(i_run, lengths.size):
+            a, b = int(bounds[i]), int(bounds[i + 1])
+            out[..., a:b, :] = self._lag_segments(euler[..., a:b, :], start[..., i, :], self.t[a:b])
         return out
+
+    def _lag_segments(self, euler, start, t):
+        """The lagged angles of segments ``euler`` (..., L, 3) started at ``start`` (..., 3)."""
+        x = unwrap_angles(euler, axis=-2)
+        y0 = np.where(np.isfinite(start), start, x[..., 0, :])
+        y0 = x[..., 0, :] + wrap(y0 - x[..., 0, :])  # on the prediction's branch
+        return first_order_lag(t, x, self.attitude_lag, y0)
+
+    def _uniform_clock(self) -> bool:
+        """True when the run's time steps are uniform (the lag's one-coefficient filter)."""
+        if self._uniform is None:
+            dt = np.diff(self.t)
+            self._uniform = bool(dt.size and np.ptp(dt) <= UNIFORM_RTOL * max(float(np.median(dt)), 1e-300))
+        return self._uniform
 
     # ------------------------------------------------------------------ prediction
     def predict(self, y: np.ndarray, nu_dot: np.ndarray | None = None,

@@ -14,7 +14,7 @@ from uvsim.errors import SimulationError
 from uvsim.forces.actuators import distinct_histories
 
 #: Sample intervals per call of the kernel (a multiple of 16).
-CHUNK = 64
+CHUNK = 16
 
 
 def blowup_message(row: int, t: float, speed_max: float) -> str:
