@@ -170,6 +170,7 @@ def test_uncompiled_equations_match_the_numpy_path():
     from uvsim.kernels.run import rk4_compiled
 
     acc = np.empty((n, t.size, 6))
+    assert plan.parts == rk4_equations.CURRENT | rk4_equations.COUPLED
     Y = rk4_compiled(rk4_equations.advance, plan, model, np.tile(t, (n, 1)), U, y0, 1, "nan", None, None, acc,
                      1e3)
     _close(Y, ref.y)
@@ -180,8 +181,11 @@ def test_models_the_kernel_cannot_run_say_why_and_run_on_numpy():
     veh = load_vehicle("bluerov2_heavy").with_effects([{"type": "thruster_lag", "time_constant": 0.1}])
     model = Model(veh, input_kind="pwm")
     assert "states" in why_not_compiled(model) and compiled_plan(model) is None
-    tether = load_vehicle("bluerov2_heavy").with_effects([{"type": "tether", "stiffness": 1.0}])
-    assert "Tether" in why_not_compiled(Model(tether, input_kind="pwm"))
+    floor = load_vehicle("bluerov2_heavy").with_effects([{"type": "bottom_effect", "floor_d": 3.0, "damping": -10.0}])
+    assert "BottomEffect" in why_not_compiled(Model(floor, input_kind="pwm"))
+    two = load_vehicle("bluerov2_heavy").with_effects([{"type": "tether", "stiffness": 1.0},
+                                                      {"type": "tether", "tension": 2.0}])
+    assert "one tether" in why_not_compiled(Model(two, input_kind="pwm")) and compiled_plan(Model(two)) is None
     sam = Model("sam")
     assert why_not_compiled(sam) is not None
     assert why_not_compiled(Model("bluerov2_heavy", input_kind="pwm")) is None
@@ -204,24 +208,29 @@ def test_kernel_names_are_checked(monkeypatch):
 
 
 @needs_numba
-@pytest.mark.parametrize("kind", ["pwm", "force"])
-def test_effects_with_a_compiled_form_equal_numpy(kind):
-    """Ballast (a force linear in the down axis), current (through nu_r) and the thrust scale
-    and asymmetry (held over each interval) run compiled, with per-row effect parameters."""
-    rng = np.random.default_rng(6)
+@pytest.mark.parametrize("kind,horizontal", [("pwm", False), ("force", False), ("pwm", True)])
+def test_effects_with_a_compiled_form_equal_numpy(kind, horizontal):
+    """Ballast (a force linear in the down axis), current (through nu_r), the thrust scale
+    and asymmetry (held over each interval) and a tether (3-D or horizontal, attached off
+    the origin, taut and slack) run compiled, with per-row effect parameters."""
+    rng = np.random.default_rng(6 + horizontal)
     veh = load_vehicle("bluerov2_heavy").with_effects([
         {"type": "ballast", "weight": 3.0, "x": 0.05, "z": 0.1, "mass": 0.3},
         {"type": "current", "n": 0.1, "e": -0.05},
         {"type": "thrust_scale", "scale": 0.9},
-        {"type": "thrust_asymmetry", "ratio": 0.7}])
+        {"type": "thrust_asymmetry", "ratio": 0.7},
+        {"type": "tether", "attach_x": -0.2, "attach_z": -0.05, "anchor_n": -1.0, "anchor_e": 0.5,
+         "anchor_d": -0.3, "tension": 2.0, "stiffness": 5.0, "slack_length": 1.2, "length": 5.0,
+         "lumped_drag": 2.0, "horizontal": horizontal}])
     n, t = 4, np.arange(0.0, 4.0, 0.02)
     k = 8 if kind == "pwm" else 6
     lo, hi = (1300, 1700) if kind == "pwm" else (-20, 20)
     U = np.repeat(rng.uniform(lo, hi, (n, 8, k)), 25, axis=1)[:, :t.size]
     names = uvsim.Model(veh).params
     ov = {nm: rng.uniform(0.6, 1.1, n) for nm in names if nm.endswith(("scale", "ratio"))}
-    ov.update({nm: rng.uniform(1.0, 4.0, n) for nm in names if nm.endswith("weight")})
-    assert len(ov) == 3 and why_not_compiled(Model(veh, ov, n=n, input_kind=kind)) is None
+    ov.update({nm: rng.uniform(1.0, 4.0, n) for nm in names if nm.endswith(("weight", "stiffness"))})
+    ov.update({nm: rng.uniform(0.5, 2.0, n) for nm in names if nm.endswith("slack_length")})
+    assert len(ov) == 5 and why_not_compiled(Model(veh, ov, n=n, input_kind=kind)) is None
     r = _both(lambda: uvsim.simulate_batch(veh, t, U, input_kind=kind, overrides=ov, return_acceleration=True))
     _close(r["numba"].y, r["numpy"].y)
     _close(r["numba"].nu_dot, r["numpy"].nu_dot)

@@ -102,6 +102,14 @@ class Tether(Effect):
         return (r_a, p0, g["tension"], g["stiffness"], g["slack_length"], c_drag, bool(np.any(c_drag)), attached,
                 g["lumped_drag"], bool(np.any(g["lumped_drag"])))
 
+    def kernel_part(self, prep):
+        r_a, p0, T0, k, Ls, c_drag, _, _, c_l, _ = prep
+        n = r_a.shape[0]
+        horizontal = p0.shape[1] == 2
+        anchor = np.concatenate([p0, np.zeros((n, 1))], 1) if horizontal else p0
+        return ("tether", np.column_stack([np.broadcast_to(r_a, (n, 3)), anchor, np.full(n, float(horizontal)),
+                                           T0, k, Ls, c_drag, c_l]))
+
     def forces(self, ctx, prep):
         # evaluated in the body frame (one rotation instead of three; the tether is evaluated
         # at every RK4 stage of every diagnosis fit, docs/performance.md):

@@ -121,7 +121,8 @@ class ForceTerm:
         a plug-in the compiled kernel does not know runs on the numpy path, which stays the
         reference.  Known forms: ``("restoring", G)`` (a force ``k G`` linear in the body's
         down axis ``k``, G (3, 6) or (n, 3, 6)), ``("diagonal", D_L, D_Q)``,
-        ``("coupled", D_L, D_Q)``, ``("none",)`` (no force of its own) and ``("held",)``:
+        ``("coupled", D_L, D_Q)``, ``("tether", values (n, 12))`` (the layout of
+        ``uvsim.kernels.rk4_equations.O_TE``), ``("none",)`` (no force of its own) and ``("held",)``:
         a force fixed over each sample interval by the input, which the term computes in
         numpy by ``held_along(U (n, m, k), kind, prep, V (n, m) or None, rows) -> (n, m, 6)``
         (``rows``: :func:`uvsim.forces.actuators.distinct_histories`, or None)."""

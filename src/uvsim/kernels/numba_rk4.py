@@ -17,7 +17,7 @@ from uvsim.kernels import rk4_equations as eq
 
 def _compile():
     g = dict(eq.__dict__)
-    for name in ("_coriolis_sub", "rhs", "advance"):
+    for name in eq.KERNEL_FUNCTIONS:
         f = getattr(eq, name)
         g[name] = numba.njit(types.FunctionType(f.__code__, g, name, f.__defaults__), cache=True, nogil=True)
     return g["advance"]

@@ -20,13 +20,12 @@ class CompiledPlan:
     Attributes
     ----------
     TH : (n, N_TH) one parameter row per trajectory.
-    has_current, has_coupled : the kernel's two optional parts.
+    parts : the kernel's optional parts, a bit mask (``rk4_equations.CURRENT`` ...).
     held : [(term, prep)] the terms whose force is held over each sample interval.
     """
 
     TH: np.ndarray
-    has_current: bool
-    has_coupled: bool
+    parts: int
     held: list = field(default_factory=list)
 
     def held_forces(self, U: np.ndarray, kind: str, V: np.ndarray | None, rows=None) -> np.ndarray:
@@ -39,6 +38,10 @@ class CompiledPlan:
         return tau
 
 
+#: The forms of ``ForceTerm.kernel_part`` the kernel knows.
+KNOWN_PARTS = ("restoring", "diagonal", "coupled", "tether", "held", "none")
+
+
 def why_not_compiled(model) -> str | None:
     """Why ``model`` runs on the numpy path (None: the compiled kernel can run it)."""
     if model.n_y != 13:
@@ -47,9 +50,14 @@ def why_not_compiled(model) -> str | None:
         return "a term changes the mass properties"
     if model.current_fn is not None:
         return "the current varies with time"
+    tethers = 0
     for term, prep in zip(model.terms, model.preps):
-        if term.kernel_part(prep) is None:
+        part = term.kernel_part(prep)
+        if part is None or part[0] not in KNOWN_PARTS:
             return f"the term {type(term).__name__} has no compiled form"
+        tethers += part[0] == "tether"
+    if tethers > 1:
+        return "the compiled kernel has one tether"
     return None
 
 
@@ -69,7 +77,7 @@ def compiled_plan(model) -> CompiledPlan | None:
     TH[:, eq.O_M:eq.O_M + 36] = _rows(model.M, n, (6, 6))
     TH[:, eq.O_MRB:eq.O_MRB + 36] = _rows(model.M_RB, n, (6, 6))
     TH[:, eq.O_MA:eq.O_MA + 36] = _rows(model.M_A, n, (6, 6))
-    has_coupled = False
+    parts = eq.CURRENT if model.has_current else 0
     held = []
     for term, prep in zip(model.terms, model.preps):
         part = term.kernel_part(prep)
@@ -81,10 +89,11 @@ def compiled_plan(model) -> CompiledPlan | None:
         elif part[0] == "coupled":
             TH[:, eq.O_CL:eq.O_CL + 36] += _rows(part[1], n, (6, 6))
             TH[:, eq.O_CQ:eq.O_CQ + 36] += _rows(part[2], n, (6, 6))
-            has_coupled = True
+            parts |= eq.COUPLED
+        elif part[0] == "tether":
+            TH[:, eq.O_TE:eq.O_TE + 12] = _rows(part[1], n, (12,))
+            parts |= eq.TETHER
         elif part[0] == "held":
             held.append((term, prep))
-        elif part[0] != "none":
-            return None
     TH[:, eq.O_VC:eq.O_VC + 3] = _rows(model.current_ned, n, (3,))
-    return CompiledPlan(np.ascontiguousarray(TH), bool(model.has_current), has_coupled, held)
+    return CompiledPlan(np.ascontiguousarray(TH), parts, held)

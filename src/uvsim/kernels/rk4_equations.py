@@ -14,7 +14,12 @@ no term states, no mass changes and no time-varying current, whose forces are
 * actuators, whose force is held over each sample interval with the input (it depends on the
   input, the voltage and parameters only): computed by :class:`uvsim.forces.actuators.Actuators`
   itself, in numpy, and passed in as ``tau_act``;
-* a constant NED current (seed 000 eq. 1-2; the split Coriolis form of :meth:`Model.rhs`).
+* a constant NED current (seed 000 eq. 1-2; the split Coriolis form of :meth:`Model.rhs`);
+* one tether (:mod:`uvsim.effects.tether`: pull towards the anchor beyond the slack length,
+  cross-flow and lumped drag at the attachment point, 3-D or horizontal).
+
+Which optional parts a model has is the bit mask ``parts`` (:data:`CURRENT`, :data:`COUPLED`,
+:data:`TETHER`).
 
 The equations are :meth:`uvsim.model.Model.rhs`'s, in the same order and the same homogeneous
 form of the rotation (:func:`uvsim.bilinear.rot_qrate`), and :func:`advance` is
@@ -40,12 +45,25 @@ O_DQ = 168     # diagonal damping, quadratic (6)
 O_CL = 174     # coupled damping, linear 6x6 row-major
 O_CQ = 210     # coupled damping, quadratic 6x6
 O_VC = 246     # constant current, NED (3), m/s
-N_TH = 249
+O_TE = 249     # tether: attachment r_a (3, body, m), anchor p_0 (3, NED, m), horizontal (1 or 0),
+#                tension T_0 (N), stiffness k (N/m), slack length L_s (m), cross-flow drag
+#                1/2 rho C_d D l / 3 (kg/m), lumped drag c_l (N s^2/m^2)
+N_TH = 261
+
+#: The functions numba compiles (:mod:`uvsim.kernels.numba_rk4`), callees first.
+KERNEL_FUNCTIONS = ("_tether_add", "_coriolis_sub", "rhs", "advance")
+
+# bits of ``parts``
+CURRENT = 1
+COUPLED = 2
+TETHER = 4
 
 
-def rhs(y, tau_act, th, has_current, has_coupled, out, tau):
+def rhs(y, tau_act, th, parts, out, tau):
     """State derivative of one trajectory into ``out`` (13,): state ``y`` (13,), the held
     actuator force ``tau_act`` (6,), parameters ``th`` (N_TH,); ``tau`` (6,) is scratch."""
+    has_current = (parts & CURRENT) != 0
+    has_coupled = (parts & COUPLED) != 0
     qw = y[3]
     qx = y[4]
     qy = y[5]
@@ -106,6 +124,8 @@ def rhs(y, tau_act, th, has_current, has_coupled, out, tau):
             for i in range(6):
                 t = t + th[O_CL + 6 * j + i] * nr[i] + th[O_CQ + 6 * j + i] * (abs(nr[i]) * nr[i])
         tau[j] = t + tau_act[j]
+    if (parts & TETHER) != 0:
+        _tether_add(tau, y, R00, R01, R02, R10, R11, R12, R20, R21, R22, nr, th)
     if has_current:
         _coriolis_sub(tau, nu, th, O_MRB)
         _coriolis_sub(tau, nr, th, O_MA)
@@ -127,6 +147,62 @@ def rhs(y, tau_act, th, has_current, has_coupled, out, tau):
     out[4] = 0.5 * (qw * p + qy * r - qz * q)
     out[5] = 0.5 * (qw * q + qz * p - qx * r)
     out[6] = 0.5 * (qw * r + qx * q - qy * p)
+
+
+def _tether_add(tau, y, R00, R01, R02, R10, R11, R12, R20, R21, R22, nr, th):
+    """``tau += [f; r_a x f]`` of the tether (:meth:`uvsim.effects.tether.Tether.forces`, body frame)."""
+    o = O_TE
+    ra0 = th[o]
+    ra1 = th[o + 1]
+    ra2 = th[o + 2]
+    if th[o + 6] == 0.0:  # 3-D: d_b = R^T (p_0 - p) - r_a
+        dn0 = th[o + 3] - y[0]
+        dn1 = th[o + 4] - y[1]
+        dn2 = th[o + 5] - y[2]
+        d0 = R00 * dn0 + R10 * dn1 + R20 * dn2 - ra0
+        d1 = R01 * dn0 + R11 * dn1 + R21 * dn2 - ra1
+        d2 = R02 * dn0 + R12 * dn1 + R22 * dn2 - ra2
+        L = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        Lm = max(L, 1e-9)
+        e0 = d0 / Lm
+        e1 = d1 / Lm
+        e2 = d2 / Lm
+    else:  # horizontal: d = (p_0 - p - R r_a) north/east only, e_b = R^T e
+        h0 = th[o + 3] - y[0] - (R00 * ra0 + R01 * ra1 + R02 * ra2)
+        h1 = th[o + 4] - y[1] - (R10 * ra0 + R11 * ra1 + R12 * ra2)
+        L = math.sqrt(h0 * h0 + h1 * h1)
+        Lm = max(L, 1e-9)
+        en0 = h0 / Lm
+        en1 = h1 / Lm
+        e0 = R00 * en0 + R10 * en1
+        e1 = R01 * en0 + R11 * en1
+        e2 = R02 * en0 + R12 * en1
+    pull = th[o + 7] + th[o + 8] * max(0.0, L - th[o + 9])
+    f0 = pull * e0
+    f1 = pull * e1
+    f2 = pull * e2
+    # the attachment point's velocity relative to the water: nu_r1 + omega x r_a
+    v0 = nr[0] + (nr[4] * ra2 - nr[5] * ra1)
+    v1 = nr[1] + (nr[5] * ra0 - nr[3] * ra2)
+    v2 = nr[2] + (nr[3] * ra1 - nr[4] * ra0)
+    ve = v0 * e0 + v1 * e1 + v2 * e2
+    n0 = v0 - ve * e0
+    n1 = v1 - ve * e1
+    n2 = v2 - ve * e2
+    c = th[o + 10] * math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+    f0 = f0 - c * n0
+    f1 = f1 - c * n1
+    f2 = f2 - c * n2
+    c = th[o + 11] * math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+    f0 = f0 - c * v0
+    f1 = f1 - c * v1
+    f2 = f2 - c * v2
+    tau[0] = tau[0] + f0
+    tau[1] = tau[1] + f1
+    tau[2] = tau[2] + f2
+    tau[3] = tau[3] + (ra1 * f2 - ra2 * f1)
+    tau[4] = tau[4] + (ra2 * f0 - ra0 * f2)
+    tau[5] = tau[5] + (ra0 * f1 - ra1 * f0)
 
 
 def _coriolis_sub(tau, nu, th, o):
@@ -158,7 +234,7 @@ def _coriolis_sub(tau, nu, th, o):
     tau[5] = tau[5] - ((u * a1 - v * a0) + (p * b1 - q * b0))
 
 
-def advance(y, T, TAU, TH, substeps, has_current, has_coupled, Y, ACC, want_acc, i0, n_t, speed_max, first_bad):
+def advance(y, T, TAU, TH, substeps, parts, Y, ACC, want_acc, i0, n_t, speed_max, first_bad):
     """RK4 over ``m`` sample intervals for every row, in place.
 
     ``y`` (n, 13) the states at ``T[:, 0]`` (updated to ``T[:, m]``); ``T`` (n, m + 1) sample
@@ -195,19 +271,19 @@ def advance(y, T, TAU, TH, substeps, has_current, has_coupled, Y, ACC, want_acc,
             h = (T[row, i + 1] - T[row, i]) / substeps
             tau_act = TAU[row, i]
             for sub in range(substeps):
-                rhs(yc, tau_act, th, has_current, has_coupled, k1, tau)
+                rhs(yc, tau_act, th, parts, k1, tau)
                 if want_acc and sub == 0:
                     for c in range(6):
                         ACC[row, i, c] = k1[7 + c]
                 for c in range(13):
                     ys[c] = yc[c] + (0.5 * h) * k1[c]
-                rhs(ys, tau_act, th, has_current, has_coupled, k2, tau)
+                rhs(ys, tau_act, th, parts, k2, tau)
                 for c in range(13):
                     ys[c] = yc[c] + (0.5 * h) * k2[c]
-                rhs(ys, tau_act, th, has_current, has_coupled, k3, tau)
+                rhs(ys, tau_act, th, parts, k3, tau)
                 for c in range(13):
                     ys[c] = yc[c] + h * k3[c]
-                rhs(ys, tau_act, th, has_current, has_coupled, k4, tau)
+                rhs(ys, tau_act, th, parts, k4, tau)
                 for c in range(13):
                     yc[c] = yc[c] + (h / 6.0) * (k1[c] + 2.0 * (k2[c] + k3[c]) + k4[c])
                 s = math.sqrt(yc[3] * yc[3] + yc[4] * yc[4] + yc[5] * yc[5] + yc[6] * yc[6])

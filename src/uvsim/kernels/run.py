@@ -37,7 +37,7 @@ def rk4_compiled(advance, plan, model, T, U, y0, substeps, on_blowup, progress, 
     for c0 in range(0, n_t - 1, CHUNK):
         c1 = min(c0 + CHUNK, n_t - 1)
         tau = plan.held_forces(U[:, c0:c1], model.input_kind, None if V is None else V[:, c0:c1], rows)
-        advance(y, T[:, c0:c1 + 1], tau, plan.TH, substeps, plan.has_current, plan.has_coupled,
+        advance(y, T[:, c0:c1 + 1], tau, plan.TH, substeps, plan.parts,
                 Y[:, c0 + 1:c1 + 1], accel[:, c0:c1] if want_acc else no_acc, want_acc, c0, n_t, speed_max,
                 first_bad)
         if on_blowup == "raise" and (first_bad >= 0).any():
