@@ -94,7 +94,6 @@ def rhs(y, tau_act, th, parts, out, tau):
     p = y[10]
     q = y[11]
     r = y[12]
-    nu = (u, v, w, p, q, r)
     # current seen from the body: nu_r = nu - [R^T v_c; 0], nu_c_dot = [-omega x R^T v_c; 0]
     ur = u
     vr = v
@@ -127,18 +126,25 @@ def rhs(y, tau_act, th, parts, out, tau):
     if (parts & TETHER) != 0:
         _tether_add(tau, y, R00, R01, R02, R10, R11, R12, R20, R21, R22, nr, th)
     if has_current:
-        _coriolis_sub(tau, nu, th, O_MRB)
-        _coriolis_sub(tau, nr, th, O_MA)
+        _coriolis_sub(tau, u, v, w, p, q, r, th, O_MRB)
+        _coriolis_sub(tau, ur, vr, wr, p, q, r, th, O_MA)
         cd = (c0, c1, c2)
         for j in range(6):
             tau[j] = tau[j] + th[O_MA + 6 * j] * cd[0] + th[O_MA + 6 * j + 1] * cd[1] + th[O_MA + 6 * j + 2] * cd[2]
     else:
-        _coriolis_sub(tau, nu, th, O_M)
-    for j in range(6):
-        s = 0.0
-        for i in range(6):
-            s = s + th[O_MINV + 6 * j + i] * tau[i]
-        out[7 + j] = s
+        _coriolis_sub(tau, u, v, w, p, q, r, th, O_M)
+    t0 = tau[0]
+    t1 = tau[1]
+    t2 = tau[2]
+    t3 = tau[3]
+    t4 = tau[4]
+    t5 = tau[5]
+    out[7] = th[O_MINV + 0] * t0 + th[O_MINV + 1] * t1 + th[O_MINV + 2] * t2 + th[O_MINV + 3] * t3 + th[O_MINV + 4] * t4 + th[O_MINV + 5] * t5
+    out[8] = th[O_MINV + 6] * t0 + th[O_MINV + 7] * t1 + th[O_MINV + 8] * t2 + th[O_MINV + 9] * t3 + th[O_MINV + 10] * t4 + th[O_MINV + 11] * t5
+    out[9] = th[O_MINV + 12] * t0 + th[O_MINV + 13] * t1 + th[O_MINV + 14] * t2 + th[O_MINV + 15] * t3 + th[O_MINV + 16] * t4 + th[O_MINV + 17] * t5
+    out[10] = th[O_MINV + 18] * t0 + th[O_MINV + 19] * t1 + th[O_MINV + 20] * t2 + th[O_MINV + 21] * t3 + th[O_MINV + 22] * t4 + th[O_MINV + 23] * t5
+    out[11] = th[O_MINV + 24] * t0 + th[O_MINV + 25] * t1 + th[O_MINV + 26] * t2 + th[O_MINV + 27] * t3 + th[O_MINV + 28] * t4 + th[O_MINV + 29] * t5
+    out[12] = th[O_MINV + 30] * t0 + th[O_MINV + 31] * t1 + th[O_MINV + 32] * t2 + th[O_MINV + 33] * t3 + th[O_MINV + 34] * t4 + th[O_MINV + 35] * t5
     # kinematics: p_dot = R nu_1, q_dot = 1/2 q (x) [0, omega] (seed 003 eq. 1-4)
     out[0] = R00 * u + R01 * v + R02 * w
     out[1] = R10 * u + R11 * v + R12 * w
@@ -205,27 +211,14 @@ def _tether_add(tau, y, R00, R01, R02, R10, R11, R12, R20, R21, R22, nr, th):
     tau[5] = tau[5] + (ra0 * f1 - ra1 * f0)
 
 
-def _coriolis_sub(tau, nu, th, o):
+def _coriolis_sub(tau, u, v, w, p, q, r, th, o):
     """``tau -= C(nu) nu`` with ``[a; b] = M nu`` for the 6x6 ``M`` at ``th[o:o + 36]``."""
-    a0 = 0.0
-    a1 = 0.0
-    a2 = 0.0
-    b0 = 0.0
-    b1 = 0.0
-    b2 = 0.0
-    for i in range(6):
-        a0 = a0 + th[o + i] * nu[i]
-        a1 = a1 + th[o + 6 + i] * nu[i]
-        a2 = a2 + th[o + 12 + i] * nu[i]
-        b0 = b0 + th[o + 18 + i] * nu[i]
-        b1 = b1 + th[o + 24 + i] * nu[i]
-        b2 = b2 + th[o + 30 + i] * nu[i]
-    u = nu[0]
-    v = nu[1]
-    w = nu[2]
-    p = nu[3]
-    q = nu[4]
-    r = nu[5]
+    a0 = th[o + 0] * u + th[o + 1] * v + th[o + 2] * w + th[o + 3] * p + th[o + 4] * q + th[o + 5] * r
+    a1 = th[o + 6] * u + th[o + 7] * v + th[o + 8] * w + th[o + 9] * p + th[o + 10] * q + th[o + 11] * r
+    a2 = th[o + 12] * u + th[o + 13] * v + th[o + 14] * w + th[o + 15] * p + th[o + 16] * q + th[o + 17] * r
+    b0 = th[o + 18] * u + th[o + 19] * v + th[o + 20] * w + th[o + 21] * p + th[o + 22] * q + th[o + 23] * r
+    b1 = th[o + 24] * u + th[o + 25] * v + th[o + 26] * w + th[o + 27] * p + th[o + 28] * q + th[o + 29] * r
+    b2 = th[o + 30] * u + th[o + 31] * v + th[o + 32] * w + th[o + 33] * p + th[o + 34] * q + th[o + 35] * r
     tau[0] = tau[0] - (q * a2 - r * a1)
     tau[1] = tau[1] - (r * a0 - p * a2)
     tau[2] = tau[2] - (p * a1 - q * a0)
