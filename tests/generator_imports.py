@@ -8,8 +8,9 @@ import subprocess
 import sys
 from pathlib import Path
 
-#: What a truth generator may import from uvsim outside uvsim.scenarios: errors, file helpers and the log writer.
-ALLOWED = {"uvsim.errors", "uvsim.files", "uvsim.logs"}
+#: What a truth generator may import from uvsim outside uvsim.scenarios: errors, file helpers, the log writer
+#: and the progress lines (uvsim.progress imports nothing of uvsim).
+ALLOWED = {"uvsim.errors", "uvsim.files", "uvsim.logs", "uvsim.progress"}
 #: Modules that generating a dataset must not load.
 FITTING = ("uvsim.fitting", "uvsim.calibration", "uvsim.measurements", "uvsim.diagnosis", "uvsim.thrusters")
 

@@ -22,6 +22,7 @@ import sys
 import threading
 
 from uvsim.errors import UvsimError
+from uvsim.progress import LineHandler, write_line
 
 #: Modules that contribute sub-commands, in the order they appear in ``--help``.
 COMMAND_MODULES = [
@@ -128,7 +129,7 @@ def main(argv: list[str] | None = None) -> int:
     in_main = threading.current_thread() is threading.main_thread()
     old_term = signal.signal(signal.SIGTERM, _raise_terminated) if in_main else None
     logger = logging.getLogger("uvsim")
-    handler = logging.StreamHandler(sys.stderr)
+    handler = LineHandler()  # on stderr, ending a begun progress line first (uvsim.progress)
     handler.setFormatter(logging.Formatter(f"uvsim {args.command}: %(message)s"))
     old_level = logger.level
     logger.addHandler(handler)
@@ -137,7 +138,7 @@ def main(argv: list[str] | None = None) -> int:
         return int(args.func(args) or 0)
     except UvsimError as exc:
         text = " ".join(line.strip() for line in str(exc).splitlines())  # one line
-        print(f"uvsim {args.command}: error: {text}", file=sys.stderr)
+        write_line(f"uvsim {args.command}: error: {text}")
         return 2
     except BrokenPipeError:  # the reader of stdout left (``uvsim vehicle show X | head``): stop quietly
         try:  # Python docs, "Note on SIGPIPE": point stdout at devnull so the exit's flush is silent
@@ -148,11 +149,11 @@ def main(argv: list[str] | None = None) -> int:
         return 141  # 128 + SIGPIPE, what a shell reports for a pipe its reader closed
     except OSError as exc:  # e.g. disk full while writing an output
         where = f"{exc.filename}: " if exc.filename else ""
-        print(f"uvsim {args.command}: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        write_line(f"uvsim {args.command}: error: {where}{exc.strerror or exc}")
         return 2
     except KeyboardInterrupt as exc:
         term = isinstance(exc, Terminated)
-        print(f"uvsim {args.command}: interrupted ({'SIGTERM' if term else 'SIGINT'})", file=sys.stderr)
+        write_line(f"uvsim {args.command}: interrupted ({'SIGTERM' if term else 'SIGINT'})")
         return 143 if term else 130
     finally:
         logger.removeHandler(handler)

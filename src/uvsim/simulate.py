@@ -222,7 +222,7 @@ def _rk4_steps(model, T, U, y0, substeps, on_blowup, progress, V=None, accel=Non
 def simulate(vehicle, t, inputs, *, input_kind: str = "force", pos0=None, q0=None, nu0=None,
              overrides: Mapping[str, Any] | None = None, current=None, method: str = "rk4",
              substeps: int = 1, rtol: float = 1e-8, atol: float = 1e-10, on_blowup: str = "raise",
-             model: Model | None = None, voltage=None) -> SimulationResult:
+             model: Model | None = None, voltage=None, counter=None) -> SimulationResult:
     """Simulate one trajectory.
 
     Parameters
@@ -245,6 +245,8 @@ def simulate(vehicle, t, inputs, *, input_kind: str = "force", pos0=None, q0=Non
         Battery voltage (V) at the sample times, held until the next sample like the
         inputs; feeds voltage-dependent thrust curves (NaN: the curve's nominal
         voltage).  None (default): every curve at its nominal voltage.
+    counter : an object with ``update(n)`` told of every ``n`` sample intervals done by "rk4"
+        (a :class:`uvsim.progress.Stage`, a tqdm bar), or None.
 
     Returns
     -------
@@ -271,7 +273,8 @@ def simulate(vehicle, t, inputs, *, input_kind: str = "force", pos0=None, q0=Non
             raise SimulationError(f"{name} {tol!r}: expected a positive tolerance (solve_ivp would change it in silence)")
     if method.lower() == "rk4":
         check_substeps(substeps)
-        Y = _rk4_loop(model, t[None, :], U[None], y0, substeps, on_blowup, V=None if V is None else V[None])[0]
+        Y = _rk4_loop(model, t[None, :], U[None], y0, substeps, on_blowup, counter,
+                      V=None if V is None else V[None])[0]
     else:
         Y = _solve_ivp(model, t, U, y0[0], method, rtol, atol, on_blowup, V)
     return SimulationResult(t, Y, model.state_names, U, model.input_kind, input_names(model.input_kind, U.shape[1]),
@@ -332,7 +335,7 @@ def _solve_ivp(model: Model, t, U, y0, method, rtol, atol, on_blowup, V=None):
 
 def simulate_batch(vehicle, t, inputs, *, input_kind: str = "force", y0=None, pos0=None, q0=None, nu0=None,
                    overrides: Mapping[str, Any] | None = None, current=None, substeps: int = 1,
-                   on_blowup: str = "nan", model: Model | None = None, progress: bool = False,
+                   on_blowup: str = "nan", model: Model | None = None, progress=False,
                    return_acceleration: bool = False, voltage=None) -> SimulationResult:
     """Simulate ``n`` trajectories at once with RK4 (numpy-vectorized).
 
@@ -351,6 +354,7 @@ def simulate_batch(vehicle, t, inputs, *, input_kind: str = "force", y0=None, po
         accelerometer measurement models).
     voltage : (n, n_t) or (n_t,) battery voltages (V), held like the inputs, or None
         (see :func:`simulate`).
+    progress : the steps as a stage (:func:`uvsim.progress.as_progress`: True a tqdm bar).
 
     Returns
     -------
@@ -386,16 +390,13 @@ def simulate_batch(vehicle, t, inputs, *, input_kind: str = "force", y0=None, po
     y0 = np.asarray(y0, dtype=float)
     if y0.shape != (n, model.n_y):
         raise SimulationError(f"y0: expected shape {(n, model.n_y)}, got {y0.shape}")
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
+    from uvsim.progress import as_progress
 
-        bar = tqdm(total=T.shape[1] - 1, desc="simulate", unit="step", leave=False)
     acc = np.empty((n, T.shape[1], 6)) if return_acceleration else None
     V = _check_voltage(voltage, T.shape)
-    Y = _rk4_loop(model, T, U, y0, substeps, on_blowup, bar, acc, V)
-    if bar is not None:
-        bar.close()
+    with as_progress(progress).stage(f"simulation of {n} trajectories x {T.shape[1]} samples", total=T.shape[1] - 1,
+                                     unit="step", short="simulate", leave=False) as stage:
+        Y = _rk4_loop(model, T, U, y0, substeps, on_blowup, stage, acc, V)
     res = SimulationResult(T[0] if np.all(T == T[:1]) else T, Y, model.state_names, U, model.input_kind,
                            input_names(model.input_kind, U.shape[2]), model.vehicle.name)
     res.nu_dot = acc
@@ -487,13 +488,14 @@ def initial_state_from_run(run, *, initial_velocity: str = "zero", window_s: flo
 
 
 def simulate_run(vehicle, run, *, current=None, overrides=None, method: str = "rk4", substeps: int = 1,
-                 on_blowup: str = "raise", initial_window_s: float = 0.0) -> SimulationResult:
+                 on_blowup: str = "raise", initial_window_s: float = 0.0, progress=None) -> SimulationResult:
     """Simulate a logged :class:`uvsim.logs.Run`: start from its first measured state
     (velocities zero where not logged) and apply its inputs (and its battery voltage,
     :attr:`uvsim.logs.Run.voltage`, when it logged one), as late as the vehicle's sensors
     read (``sensors.latency``, :mod:`uvsim.latency`).  Input columns that do not
     fit the vehicle, and PWM outside its thrust curves, raise
-    :class:`uvsim.errors.PlausibilityError` naming the run's file, column and row."""
+    :class:`uvsim.errors.PlausibilityError` naming the run's file, column and row.  ``progress``:
+    the simulation as a stage (:func:`uvsim.progress.as_progress`)."""
     from uvsim.latency import delay_inputs
     from uvsim.plausibility import require_inputs_match
     from uvsim.vehicle import load_vehicle
@@ -502,6 +504,12 @@ def simulate_run(vehicle, run, *, current=None, overrides=None, method: str = "r
     require_inputs_match(run, vehicle)
     run = delay_inputs(run, vehicle.sensor_latency)  # the vehicle's sensors.latency (uvsim.latency)
     pos0, q0, nu0, _ = initial_state_from_run(run, window_s=initial_window_s)
-    return simulate(vehicle, run.t, run.inputs, input_kind=run.input_kind, pos0=pos0, q0=q0, nu0=nu0,
-                    overrides=overrides, current=current, method=method, substeps=substeps, on_blowup=on_blowup,
-                    voltage=run.voltage)
+    from uvsim.progress import as_progress
+
+    rk4 = isinstance(method, str) and method.lower() == "rk4"
+    with as_progress(progress).stage(f"simulation of {run.name}: {len(run.t)} samples, {run.t[-1] - run.t[0]:.1f} s "
+                                     f"({method})", total=len(run.t) - 1 if rk4 else None, unit="step",
+                                     short=f"simulate {run.name}") as stage:
+        return simulate(vehicle, run.t, run.inputs, input_kind=run.input_kind, pos0=pos0, q0=q0, nu0=nu0,
+                        overrides=overrides, current=current, method=method, substeps=substeps, on_blowup=on_blowup,
+                        voltage=run.voltage, counter=stage)

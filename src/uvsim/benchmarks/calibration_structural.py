@@ -71,6 +71,7 @@ import numpy as np
 
 from uvsim.benchmarks.records import append_record, load_records
 from uvsim.errors import UvsimError
+from uvsim.progress import as_progress
 
 #: A channel whose validation Fit % drops by more than this many points: the fit is worse.
 WORSE_POINTS = 1.0
@@ -360,9 +361,11 @@ def _label(mode: tuple) -> str:
 
 def run_benchmark(n: int, seed: int, *, compare_no_prior: bool = False, loss: str = "linear", supply=REAL_LOG_SUPPLY,
                   free: str = REAL_LOG_FREE, latency=REAL_LOG_LATENCY, workers: int = 1,
-                  results: str | Path | None = None, progress=None) -> dict:
+                  results: str | Path | None = None, progress=None, stages=None) -> dict:
     """``n`` seeds from ``seed`` (resumed from ``results``, JSON lines), calibrated with
-    ``--free free --latency latency`` and ``supply`` (:func:`run_one`; latency None: no ``--latency``)."""
+    ``--free free --latency latency`` and ``supply`` (:func:`run_one`; latency None: no ``--latency``);
+    ``progress``: callable(line) of each finished calibration; ``stages``: each as a stage
+    (:func:`uvsim.progress.as_progress`)."""
     if n < 1:
         raise UvsimError(f"--scenarios {n}: need at least one scenario")
     from uvsim.calibration.inputs import latency_setting
@@ -384,7 +387,8 @@ def run_benchmark(n: int, seed: int, *, compare_no_prior: bool = False, loss: st
         if key in done:
             records.append(done[key])
             continue
-        rec = run_one(s, prior=p, loss=loss, supply=supply, free=free, latency=latency, workers=workers)
+        with as_progress(stages).stage(f"[{i}/{len(todo)}] seed {s} {_label(key[1:])}"):
+            rec = run_one(s, prior=p, loss=loss, supply=supply, free=free, latency=latency, workers=workers)
         records.append(rec)
         append_record(path, rec)
         say(f"[{i}/{len(todo)}] seed {s} {_label(key[1:])}: effects {rec['effects'] or 'none'}, "

@@ -34,6 +34,7 @@ import numpy as np
 
 from uvsim.benchmarks.records import append_record, load_records
 from uvsim.errors import UvsimError
+from uvsim.progress import as_progress
 
 #: Seconds after which one diagnosis is stopped and recorded as not diagnosed.
 TIMEOUT = 3600.0
@@ -137,8 +138,9 @@ def summarize(records: list[dict]) -> dict:
 
 
 def run_benchmark(n: int, seed: int, *, cases=None, workers: int = 1, results: str | Path | None = None,
-                  progress=None, duration=None) -> dict:
-    """``n`` cases from ``seed`` (module docstring), resumed from ``results`` (JSON lines)."""
+                  progress=None, duration=None, stages=None) -> dict:
+    """``n`` cases from ``seed`` (module docstring), resumed from ``results`` (JSON lines); ``progress``:
+    callable(line) of each finished case; ``stages``: each as a stage (:func:`uvsim.progress.as_progress`)."""
     from uvsim.scenarios.field import CASES
 
     if n < 1:
@@ -151,32 +153,19 @@ def run_benchmark(n: int, seed: int, *, cases=None, workers: int = 1, results: s
     path = Path(results) if results else None
     done = load_records(path, lambda rec: (rec["seed"], rec["case"]), say, "case")
     todo = [(seed + i, pool[i % len(pool)]) for i in range(n)]
-    bar = None
-    if progress is not None and sys.stdout.isatty():
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=len(todo), desc="diagnose-field", unit="case")
     records = []
-    try:
-        for i, (s, c) in enumerate(todo, 1):
-            rec = done.get((s, c))
-            if rec is None:
+    for i, (s, c) in enumerate(todo, 1):
+        rec = done.get((s, c))
+        if rec is None:
+            with as_progress(stages).stage(f"[{i}/{len(todo)}] {c} seed {s}"):
                 rec = run_one(s, c, workers=workers, duration=duration)
-                append_record(path, rec)
-            records.append(rec)
-            line = (f"[{i}/{len(todo)}] {c} seed {s}: expected {_label(rec['expected'])}, named "
-                    f"{', '.join(rec['named_variants']) or 'none'} ({'right' if rec['right_set'] else 'WRONG'}"
-                    + ("" if rec["validation_fixed"] is None else
-                       f", validation {'fixed' if rec['validation_fixed'] else 'not fixed'}")
-                    + f"), exit {rec['exit_code']}, {rec['seconds']:.0f} s")
-            if bar is not None:
-                bar.write(line)
-                bar.update(1)
-            else:
-                say(line)
-    finally:
-        if bar is not None:
-            bar.close()
+            append_record(path, rec)
+        records.append(rec)
+        say(f"[{i}/{len(todo)}] {c} seed {s}: expected {_label(rec['expected'])}, named "
+            f"{', '.join(rec['named_variants']) or 'none'} ({'right' if rec['right_set'] else 'WRONG'}"
+            + ("" if rec["validation_fixed"] is None else
+               f", validation {'fixed' if rec['validation_fixed'] else 'not fixed'}")
+            + f"), exit {rec['exit_code']}, {rec['seconds']:.0f} s")
     return {"summary": summarize(records), "records": records}
 
 

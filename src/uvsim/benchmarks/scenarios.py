@@ -27,6 +27,7 @@ import numpy as np
 
 from uvsim.benchmarks.records import append_record, load_records
 from uvsim.errors import UvsimError
+from uvsim.progress import as_progress
 
 #: The base coefficients the benchmark re-tunes in every model (added mass and damping of
 #: all six DOFs; the rigid-body inertia enters only with the added inertia, and mass and
@@ -151,9 +152,11 @@ def plan(n: int, seed: int, two_effects: int = 0) -> list[tuple[int, int]]:
 
 
 def run_benchmark(n: int, seed: int, *, two_effects: int = 0, workers: int = 1, results: str | Path | None = None,
-                  progress=None) -> dict:
+                  progress=None, stages=None) -> dict:
     """Run (or resume) the benchmark; ``results`` is the JSON-lines file of finished
-    scenarios (kept between runs).  Returns the summary plus the records."""
+    scenarios (kept between runs).  Returns the summary plus the records.  ``progress``:
+    callable(line) of each finished scenario; ``stages``: each scenario as a stage
+    (:func:`uvsim.progress.as_progress`)."""
     if n < 0 or two_effects < 0 or (n + two_effects) == 0:
         raise UvsimError(f"--scenarios {n} / --two-effects {two_effects}: need at least one scenario")
     say = progress or (lambda m: None)
@@ -165,7 +168,8 @@ def run_benchmark(n: int, seed: int, *, two_effects: int = 0, workers: int = 1, 
         if (s, k) in done:
             records.append(done[(s, k)])
             continue
-        rec = run_scenario(s, k, workers=workers)
+        with as_progress(stages).stage(f"[{i}/{len(todo)}] seed {s}, {k} effect(s)"):
+            rec = run_scenario(s, k, workers=workers)
         records.append(rec)
         append_record(path, rec)
         say(f"[{i}/{len(todo)}] seed {s}: true {_label(rec['true'])}, named {_label(rec['named'])} "

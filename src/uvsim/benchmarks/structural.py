@@ -33,6 +33,7 @@ import numpy as np
 from uvsim.benchmarks.scenarios import BASE_RETUNE, TRUTH_TO_CATALOGUE, worst_group_change
 from uvsim.benchmarks.records import append_record, load_records
 from uvsim.errors import UvsimError
+from uvsim.progress import as_progress
 
 CLASSES = ("base_error", "curve_mismatch", "out_of_catalogue", "imu_depth")
 #: Seed offset of each class (so the classes draw different scenarios from one --seed).
@@ -119,8 +120,9 @@ def summarize(records: list[dict]) -> dict:
 
 
 def run_benchmark(n: int, seed: int, *, classes=CLASSES, supply: bool = False, workers: int = 1,
-                  results: str | Path | None = None, progress=None) -> dict:
-    """``n`` scenarios per class from ``seed`` (resumed from ``results``, JSON lines)."""
+                  results: str | Path | None = None, progress=None, stages=None) -> dict:
+    """``n`` scenarios per class from ``seed`` (resumed from ``results``, JSON lines); ``progress``:
+    callable(line) of each finished one; ``stages``: each as a stage (:func:`uvsim.progress.as_progress`)."""
     if n < 1:
         raise UvsimError(f"--scenarios {n}: need at least one scenario per class")
     bad = [c for c in classes if c not in CLASSES]
@@ -135,7 +137,8 @@ def run_benchmark(n: int, seed: int, *, classes=CLASSES, supply: bool = False, w
         if (c, s, supply) in done:
             records.append(done[(c, s, supply)])
             continue
-        rec = run_one(c, s, supply=supply, workers=workers)
+        with as_progress(stages).stage(f"[{i}/{len(todo)}] {c} seed {s}"):
+            rec = run_one(c, s, supply=supply, workers=workers)
         records.append(rec)
         append_record(path, rec)
         say(f"[{i}/{len(todo)}] {c} seed {s}: truth {rec['truth'] or 'none'}, named {rec['named'] or 'none'}, "

@@ -49,10 +49,14 @@ from uvsim.fitting.parameters import cb_not_below_cg, default_bounds, physical_b
 from uvsim.latency import runs_for
 from uvsim.measurements import check_sample_weighting, check_signal_settings, measurements_for
 from uvsim.plausibility import check_runs, parse_allow
+from uvsim.progress import Progress, as_progress
 from uvsim.fit_settings import DEFAULT_CONTINUITY, DEFAULT_HORIZONS, DEFAULT_SAMPLE_WEIGHTING  # noqa: F401
 from uvsim.schema import check_workers, real_number, whole_number
 
 log = logging.getLogger("uvsim")
+#: The joint stage's progress label by checkpoint tag (the first fit, the refits).
+JOINT_LABELS = {"": "joint fit", ".latency": "joint fit again with the estimated sensor latency",
+                ".supply": "joint fit on the T200 voltage family (--supply-voltage auto)"}
 #: The joint stage stops when an iteration lowers the cost by less than this fraction of it
 #: (:func:`uvsim.fitting.fit`'s ``ftol``). 1e-5 of a cost of N noise-normalized residuals is far
 #: below the cost's own sampling spread (sqrt(2N)); with the tight continuity above, ``fit``'s
@@ -146,7 +150,8 @@ class Calibrator:
     batch_rows : largest number of trajectories per batched GA simulation.
     checkpoint : file written after every GA generation (the joint stage writes
         ``<checkpoint>.joint``); resume : checkpoint to continue from.
-    progress : tqdm bars (GA generations, joint iterations).
+    progress : True: tqdm bars (GA generations, joint iterations); a :class:`uvsim.progress.Progress`:
+        its bars or one line per stage (GA, joint fits, latency scan, free simulations).
     effects : extra force terms added to the vehicle (dicts or ForceTerm objects).
     allow : names of plausibility checks (:mod:`uvsim.plausibility`) that may fail; every
         other check of the runs against the vehicle raises before the fit.
@@ -176,7 +181,7 @@ class Calibrator:
                  attitude_lag="auto", latency=None, supply_voltage=None,
                  initial_velocity: str = "zero", prior: bool = True, loss: str = "linear",
                  workers: int = 1, dask: str | None = None, batch_rows: int = DEFAULT_BATCH_ROWS, checkpoint=None,
-                 resume=None, progress: bool = False, effects=None, allow=()):
+                 resume=None, progress=False, effects=None, allow=()):
         self.dofs = dofs
         self.population, self.generations, self.seed = population, generations, seed
         self.tournament, self.crossover, self.mutation = tournament, crossover, mutation
@@ -267,6 +272,8 @@ class Calibrator:
                      "low_speed_exponent"):
             real_number(getattr(self, name), name, error=err)  # not NaN, inf or text (GASettings checks ranges)
         for name in ("refine", "gyro_bias", "attitude_bias", "acc_bias", "screen", "prior", "progress"):
+            if name == "progress" and isinstance(self.progress, Progress):
+                continue
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise err(f"{name} {getattr(self, name)!r}: expected True or False (a string such as 'no' is true "
                           "in Python)")
@@ -278,6 +285,7 @@ class Calibrator:
         manifest's vehicle, also a file beside the manifest).  Returns self."""
         t0 = time.perf_counter()
         self._check_settings()  # before reading the runs, not after the GA
+        self._progress = as_progress(bool(self.progress) if isinstance(self.progress, np.bool_) else self.progress)
         ds = as_dataset(dataset)
         veh = resolve_vehicle(vehicle, ds)
         check_runs(ds.runs, veh, parse_allow(self.allow, "allow"))  # units, sampling, PWM range
@@ -377,7 +385,7 @@ class Calibrator:
                 first = fit_res
                 fit_res, start_veh, scan = refit_with_latency(
                     lambda v, names, tag: joint(v, joint_bounds, names, tag)[0], start_veh, fit_res, runs, meas,
-                    attitude_bias=bool(self.attitude_bias))
+                    attitude_bias=bool(self.attitude_bias), progress=self._progress)
                 self.latency_ = self._latency_record(start_veh, scan)
                 if scan["use"]:
                     self.latency_["first_fit"] = {"cost": float(first.cost), "stages": first.stages,
@@ -408,9 +416,11 @@ class Calibrator:
             self.latency_["value"])
         self.dofs_ = ga_dofs
         self._train_runs = runs
-        self.identifiability_ = identifiability_report(self)
-        self.report_ = build_report(self, ds, runs, problems, ga, joint_bounds if self.refine else bounds_of, t0,
-                                    t_ga, t_ref)
+        with self._progress.stage(f"free simulations of the {len(ds.runs)} runs with the fitted and the starting "
+                                  "model (report, verdict)"):
+            self.identifiability_ = identifiability_report(self)
+            self.report_ = build_report(self, ds, runs, problems, ga, joint_bounds if self.refine else bounds_of, t0,
+                                        t_ga, t_ref)
         self.wall_seconds_ = self.report_["wall_seconds"]
         return self
 
@@ -457,7 +467,7 @@ class Calibrator:
         try:
             ga = run_ga(problems, evaluator, hook, self._settings(), checkpoint=self.checkpoint,
                         resume=self.resume if self.resume is not None and Path(self.resume).is_file() else None,
-                        progress=self.progress, problem_key=key)
+                        progress=self._progress, problem_key=key)
         finally:
             hook.close()
         values = {}
@@ -515,7 +525,7 @@ class Calibrator:
                          continuity=continuity, ftol=JOINT_FTOL, max_iter=int(self.max_iter),
                          gyro_bias=bool(self.gyro_bias), attitude_bias=bool(self.attitude_bias),
                          acc_bias=bool(self.acc_bias), initial_velocity=self.initial_velocity,
-                         workers=self._workers(), checkpoint=ck, progress=self.progress,
+                         workers=self._workers(), checkpoint=ck, progress=self._progress, label=JOINT_LABELS[tag],
                          prior_mean=(prior_mean or self.initial_vehicle_.parameters()) if self.prior else None,
                          prior_sd=self.initial_vehicle_.uncertainty, loss=self.loss, stage_meas=judged)
 

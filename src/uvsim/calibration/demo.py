@@ -76,9 +76,12 @@ def format_table5(cal, truth: dict | None = None) -> str:
 def run(out_dir, dataset, settings: dict | None = None) -> str:
     """Calibrate ``dataset`` (the shipped tank data), print the verdict and write
     calibration_report.json, the plots and (unless the verdict is worse) fitted.yaml into
-    ``out_dir``.  Returns the verdict's status (:mod:`uvsim.fitting.verdict`)."""
+    ``out_dir``.  Returns the verdict's status (:mod:`uvsim.fitting.verdict`).  ``settings``:
+    the Calibrator's, over :data:`DEMO_SETTINGS` (``progress``: its stages and the plots',
+    :mod:`uvsim.progress`)."""
     from uvsim.calibration import Calibrator
     from uvsim.commands.calibration_output import jsonable, print_verdict, record_outcome, save_fitted_vehicle
+    from uvsim.progress import as_progress
 
     s = {**DEMO_SETTINGS, **(settings or {})}
     out = Path(out_dir)
@@ -97,7 +100,8 @@ def run(out_dir, dataset, settings: dict | None = None) -> str:
     (out / "calibration_report.json").write_text(json.dumps(jsonable(rep), indent=2))
     from uvsim.plotting.calibration import plot_calibration
 
-    plot_calibration(cal, dataset, out / "calibration_plots", run_plots="validation")
+    with as_progress(s.get("progress")).stage(f"plots into {out / 'calibration_plots'}"):
+        plot_calibration(cal, dataset, out / "calibration_plots", run_plots="validation")
     print(f"calibration outputs: {(str(out / 'fitted.yaml') + ', ') if keep else ''}"
           f"{out / 'calibration_report.json'}, {out / 'calibration_plots'}/")
     return status

@@ -37,6 +37,7 @@ from deap import algorithms, base, tools
 
 from uvsim.checkpoint import Checkpoint, fingerprint  # noqa: F401  (fingerprint: used by the calibrator)
 from uvsim.errors import CalibrationError
+from uvsim.progress import as_progress
 
 #: What a resumed GA must share with the run that wrote the checkpoint.
 RESUME_NEEDS = "--data, --vehicle, --dof, --seed, --population, --generations and GA settings"
@@ -166,7 +167,7 @@ def load_checkpoint(path) -> dict:
 
 
 def run_ga(problems: dict, evaluator, hook, settings: GASettings, *, checkpoint=None, resume=None,
-           progress: bool = False, problem_key: str = "", stop_after: int | None = None) -> dict:
+           progress=False, problem_key: str = "", stop_after: int | None = None) -> dict:
     """Evolve one population per DOF in lock step.
 
     Parameters
@@ -176,6 +177,7 @@ def run_ga(problems: dict, evaluator, hook, settings: GASettings, *, checkpoint=
     hook : DEAP map hook (SerialMap / ProcessMap / DaskMap).
     checkpoint : path written after every generation (None: no checkpoints).
     resume : path of a checkpoint to continue from (must match settings and problem).
+    progress : the generations as a stage (:func:`uvsim.progress.as_progress`: True a tqdm bar).
     problem_key : fingerprint of the dataset/vehicle/problem, checked on resume.
     stop_after : stop after this generation (for tests of resume); None = run all.
 
@@ -216,52 +218,49 @@ def run_ga(problems: dict, evaluator, hook, settings: GASettings, *, checkpoint=
         gen0 = 0
         prior_wall = 0.0
 
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=settings.generations + 1, initial=gen0, desc="GA", unit="gen")
+    name = (f"GA of {', '.join(dofs)}: {settings.population} individuals x {settings.generations} generations"
+            + (f", from generation {gen0}" if gen0 else ""))
+    stage = as_progress(progress).stage(name, total=settings.generations + 1, unit="gen", short="GA")
 
     def wall():
         return prior_wall + time.perf_counter() - t_start
 
     last = gen0 - 1
-    for gen in range(gen0, settings.generations + 1):
-        last = gen
-        t_gen = time.perf_counter()
-        if gen == 0:
-            offspring = pops
-        else:
-            offspring = {}
+    with stage:
+        stage.set(gen0)
+        for gen in range(gen0, settings.generations + 1):
+            last = gen
+            t_gen = time.perf_counter()
+            if gen == 0:
+                offspring = pops
+            else:
+                offspring = {}
+                for d in dofs:
+                    off = tb.select(pops[d], len(pops[d]))
+                    off = algorithms.varAnd(off, tb, settings.crossover, settings.mutation)
+                    offspring[d] = [_clip(ind) for ind in off]
+            invalid = [ind for d in dofs for ind in offspring[d] if not ind.fitness.valid]
+            fits = tb.map(tb.evaluate, invalid)
+            for ind, fit in zip(invalid, fits):
+                ind.fitness.values = fit
+            evaluations += len(invalid)
             for d in dofs:
-                off = tb.select(pops[d], len(pops[d]))
-                off = algorithms.varAnd(off, tb, settings.crossover, settings.mutation)
-                offspring[d] = [_clip(ind) for ind in off]
-        invalid = [ind for d in dofs for ind in offspring[d] if not ind.fitness.valid]
-        fits = tb.map(tb.evaluate, invalid)
-        for ind, fit in zip(invalid, fits):
-            ind.fitness.values = fit
-        evaluations += len(invalid)
-        for d in dofs:
-            pops[d] = offspring[d]
-            hofs[d].update(pops[d])
-            _record(logbooks[d], gen, pops[d], sum(1 for i in invalid if i.dof == d), wall())
-        if checkpoint is not None:
-            _save_checkpoint(_checkpoint(checkpoint, key), {
-                "generation": gen, "populations": pops,
-                "halls": hofs, "logbooks": logbooks, "evaluations": evaluations, "wall_s": wall(),
-                "random_state": random.getstate(), "numpy_state": np.random.get_state(),
-                "settings": asdict(settings), "dofs": dofs,
-            })
-        if bar is not None:
+                pops[d] = offspring[d]
+                hofs[d].update(pops[d])
+                _record(logbooks[d], gen, pops[d], sum(1 for i in invalid if i.dof == d), wall())
+            if checkpoint is not None:
+                _save_checkpoint(_checkpoint(checkpoint, key), {
+                    "generation": gen, "populations": pops,
+                    "halls": hofs, "logbooks": logbooks, "evaluations": evaluations, "wall_s": wall(),
+                    "random_state": random.getstate(), "numpy_state": np.random.get_state(),
+                    "settings": asdict(settings), "dofs": dofs,
+                })
             dt = time.perf_counter() - t_gen
             best = sum(h[0].fitness.values[0] for h in hofs.values())
-            bar.set_postfix(best=f"{best:.4g}", evals_per_s=f"{len(invalid) / dt if dt > 0 else 0:.0f}")
-            bar.update(1)
-        if stop_after is not None and gen >= stop_after:
-            break
-    if bar is not None:
-        bar.close()
+            stage.update(1, best=f"{best:.4g}", evals_per_s=f"{len(invalid) / dt if dt > 0 else 0:.0f}")
+            if stop_after is not None and gen >= stop_after:
+                break
+        stage.summary = f"{evaluations} evaluations"
     return {
         "best": {d: list(hofs[d][0]) for d in dofs},
         "best_fitness": {d: float(hofs[d][0].fitness.values[0]) for d in dofs},

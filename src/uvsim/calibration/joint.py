@@ -23,6 +23,7 @@ from uvsim.checkpoint import Checkpoint
 from uvsim.errors import CalibrationError
 from uvsim.fitting import fit, make_space
 from uvsim.fitting.fitter import build_problems
+from uvsim.progress import as_progress
 
 log = logging.getLogger("uvsim")
 #: What a resumed calibration must keep equal (for the mismatch message).
@@ -77,19 +78,11 @@ class JointCheckpoint:
             self._out.save(dict(self._doc), progress=progress)
 
 
-def _bar(progress: bool, total: int):
-    if not progress:
-        return None
-    from tqdm.auto import tqdm
-
-    return tqdm(total=total, desc="joint fit", unit="it")
-
-
 def run_joint(vehicle, runs, meas, params, *, keep, screen, bounds, horizons, max_iter: int, gyro_bias: bool,
               attitude_bias: bool = False, acc_bias: bool = False, initial_velocity: str = "zero", workers: int = 1,
               checkpoint: JointCheckpoint | None = None,
-              progress: bool = False, prior_mean=None, prior_sd=None, loss: str = "linear",
-              continuity=(1.0,), ftol: float = 1e-6, stage_meas=None):
+              progress=False, prior_mean=None, prior_sd=None, loss: str = "linear",
+              continuity=(1.0,), ftol: float = 1e-6, stage_meas=None, label: str = "joint fit"):
     """Screen and fit (module docstring).
 
     Parameters
@@ -107,22 +100,26 @@ def run_joint(vehicle, runs, meas, params, *, keep, screen, bounds, horizons, ma
     continuity : continuity factors of the last horizon's stages (:func:`uvsim.fitting.fit`).
     ftol : relative cost decrease below which a stage stops (:func:`uvsim.fitting.fit`).
     stage_meas : the measurement models of each stage (:func:`uvsim.fitting.fit`).
+    progress, label : the screen and the fit as stages named after ``label``
+        (:func:`uvsim.progress.as_progress`: True a tqdm bar of the iterations).
 
     Returns
     -------
     (FitResult or None when nothing is free, screen report {"relative_sigma": {name:
     value}, "not_excited": [names], "threshold": EXCITATION_REL_SIGMA})
     """
+    progress = as_progress(progress)
     keep, screen = list(keep), [k for k in screen if k not in keep]
     report = {"relative_sigma": {}, "not_excited": [], "threshold": EXCITATION_REL_SIGMA}
     if screen:
         saved = checkpoint.screen if checkpoint is not None else None
         if saved is None:
-            space = make_space(params, keep + screen, bounds=bounds)
-            probs, _ = build_problems(vehicle, runs, meas, space, horizons[0], space.z0, gyro_bias=gyro_bias,
-                                      attitude_bias=attitude_bias, acc_bias=acc_bias,
-                                      initial_velocity=initial_velocity, loss=loss)
-            rel = excitation(space, information(probs, space.z0, workers))
+            with progress.stage(f"excitation screen of {len(keep + screen)} parameters on {len(runs)} runs"):
+                space = make_space(params, keep + screen, bounds=bounds)
+                probs, _ = build_problems(vehicle, runs, meas, space, horizons[0], space.z0, gyro_bias=gyro_bias,
+                                          attitude_bias=attitude_bias, acc_bias=acc_bias,
+                                          initial_velocity=initial_velocity, loss=loss)
+                rel = excitation(space, information(probs, space.z0, workers))
             saved = {"relative_sigma": {k: rel[k] for k in screen},
                      "not_excited": [k for k in screen if not rel[k] <= EXCITATION_REL_SIGMA]}
             if checkpoint is not None:
@@ -133,24 +130,20 @@ def run_joint(vehicle, runs, meas, params, *, keep, screen, bounds, horizons, ma
         return None, report
     space = make_space(params, names, bounds=bounds)
     n_stages = len(horizons) - 1 + len(continuity)
-    bar = _bar(progress, max_iter * n_stages)
+    name = (f"{label} of {len(names)} parameters on {len(runs)} runs ({n_stages} stage(s) of at most {max_iter} "
+            "iterations)")
+    with progress.stage(name, total=max_iter * n_stages, unit="it", short=label.split(" (")[0]) as bar:
 
-    def on_it(stage, it, cost):
-        if bar is not None:
-            bar.n = stage * max_iter + it
-            bar.set_postfix(stage=f"{stage + 1}/{n_stages}", cost=f"{cost:.5g}")
-            bar.refresh()
+        def on_it(stage, it, cost):
+            bar.set(stage * max_iter + it, stage=f"{stage + 1}/{n_stages}", cost=f"{cost:.5g}")
 
-    try:
         res = fit(vehicle, runs, space, meas=meas, horizons=horizons, max_iter=max_iter, gyro_bias=gyro_bias,
                   attitude_bias=attitude_bias, acc_bias=acc_bias, initial_velocity=initial_velocity, workers=workers,
                   checkpoint=checkpoint, on_iteration=on_it,
                   progress=lambda msg: log.debug(msg), prior_mean=prior_mean, prior_sd=prior_sd,
                   loss=loss, continuity=continuity, ftol=ftol, stage_meas=stage_meas)
-    finally:
-        if bar is not None:
-            bar.n = bar.total
-            bar.close()
+        bar.set(max_iter * n_stages)
+        bar.summary = f"{sum(int(s.get('iterations', 0)) for s in res.stages)} iterations"
     if not np.all(np.isfinite(res.z)):
         raise CalibrationError("the joint fit diverged (non-finite parameters)")
     return res, report

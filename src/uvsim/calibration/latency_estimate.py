@@ -95,7 +95,7 @@ def scan_latency(vehicle, runs, meas, *, attitude_bias: bool = False, grid=SCAN_
             "use": bool(best != current and gain >= MIN_GAIN), "min_gain": MIN_GAIN, "horizon_s": SCAN_HORIZON}
 
 
-def refit_with_latency(joint, start_veh, fit_res, runs, meas, *, attitude_bias: bool = False):
+def refit_with_latency(joint, start_veh, fit_res, runs, meas, *, attitude_bias: bool = False, progress=None):
     """The scan with the fitted model, then the joint fit again from its result with the latency
     found when it is worth it (module docstring).
 
@@ -105,6 +105,7 @@ def refit_with_latency(joint, start_veh, fit_res, runs, meas, *, attitude_bias: 
         freeing exactly ``names`` (the first fit's: no second screen), checkpointed under ``tag``.
     start_veh, fit_res : the first fit's start vehicle and result.
     runs, meas : the training runs and their measurement models.
+    progress : the scan as a stage (:func:`uvsim.progress.as_progress`).
 
     Returns
     -------
@@ -112,8 +113,11 @@ def refit_with_latency(joint, start_veh, fit_res, runs, meas, *, attitude_bias: 
         The fit to keep, its start vehicle (with the latency it was fitted at) and the scan
         (:func:`scan_latency`).
     """
+    from uvsim.progress import as_progress
+
     fitted = start_veh.with_parameters(fit_res.values)
-    scan = scan_latency(fitted, runs, meas, attitude_bias=attitude_bias)
+    with as_progress(progress).stage(f"sensor latency scan ({len(SCAN_GRID)} latencies, {len(runs)} runs)"):
+        scan = scan_latency(fitted, runs, meas, attitude_bias=attitude_bias)
     if not scan["use"]:
         return fit_res, start_veh, scan
     log.info("sensor latency %.1f ms lowers the windowed cost by %.1f %%: fitting again with it",

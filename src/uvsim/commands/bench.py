@@ -16,6 +16,8 @@ import json
 import os
 import platform
 
+from uvsim.commands.checks import add_progress_arguments, command_progress
+
 
 def register(sub) -> None:
     from uvsim.benchmarks.calibration_structural import REAL_LOG_FREE, REAL_LOG_LATENCY, REAL_LOG_SUPPLY
@@ -59,7 +61,9 @@ def register(sub) -> None:
     p.add_argument("--only", default=None, help="comma-separated areas (core, hydro, sam, calibration, diagnosis; "
                                                  "calibrate-realsensor runs only when named); diagnose-structural: "
                                                  "classes; diagnose-field: cases (clean, dead, reversed, ...)")
+    add_progress_arguments(p)
     p.set_defaults(func=_run)
+
 
 
 def _run(args) -> int:
@@ -85,10 +89,10 @@ def _run(args) -> int:
         mods = {a: m for a, m in mods.items() if getattr(m, "DEFAULT", True)}
     results: dict = {}
     desc: dict = {}
+    progress = command_progress("bench", args)
     for area, mod in mods.items():
-        if not args.json:
-            print(f"[{area}] running ...", flush=True)
-        results.update(mod.run(quick=args.quick))
+        with progress.stage(f"[{area}] speed figures" + (" (--quick)" if args.quick else "")):
+            results.update(mod.run(quick=args.quick))
         describe = getattr(mod, "describe", None)  # labels with this mode's problem sizes
         desc.update(describe(args.quick) if describe else getattr(mod, "DESCRIPTIONS", {}))
     if args.json:
@@ -101,8 +105,9 @@ def _run(args) -> int:
 
 
 def _suite(args, run) -> dict | None:
-    """Run a scenario benchmark (``run(progress)``) with ``--results`` checked; print its JSON
-    and return None with ``--json``, else print the machine line and return its output."""
+    """Run a scenario benchmark (``run(say, stages)``: a line per finished case, each case a stage of
+    :mod:`uvsim.progress`) with ``--results`` checked; print its JSON and return None with ``--json``,
+    else print the machine line and return its output."""
     from uvsim.commands.checks import check_outputs
     from uvsim.errors import UvsimError
     from uvsim.schema import check_workers, whole_number
@@ -111,7 +116,7 @@ def _suite(args, run) -> dict | None:
     whole_number(args.seed, "--seed", minimum=0, error=UvsimError)
     check_workers(args.workers, "--workers", error=UvsimError)
     check_outputs({"--results": args.results})
-    out = run(None if args.json else (lambda m: print(m, flush=True)))
+    out = run(None if args.json else (lambda m: print(m, flush=True)), command_progress("bench", args))
     if args.json:
         print(json.dumps(out, indent=2, default=float))
         return None
@@ -122,8 +127,8 @@ def _suite(args, run) -> dict | None:
 def _diagnose(args) -> int:
     from uvsim.benchmarks.scenarios import run_benchmark
 
-    out = _suite(args, lambda say: run_benchmark(args.scenarios, args.seed, two_effects=args.two_effects,
-                                                 workers=args.workers, results=args.results, progress=say))
+    out = _suite(args, lambda say, stages: run_benchmark(args.scenarios, args.seed, two_effects=args.two_effects,
+                                                 workers=args.workers, results=args.results, progress=say, stages=stages))
     if out is None:
         return 0
     s = out["summary"]
@@ -166,9 +171,9 @@ def _structural(args) -> int:
     from uvsim.benchmarks.structural import CLASSES, run_benchmark
 
     classes = [c.strip() for c in args.only.split(",") if c.strip()] if args.only else list(CLASSES)
-    out = _suite(args, lambda say: run_benchmark(args.scenarios, args.seed, classes=classes, workers=args.workers,
+    out = _suite(args, lambda say, stages: run_benchmark(args.scenarios, args.seed, classes=classes, workers=args.workers,
                                                  supply=_diagnosis_supply(args), results=args.results,
-                                                 progress=say))
+                                                 progress=say, stages=stages))
     if out is None:
         return 0
     s = out["summary"]
@@ -187,8 +192,8 @@ def _field(args) -> int:
     from uvsim.benchmarks.field_logs import run_benchmark
 
     cases = [c.strip() for c in args.only.split(",") if c.strip()] if args.only else None
-    out = _suite(args, lambda say: run_benchmark(args.scenarios, args.seed, cases=cases, workers=args.workers,
-                                                 results=args.results, progress=say))
+    out = _suite(args, lambda say, stages: run_benchmark(args.scenarios, args.seed, cases=cases, workers=args.workers,
+                                                 results=args.results, progress=say, stages=stages))
     if out is None:
         return 0
     s = out["summary"]
@@ -214,12 +219,12 @@ def _calibrate_structural(args) -> int:
 
     supply = {None: REAL_LOG_SUPPLY, "free": True, "auto": "auto", "none": False}[args.supply_voltage]
 
-    out = _suite(args, lambda say: run_benchmark(args.scenarios, args.seed, compare_no_prior=args.compare_no_prior,
+    out = _suite(args, lambda say, stages: run_benchmark(args.scenarios, args.seed, compare_no_prior=args.compare_no_prior,
                                                  loss=args.loss, supply=supply,
                                                  free=args.free,
                                                  latency=None if args.latency == "none" else args.latency,
                                                  workers=args.workers, results=args.results,
-                                                 progress=say))
+                                                 progress=say, stages=stages))
     if out is None:
         return 0
     for mode, d in out["summary"].items():

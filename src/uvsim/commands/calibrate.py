@@ -5,7 +5,7 @@
                     [--horizons 2,6] [--continuity 0.05] [--no-gyro-bias] [--no-prior] [--loss huber] [--sample-weighting per_sample] [--seed S]
                     [--population P --generations G]
                     [--workers N] [--dask ADDR|local] [--checkpoint CKPT] [--resume CKPT] [--no-refine]
-                    --out fitted.yaml [--json report.json] [--plots DIR] [--progress]
+                    --out fitted.yaml [--json report.json] [--plots DIR] [--progress | --no-progress]
 
 Seed 000's GA per DOF for runs marked with one DOF, then one joint windowed
 prediction-error fit of every training run (marked and ``dof: mixed``).
@@ -14,12 +14,11 @@ from __future__ import annotations
 
 import json
 import logging
-import sys
 from pathlib import Path
 
 from uvsim.commands import lag_option, parse_pairs
-from uvsim.commands.checks import (add_allow_argument, add_progress_arguments, check_outputs,
-                                   check_runs_at_door, remove_checkpoints, say, want_progress)
+from uvsim.commands.checks import (add_allow_argument, add_progress_arguments, check_outputs, check_runs_at_door,
+                                   command_progress, remove_checkpoints, say)
 from uvsim.commands.calibration_output import (jsonable, print_summary, print_verdict,  # noqa: F401 (re-exported)
                                                record_outcome, save_fitted_vehicle)
 from uvsim.errors import UvsimError
@@ -192,6 +191,7 @@ def _run(args) -> int:
     ds = read_dataset(args.data)
     veh = resolve_vehicle(args.vehicle, ds)
     notes = check_runs_at_door("calibrate", ds.runs, veh, args.allow)
+    progress = command_progress("calibrate", args)
     cal = Calibrator(dofs=args.dof, population=args.population, generations=args.generations, seed=args.seed,
                      margin=args.margin, workers=args.workers, dask=args.dask, checkpoint=ckpt, resume=args.resume,
                      refine=not args.no_refine, free=args.free, fix=args.fix, bounds=bounds,
@@ -202,12 +202,14 @@ def _run(args) -> int:
                      sample_weighting=args.sample_weighting,
                      screen=not args.no_screen,
                      ga_channels=args.ga_channels,
-                     attitude_lag=lag, latency=args.latency, supply_voltage=args.supply_voltage, low_speed_exponent=args.low_speed_exponent, progress=want_progress(args),
+                     attitude_lag=lag, latency=args.latency, supply_voltage=args.supply_voltage, low_speed_exponent=args.low_speed_exponent, progress=progress,
                      allow=parse_allow(args.allow))
     logger = logging.getLogger("uvsim")
     handler = None
     if not logger.handlers:  # "resuming from ..." and other notes reach the user
-        handler = logging.StreamHandler(sys.stderr)
+        from uvsim.progress import LineHandler
+
+        handler = LineHandler()
         handler.setFormatter(logging.Formatter("%(message)s"))
         logger.addHandler(handler)
         logger.setLevel(logging.INFO)
@@ -221,17 +223,21 @@ def _run(args) -> int:
             logger.removeHandler(handler)
     rep = cal.report_
     rep["input_notes"] = notes
-    status = finish_calibration(cal, ds, out, args.json, args.plots, keep_worse=args.keep_worse)
+    status = finish_calibration(cal, ds, out, args.json, args.plots, keep_worse=args.keep_worse, progress=progress)
     from uvsim.calibration.joint import joint_checkpoint_path
 
     remove_checkpoints(ckpt, *(joint_checkpoint_path(f"{ckpt}{tag}") for tag in ("", ".latency", ".supply")))
     return EXIT_CODES[status]
 
 
-def finish_calibration(cal, ds, out, json_path=None, plots=None, *, keep_worse: bool = False) -> str:
+def finish_calibration(cal, ds, out, json_path=None, plots=None, *, keep_worse: bool = False, progress=None) -> str:
     """Write what a calibration's outcome allows and print it (docs/calibration.md, "The verdict"):
     report.json and the plots always; the fitted vehicle when the verdict is *better* or a
-    *trade-off*, and for *worse* only with ``keep_worse``.  Returns the status."""
+    *trade-off*, and for *worse* only with ``keep_worse``.  Returns the status.  ``progress``:
+    the plots as a stage (:mod:`uvsim.progress`)."""
+    from uvsim.progress import as_progress
+
+    progress = as_progress(progress)
     rep = cal.report_
     status, why, keep = record_outcome(cal, ds, keep_worse=keep_worse)
     if keep:
@@ -243,7 +249,8 @@ def finish_calibration(cal, ds, out, json_path=None, plots=None, *, keep_worse: 
     if plots:
         from uvsim.plotting.calibration import plot_calibration
 
-        plot_calibration(cal, ds, plots)
+        with progress.stage(f"plots into {plots}"):
+            plot_calibration(cal, ds, plots)
     stages = "; ".join(f"{'whole runs' if s['horizon_s'] is None else format(s['horizon_s'], 'g') + ' s windows'}: "
                        f"{s['iterations']} iterations, {s['message']}" for s in rep["refinement"].get("stages", []))
     print(f"calibrated {rep['vehicle']} on {len(rep['training_runs'])} training runs: "

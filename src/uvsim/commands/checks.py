@@ -10,7 +10,6 @@ parameter of a DOF on a search bound), otherwise :class:`uvsim.errors.ResultChec
 from __future__ import annotations
 
 import math
-import sys
 
 import numpy as np
 from typing import Iterable, Mapping
@@ -31,19 +30,28 @@ def add_allow_argument(p) -> None:
                    help=f"turn these plausibility checks of the runs into warnings ({names}; docs/contracts.md)")
 
 
-def add_progress_arguments(p) -> None:
+def add_progress_arguments(p, quiet: bool = False) -> None:
+    """``--progress`` / ``--no-progress`` (and ``--quiet``, the same as ``--no-progress``)."""
     g = p.add_mutually_exclusive_group()
     g.add_argument("--progress", dest="progress", action="store_true", default=None,
-                   help="progress bars for the long phases (default: when stderr is a terminal)")
-    g.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bars")
+                   help="progress bars for the long stages (default: bars when stderr is a terminal, else one line "
+                        "per stage on stderr: 'uvsim COMMAND: STAGE ... done in 12.3 s')")
+    g.add_argument("--no-progress", dest="progress", action="store_false", help="no progress output")
+    if quiet:
+        g.add_argument("--quiet", dest="progress", action="store_false", help="the same as --no-progress")
 
 
-def want_progress(args) -> bool:
-    return sys.stderr.isatty() if args.progress is None else bool(args.progress)
+def command_progress(command: str, args):
+    """The :class:`uvsim.progress.Progress` of ``uvsim COMMAND`` for its ``--progress`` options."""
+    from uvsim.progress import Progress
+
+    return Progress.for_command(command, args.progress)
 
 
 def say(command: str, message: str) -> None:
-    print(f"uvsim {command}: {message}", file=sys.stderr, flush=True)
+    from uvsim.progress import write_line
+
+    write_line(f"uvsim {command}: {message}")
 
 
 def check_outputs(files: Mapping[str, object] = (), dirs: Mapping[str, object] = (),

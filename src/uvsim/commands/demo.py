@@ -27,19 +27,23 @@ def shipped_dataset_path() -> Path:
     return Path(uvsim.__file__).parent / "data" / "datasets" / "bluerov2_tank"
 
 
-def simulate_dataset_report(dataset, vehicles: dict) -> tuple[dict, dict]:
+def simulate_dataset_report(dataset, vehicles: dict, progress=None) -> tuple[dict, dict]:
     """Simulate every run with each vehicle (its free simulation as every verdict sees it,
     :func:`uvsim.fitting.evaluate.open_loop`: batched, initial state estimated over the first
     0.5 s, position aligned over the first 3 s).  Returns (sims[label][run name] -> states
-    (n, n_y), rmse[label][dof] -> pooled group RMSEs, :mod:`uvsim.metrics`)."""
+    (n, n_y), rmse[label][dof] -> pooled group RMSEs, :mod:`uvsim.metrics`); ``progress``: one
+    stage per vehicle (:mod:`uvsim.progress`)."""
     from uvsim.fitting.evaluate import open_loop
     from uvsim.metrics import pooled_group_rmse
+    from uvsim.progress import as_progress
 
     sims, rows = {}, {}
     for label, veh in vehicles.items():
         sims[label] = {}
         by_dof: dict = {}
-        for run, ev in zip(dataset.runs, open_loop(veh, dataset.runs)):
+        with as_progress(progress).stage(f"free simulations of the {len(dataset.runs)} runs with {label}"):
+            evs = open_loop(veh, dataset.runs)
+        for run, ev in zip(dataset.runs, evs):
             sims[label][run.name] = ev["states"]
             by_dof.setdefault(run.dof, []).append(ev["metrics"])
         rows[label] = {dof: pooled_group_rmse(ms) for dof, ms in by_dof.items()}
@@ -50,8 +54,9 @@ def _run(args) -> int:
     from uvsim.logs import read_dataset
     from uvsim.vehicle import load_vehicle
 
-    from uvsim.commands.checks import check_outputs
+    from uvsim.commands.checks import check_outputs, command_progress
 
+    progress = command_progress("demo", args)
     out = Path(args.out)
     check_outputs(dirs={"--out": out})
     out.mkdir(parents=True, exist_ok=True)
@@ -61,7 +66,7 @@ def _run(args) -> int:
                 "Table 2 (bluerov2_heavy_initial)": load_vehicle("bluerov2_heavy_initial")}
     print(f"uvsim demo: {len(ds.runs)} synthetic tank runs ({ds.path.name}; truth = seed 000 Table 5, "
           f"noise: position 2 mm, attitude 0.005-0.01 rad)")
-    sims, rows = simulate_dataset_report(ds, vehicles)
+    sims, rows = simulate_dataset_report(ds, vehicles, progress)
     n_steps = sum(len(r.t) - 1 for r in ds.runs) * len(vehicles)
     print(f"simulated {len(ds.runs) * len(vehicles)} runs ({n_steps} RK4 steps, batched) in "
           f"{time.perf_counter() - t0:.1f} s\n")
@@ -81,16 +86,15 @@ def _run(args) -> int:
     by_dof = {}
     for r in ds.runs:
         by_dof.setdefault(r.dof, []).append(r)
-    p = tank_runs(by_dof, sims, out / "tank_runs.png", title="BlueROV2 Heavy tank runs: measured vs simulated")
+    with progress.stage(f"plot of the {len(ds.runs)} runs"):
+        p = tank_runs(by_dof, sims, out / "tank_runs.png", title="BlueROV2 Heavy tank runs: measured vs simulated")
     print(f"plot: {p}")
     status = "better"
     if not args.skip_calibration:
         from uvsim.calibration.demo import run as calibration_demo
 
         print()
-        from uvsim.commands.checks import want_progress
-
-        status = calibration_demo(out, ds, settings={"progress": want_progress(args)})
+        status = calibration_demo(out, ds, settings={"progress": progress})
     print(f"\ndone in {time.perf_counter() - t0:.1f} s; outputs in {out}/")
     from uvsim.fitting.verdict import EXIT_CODES
 

@@ -3,7 +3,7 @@
     uvsim diagnose --data DIR [--vehicle NAME|FILE] [--json report.json] [--plots DIR] [--out fixed.yaml]
                    [--retune X_uu,N_rr] [--only current,tether] [--noise depth=0.01,attitude=0.005]
                    [--weights position=1,depth=0] [--horizon 3] [--max-effects 2] [--workers 2]
-                   [--checkpoint CKPT] [--resume CKPT]
+                   [--checkpoint CKPT] [--resume CKPT] [--progress | --no-progress]
 """
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ import json
 from pathlib import Path
 
 from uvsim.commands import lag_option, parse_pairs
-from uvsim.commands.checks import (add_allow_argument, check_outputs, check_runs_at_door, diagnosis_caveats,
-                                   diagnosis_problems, remove_checkpoints, say)
+from uvsim.commands.checks import (add_allow_argument, add_progress_arguments, check_outputs, check_runs_at_door,
+                                   command_progress, diagnosis_caveats, diagnosis_problems, remove_checkpoints, say)
 from uvsim.fitting.verdict import EXIT_CODES
 from uvsim.fitting.verdict import table as verdict_table
 
@@ -55,8 +55,8 @@ def register(subparsers) -> None:
                                         "plus .ckpt; none without either)")
     p.add_argument("--resume", metavar="CKPT", help="continue an interrupted diagnosis from its checkpoint "
                                                     "(same dataset, vehicle and settings)")
-    p.add_argument("--quiet", action="store_true", help="no progress messages")
     add_allow_argument(p)
+    add_progress_arguments(p, quiet=True)
     p.set_defaults(func=run)
 
 
@@ -148,7 +148,7 @@ def run(args) -> int:
     from uvsim.plausibility import parse_allow
     from uvsim.vehicle import load_vehicle
 
-    progress = None if args.quiet else (lambda m: print(f"uvsim diagnose: {m}", flush=True))
+    progress = command_progress("diagnose", args)
     noise, weights = parse_pairs(args.noise, "--noise"), parse_pairs(args.weights, "--weights")
     ckpt = args.checkpoint or next((f"{f}.ckpt" for f in (args.json_out, args.out) if f), None)
     check_outputs({"--json": args.json_out, "--out": args.out, "--checkpoint": ckpt}, {"--plots": args.plots})
@@ -200,7 +200,8 @@ def run(args) -> int:
     if args.plots:
         from uvsim.plotting.diagnosis import plot_diagnosis
 
-        files = plot_diagnosis(diag, args.plots)
+        with progress.stage(f"plots into {args.plots}"):
+            files = plot_diagnosis(diag, args.plots)
         print(f"plots: {', '.join(str(f) for f in files)}")
     if args.out and keep:
         save_fixed_vehicle(diag, args.out)

@@ -2,6 +2,7 @@
 (docs/import_export.md)."""
 from __future__ import annotations
 
+from uvsim.commands.checks import add_progress_arguments, command_progress
 from uvsim.errors import UvsimError
 
 
@@ -33,6 +34,7 @@ def register(sub) -> None:
                    help="when the log's motors are exactly reversed with respect to the vehicle (MOT_n_DIRECTION), "
                         "write an adapted copy of the vehicle beside the manifest instead of failing")
     a.add_argument("--imu", type=int, default=0, help="DataFlash IMU instance for rates and accelerations (default 0)")
+    add_progress_arguments(a)
     a.set_defaults(func=_ardusub)
 
     b = kinds.add_parser("bag", help="ROS 1 (.bag) or ROS 2 bag directory (needs uvsim[ros])")
@@ -41,7 +43,10 @@ def register(sub) -> None:
     b.add_argument("--out", required=True, help="dataset directory to write")
     b.add_argument("--vehicle", default=None, help="vehicle name or YAML (default: the map's 'vehicle')")
     b.add_argument("--segments", default=None, help="segments YAML; default: the whole bag as one run")
+    add_progress_arguments(b)
     b.set_defaults(func=_bag)
+
+
 
 
 def _ardusub(args) -> int:
@@ -50,7 +55,8 @@ def _ardusub(args) -> int:
 
     res = import_ardusub(args.log, args.out, vehicle=args.vehicle, segments=args.segments,
                          water=_water(args.water), surface_pressure=args.surface_pressure,
-                         adapt_vehicle=args.adapt_vehicle, imu_instance=args.imu)
+                         adapt_vehicle=args.adapt_vehicle, imu_instance=args.imu,
+                         progress=command_progress("import", args))
     print("\n".join(summary_lines(res)))
     return 0
 
@@ -59,6 +65,7 @@ def _bag(args) -> int:
     from uvsim.importers.build import summary_lines
     from uvsim.importers.rosbag import import_bag
 
-    res = import_bag(args.bag, args.map, args.out, vehicle=args.vehicle, segments=args.segments)
+    res = import_bag(args.bag, args.map, args.out, vehicle=args.vehicle, segments=args.segments,
+                     progress=command_progress("import", args))
     print("\n".join(summary_lines(res)))
     return 0

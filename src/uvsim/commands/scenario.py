@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import json
 
+from uvsim.commands.checks import add_progress_arguments, command_progress
+
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
@@ -25,6 +27,7 @@ def register(subparsers) -> None:
     g.add_argument("--effects", help="comma-separated effect types (e.g. tether,ballast)")
     g.add_argument("--input-kind", help="force, thrust or pwm")
     g.add_argument("--spec", help="regenerate from a spec or truth file (YAML) instead of drawing one")
+    add_progress_arguments(g)
     g.set_defaults(func=run_generate)
     s = sub.add_parser("snr", help="effect_snr of one effect over drawn scenarios (detectability)")
     s.add_argument("--profile", default="diagnose", help="diagnose, issue10_timing or realsensor")
@@ -33,12 +36,16 @@ def register(subparsers) -> None:
     s.add_argument("--magnitude", default="low", help="low, high or a value in the effect's unit")
     s.add_argument("--variant", help="force one variant")
     s.add_argument("--json", action="store_true", help="print every scenario's result as JSON")
+    add_progress_arguments(s)
     s.set_defaults(func=run_snr)
     h = sub.add_parser("halving", help="integration error of a scenario by step halving")
     h.add_argument("--profile", default="issue10_timing", help="diagnose, issue10_timing or realsensor")
     h.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     h.add_argument("--max-step", type=float, help="RK4 step bound to check, s (default the spec's, 0.002)")
+    add_progress_arguments(h)
     h.set_defaults(func=run_halving)
+
+
 
 
 def run_generate(args) -> int:
@@ -63,7 +70,7 @@ def run_generate(args) -> int:
         if args.input_kind:
             over["input_kind"] = args.input_kind
         spec = sample_scenario(args.seed, args.profile, **over)
-    out = generate(spec, args.out)
+    out = generate(spec, args.out, progress=command_progress("scenario generate", args))
     truth = load_truth(out)
     print(f"{out}: {len(spec.runs)} runs, {spec.input_kind} inputs at {spec.rate_hz:g} Hz, vehicle "
           f"{spec.vehicle['model_name']}.yaml")
@@ -82,7 +89,8 @@ def run_snr(args) -> int:
         mag = float(args.magnitude)
     except ValueError:
         mag = args.magnitude
-    res = snr_study(args.profile, args.effect, range(args.seeds), magnitude=mag, variant=args.variant)
+    res = snr_study(args.profile, args.effect, range(args.seeds), magnitude=mag, variant=args.variant,
+                    progress=command_progress("scenario snr", args))
     summary = summarize(res)
     if args.json:
         print(json.dumps({"summary": summary, "scenarios": res}, indent=2))
@@ -97,7 +105,8 @@ def run_halving(args) -> int:
     from uvsim.scenarios import sample_scenario
     from uvsim.scenarios.studies import step_halving
 
-    r = step_halving(sample_scenario(args.seed, args.profile), args.max_step)
+    r = step_halving(sample_scenario(args.seed, args.profile), args.max_step,
+                     progress=command_progress("scenario halving", args))
     print(f"{args.profile} seed {args.seed}, {r['runs']} runs, RK4 step {1000 * r['max_step_s']:g} ms vs half of it: "
           f"max difference position {r['position_m']:.2e} m, attitude {r['attitude_rad']:.2e} rad, "
           f"velocity {r['velocity']:.2e}")

@@ -12,7 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from uvsim.commands.checks import add_allow_argument, check_outputs, check_runs_at_door, say
+from uvsim.commands.checks import (add_allow_argument, add_progress_arguments, check_outputs, check_runs_at_door,
+                                   command_progress, say)
 from uvsim.errors import UvsimError
 from uvsim.vehicle_schema import check_current_speed
 
@@ -48,6 +49,7 @@ def register(sub) -> None:
     p.add_argument("--plot", default=None, help="figure for --compare (default: <out>_compare.png beside --out, else "
                                                 "<run name>_compare.png in the current directory, never beside the run)")
     add_allow_argument(p)
+    add_progress_arguments(p)
     p.set_defaults(func=_run)
 
 
@@ -86,11 +88,12 @@ def _run(args) -> int:
     check_initial_window(args.initial_window, float(run.t[-1] - run.t[0]), "--initial-window")
     segments = split_run(run)  # a run with gaps: each segment from its own first measured state (uvsim.gaps)
     check_runs_at_door("simulate", segments, veh, args.allow)
+    progress = command_progress("simulate", args)
     pieces = []
     for seg in segments:
         seg = delay_inputs(seg, veh.sensor_latency)  # as simulate_run applies them (and --compare's forces)
         pieces.append((seg, simulate_run(veh, seg, current=current, method=args.method, substeps=args.substeps,
-                                         initial_window_s=args.initial_window)))
+                                         initial_window_s=args.initial_window, progress=progress)))
     if veh.sensor_latency:
         print(f"inputs applied {veh.sensor_latency * 1000:.1f} ms late (the vehicle's sensors.latency)")
     if args.out:
@@ -104,7 +107,7 @@ def _run(args) -> int:
         per = f" in {len(pieces)} segments, each from its own first measured state" if len(pieces) > 1 else ""
         print(f"simulated {run.name}{per}: {len(df)} samples, {df.t.iloc[-1] - df.t.iloc[0]:.2f} s -> {args.out}")
     if args.compare:
-        _compare(args, veh, run, pieces, current)
+        _compare(args, veh, run, pieces, current, progress)
     return 0
 
 
@@ -232,7 +235,7 @@ def _with_breaks(pieces, chans: list[dict], lengths: list[int]):
 MIN_COMPARE_SAMPLES = 20
 
 
-def _compare(args, veh, run, pieces, current) -> None:
+def _compare(args, veh, run, pieces, current, progress=None) -> None:
     """Print the per-channel table and write the figure for the simulated ``pieces``
     ((segment, result) pairs: the run itself, or its segments when it has gaps)."""
     from uvsim.plotting.compare import compare_run
@@ -252,5 +255,8 @@ def _compare(args, veh, run, pieces, current) -> None:
               f"{r['fit_percent']:>9.2f}")
     t, sim, meas, chans = _with_breaks(pieces, chans, lengths)
     plot = Path(args.plot)
-    compare_run(t, chans, sim, meas, plot, title=f"{run.name}: measured vs {veh.name}")
+    from uvsim.progress import as_progress
+
+    with as_progress(progress).stage(f"plot {plot}"):
+        compare_run(t, chans, sim, meas, plot, title=f"{run.name}: measured vs {veh.name}")
     print(f"plot -> {plot}")

@@ -51,6 +51,7 @@ from uvsim.latency import runs_for
 from uvsim.logs import Dataset, read_dataset
 from uvsim.measurements import check_signal_settings
 from uvsim.plausibility import check_runs, parse_allow
+from uvsim.progress import as_progress
 from uvsim.schema import check_workers, is_whole_number
 from uvsim.vehicle import load_vehicle
 
@@ -128,7 +129,8 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     top : candidates fitted through the simulator per step (by screening rank).
     max_iter : Levenberg-Marquardt iterations per fit.
     workers : processes for the simulations.
-    progress : callable(message).
+    progress : the stages (each fit, screening and validation) and notes: a callable(message)
+        receiving each stage's name as it starts, or a :class:`uvsim.progress.Progress`.
     allow : names of plausibility checks (:mod:`uvsim.plausibility`) that may fail; every
         other finding is an error naming the file, column and row.
     checkpoint : file to which every finished fit is saved (atomically, after each fit).
@@ -141,7 +143,8 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         (:func:`uvsim.estimation.lag.attitude_lag_setting`); 0: none.
     """
     t_start = time.perf_counter()
-    say = progress or (lambda msg: None)
+    progress = as_progress(progress)
+    say = progress.say
     dataset = data if isinstance(data, Dataset) else read_dataset(data)
     if vehicle is None:
         vehicle = dataset.vehicle_file or dataset.vehicle
@@ -173,7 +176,8 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
                        "attitude_lag": lag["tau"]})
     store, on_fit = _checkpoint_store(checkpoint, resume, key, say)
     sel = Selector(veh, train, val, retune=retune, noise=noise, weights=weights, horizon=horizon,
-                   max_iter=max_iter, workers=workers, say=say, store=store, on_fit=on_fit, attitude_lag=lag["tau"])
+                   max_iter=max_iter, workers=workers, say=progress, store=store, on_fit=on_fit,
+                   attitude_lag=lag["tau"])
 
     # 1. baseline ----------------------------------------------------------------------
     values: dict = {}
@@ -182,9 +186,9 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         sp = sel.space(veh, sel.retune, sel.retune_bounds, start, {})
         base_fit = sel.fit_train(veh, sp, "the baseline (re-tuned base coefficients)")
         values = dict(base_fit.values)
-    say("validation cost of the baseline")
-    val_given = sel.validation(veh, {})
-    val_cur = sel.validation(veh, values) if values else val_given
+    with progress.stage(f"validation cost of the baseline ({len(val)} validation run(s))"):
+        val_given = sel.validation(veh, {})
+        val_cur = sel.validation(veh, values) if values else val_given
     retune_verdict, asked_retune = None, list(sel.retune)
     if values:
         # the re-tune is a change of the model like an effect: the baseline keeps it only when the
@@ -265,9 +269,9 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     veh_after = sel.vehicle_for(accepted)
     if values:
         veh_after = veh_after.with_parameters(values)
-    say("open-loop validation before / after")
-    ol_before = open_loop(veh, val, meas=sel.meas_va)
-    ol_after = open_loop(veh_after, val, meas=sel.meas_va)
+    with progress.stage(f"open-loop validation before / after ({len(val)} validation run(s))"):
+        ol_before = open_loop(veh, val, meas=sel.meas_va)
+        ol_after = open_loop(veh_after, val, meas=sel.meas_va)
     # the corrected model against the given one, as calibration judges a fit (None: unchanged)
     changed = bool(accepted) or bool(values)
     model_verdict = None

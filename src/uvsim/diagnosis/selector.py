@@ -10,6 +10,7 @@ fitted, so a diagnosis interrupted and resumed from its checkpoint repeats no fi
 """
 from __future__ import annotations
 
+from contextlib import nullcontext
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -28,6 +29,7 @@ from uvsim.fitting.parameters import GAIN_RANGE, FreeParameter, ParameterSpace, 
 from uvsim.fitting.verdict import score
 from uvsim.forces import make_term
 from uvsim.measurements import measurements_for
+from uvsim.progress import as_progress
 
 #: A variant is as good as the best of its effect when it removes this share of what the
 #: best removes in the screening.
@@ -59,14 +61,18 @@ class Selector:
     """State and steps of one diagnosis (module docstring).
 
     ``store`` is a dict of finished fits by fingerprint (restored from a checkpoint), and
-    ``on_fit(store)`` is called after every new fit (to save the checkpoint)."""
+    ``on_fit(store)`` is called after every new fit (to save the checkpoint); ``say``: the
+    progress (:func:`uvsim.progress.as_progress`: a callable(message) or a Progress), the fits
+    and screenings are its stages."""
 
     def __init__(self, vehicle, train, val, *, retune, noise, weights, horizon, max_iter, workers, say,
                  store=None, on_fit=None, attitude_lag: float = 0.0):
         self.base_vehicle = vehicle
         self.train, self.val = train, val
         self.noise, self.weights = noise, weights
-        self.horizon, self.max_iter, self.workers, self.say = horizon, max_iter, workers, say
+        self.horizon, self.max_iter, self.workers = horizon, max_iter, workers
+        self.progress = as_progress(say)
+        self.say = self.progress.say
         # the calibration's measurement model: logged Euler angles trail by the attitude filter's lag
         self.meas_tr = [measurements_for(r, vehicle, noise=noise, weights=weights, run_weight=1.0,
                                          attitude_lag=attitude_lag) for r in train]
@@ -133,9 +139,10 @@ class Selector:
 
     def fit_train(self, vehicle, space, label: str, max_iter: int | None = None):
         self.fits += 1
-        self.say(f"fit {self.fits}: {label} ({space.p} parameter(s)) on {len(self.train)} training run(s)")
-        return self._fit("train", vehicle, space, self.train, self.meas_tr,
-                         self.max_iter if max_iter is None else max_iter, label)
+        with self.progress.stage(f"fit {self.fits}: {label} ({space.p} parameter(s)) on {len(self.train)} "
+                                 "training run(s)"):
+            return self._fit("train", vehicle, space, self.train, self.meas_tr,
+                             self.max_iter if max_iter is None else max_iter, label)
 
     def val_cost(self, vehicle, values: Mapping) -> dict:
         """Per-window validation costs of a model with fixed parameters (nodes re-estimated)."""
@@ -173,12 +180,12 @@ class Selector:
         motions = [m for m in self.motions if m is not None]
         if not motions or not self.retune:
             return {}
-        self.say(f"equation-error start for the {len(self.retune)} re-tuned coefficient(s)")
-        sp = self.space(vehicle, self.retune, self.retune_bounds, {}, {})
-        try:
-            return EquationError(vehicle, motions, sp).gauss_newton(iterations=3)["values"]
-        except (UvsimError, np.linalg.LinAlgError, ValueError):
-            return {}
+        with self.progress.stage(f"equation-error start for the {len(self.retune)} re-tuned coefficient(s)"):
+            sp = self.space(vehicle, self.retune, self.retune_bounds, {}, {})
+            try:
+                return EquationError(vehicle, motions, sp).gauss_newton(iterations=3)["values"]
+            except (UvsimError, np.linalg.LinAlgError, ValueError):
+                return {}
 
     # ---------------------------------------------------------------- screening
     def screen(self, cur, cands: list, coupled: bool = True) -> tuple[list, dict]:
@@ -328,14 +335,16 @@ class Selector:
         # error cannot separate a piece's mass from the re-tuned added mass (decision.inertia_challenger)
         held = [c for c in cands if c.tags.get("open_loop")]
         cands = [c for c in cands if not c.tags.get("open_loop")]
+        screening = None
         if any(m is not None for m in self.motions):
-            self.say(f"step {k_step}: screening {len(cands) + 1} candidate variant(s) by equation error")
+            screening = f"step {k_step}: screening {len(cands) + 1} candidate variant(s) by equation error"
         else:  # said at the start too (Selector._say_unscreened): the choice below is by simplicity alone
             self.say(f"step {k_step}: no equation-error screening (no training run allows it): the simplest variant "
                      "of each effect is fitted through the simulator")
         want_coupled = "coupled_damping" not in exclude and (only is None or "coupled_damping" in only)
-        screened, ee_info = (self.screen(cur, cands, coupled=want_coupled) if cands
-                             else ([], {"available": False}))
+        with self.progress.stage(screening) if screening else nullcontext():
+            screened, ee_info = (self.screen(cur, cands, coupled=want_coupled) if cands
+                                 else ([], {"available": False}))
         # per effect: the simplest variant within VARIANT_SHARE of the best variant's reduction
         by_effect: dict = {}
         for c, s in screened:

@@ -155,7 +155,7 @@ def _check_surface_pressure(p) -> None:
 
 
 def read_ardusub(path, *, water: str | float | None = None, surface_pressure: float | None = None,
-                 imu_instance: int = 0) -> ArduSubLog:
+                 imu_instance: int = 0, progress=None) -> ArduSubLog:
     """Read one ArduSub log into streams (see the module docstring).
 
     Parameters
@@ -164,6 +164,7 @@ def read_ardusub(path, *, water: str | float | None = None, surface_pressure: fl
     water : "fresh", "salt", a density in kg/m^3, or None (the log's BARO_SPEC_GRAV, else fresh).
     surface_pressure : Pa, overrides the pre-dive / calibrated surface pressure.
     imu_instance : which IMU (DataFlash IMU.I) gives rates and accelerations.
+    progress : the reading as a stage (:func:`uvsim.progress.as_progress`).
     """
     path = Path(path)
     whole_number(imu_instance, "imu_instance (--imu)", minimum=0, error=LogFormatError,
@@ -179,7 +180,10 @@ def read_ardusub(path, *, water: str | float | None = None, surface_pressure: fl
         kind = "tlog"
     else:
         raise LogFormatError(f"{path}: unknown log type {path.suffix!r}; expected .BIN (DataFlash) or .tlog (MAVLink)")
-    msgs, info = _collect(path, kind)
+    from uvsim.progress import as_progress
+
+    with as_progress(progress).stage(f"reading {path.name} ({path.stat().st_size / 1e6:.1f} MB) with pymavlink"):
+        msgs, info = _collect(path, kind)
     reader = _bin_streams if kind == "bin" else _tlog_streams
     log = reader(path, msgs, water, surface_pressure, imu_instance)
     log.meta.update(info)

@@ -26,7 +26,8 @@ DEFAULT_VEHICLE = {2: "bluerov2_heavy", 1: "bluerov2_vectored_standin"}
 
 
 def import_ardusub(log, out, *, vehicle=None, segments=None, water=None, surface_pressure=None,
-                   adapt_vehicle: bool = False, tol: float = MERGE_TOL_S, imu_instance: int = 0) -> dict:
+                   adapt_vehicle: bool = False, tol: float = MERGE_TOL_S, imu_instance: int = 0,
+                   progress=None) -> dict:
     """Import an ArduSub .BIN/.tlog into a dataset directory ``out``.
 
     Parameters
@@ -40,13 +41,15 @@ def import_ardusub(log, out, *, vehicle=None, segments=None, water=None, surface
     adapt_vehicle : when the log's motors are exactly reversed with respect to the vehicle
         file (MOT_n_DIRECTION), write ``<vehicle>_<log stem>.yaml`` beside the manifest with
         those thrusters' directions flipped instead of failing.
+    progress : the reading of the log as a stage (:func:`uvsim.progress.as_progress`).
 
     Returns
     -------
     dict with "dataset" (Path), "runs" ([(name, duration s, rows)]), "vehicle", "record".
     """
     log = Path(log)
-    data = read_ardusub(log, water=water, surface_pressure=surface_pressure, imu_instance=imu_instance)
+    data = read_ardusub(log, water=water, surface_pressure=surface_pressure, imu_instance=imu_instance,
+                        progress=progress)
     where = str(log)
     fc = data.frame_config
     if vehicle is None:

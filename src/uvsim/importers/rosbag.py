@@ -237,8 +237,9 @@ def load_map(path) -> dict:
     return doc
 
 
-def read_bag(bag, mapping: dict, map_name: str = "map") -> tuple[list, dict]:
-    """Streams of ``bag`` as named by ``mapping`` (a checked map) and the time base."""
+def read_bag(bag, mapping: dict, map_name: str = "map", progress=None) -> tuple[list, dict]:
+    """Streams of ``bag`` as named by ``mapping`` (a checked map) and the time base; ``progress``:
+    the reading as a stage (:func:`uvsim.progress.as_progress`)."""
     rb = require("rosbags.highlevel", "ros", f"{bag}: reading ROS bags")
     typesys = require("rosbags.typesys", "ros", f"{bag}: reading ROS bags")
     bag = Path(bag)
@@ -252,33 +253,38 @@ def read_bag(bag, mapping: dict, map_name: str = "map") -> tuple[list, dict]:
         reader.open()
     except Exception as exc:  # rosbags raises its own error types for unreadable bags
         raise LogFormatError(f"{bag}: cannot be read as a ROS 1 or ROS 2 bag: {type(exc).__name__}: {exc}") from None
-    try:
-        topics = {c.topic: c for c in reader.connections}
-        streams, t_first = [], []
-        raw_streams = []
-        for name, spec in mapping["streams"].items():
-            topic = spec["topic"]
-            where = f"{bag}: topic {topic} (map streams.{name})"
-            if topic not in topics:
-                raise LogFormatError(f"{bag}: topic {topic!r} (map streams.{name}) is not in the bag; "
-                                     f"topics: {sorted(topics)}")
-            conns = [c for c in reader.connections if c.topic == topic]
-            msgs, times = [], []
-            stamp = spec.get("stamp", mapping.get("stamp", "header"))
-            for conn, t_bag, raw in reader.messages(connections=conns):
-                try:
-                    m = reader.deserialize(raw, conn.msgtype)
-                except Exception as exc:
-                    raise LogFormatError(f"{where}: cannot deserialize {conn.msgtype}: {exc}") from None
-                msgs.append(m)
-                times.append(_stamp(m, t_bag, stamp, f"{where} ({conn.msgtype})"))
-            if not msgs:
-                raise LogFormatError(f"{where}: topic has no messages")
-            raw_streams.append((name, spec, msgs, np.asarray(times, dtype=np.int64), f"{where} ({conns[0].msgtype})",
-                                stamp))
-            t_first.append(min(times))
-    finally:
-        reader.close()
+    from uvsim.progress import as_progress
+
+    size = sum(f.stat().st_size for f in ([bag] if bag.is_file() else bag.rglob("*")) if f.is_file())
+    with as_progress(progress).stage(f"reading {bag.name} ({size / 1e6:.1f} MB), {len(mapping['streams'])} "
+                                     "topic(s)"):
+        try:
+            topics = {c.topic: c for c in reader.connections}
+            streams, t_first = [], []
+            raw_streams = []
+            for name, spec in mapping["streams"].items():
+                topic = spec["topic"]
+                where = f"{bag}: topic {topic} (map streams.{name})"
+                if topic not in topics:
+                    raise LogFormatError(f"{bag}: topic {topic!r} (map streams.{name}) is not in the bag; "
+                                         f"topics: {sorted(topics)}")
+                conns = [c for c in reader.connections if c.topic == topic]
+                msgs, times = [], []
+                stamp = spec.get("stamp", mapping.get("stamp", "header"))
+                for conn, t_bag, raw in reader.messages(connections=conns):
+                    try:
+                        m = reader.deserialize(raw, conn.msgtype)
+                    except Exception as exc:
+                        raise LogFormatError(f"{where}: cannot deserialize {conn.msgtype}: {exc}") from None
+                    msgs.append(m)
+                    times.append(_stamp(m, t_bag, stamp, f"{where} ({conn.msgtype})"))
+                if not msgs:
+                    raise LogFormatError(f"{where}: topic has no messages")
+                raw_streams.append((name, spec, msgs, np.asarray(times, dtype=np.int64), f"{where} ({conns[0].msgtype})",
+                                    stamp))
+                t_first.append(min(times))
+        finally:
+            reader.close()
     t0 = min(t_first)
     n_in = 0
     for name, spec, msgs, times, where, stamp in raw_streams:
@@ -316,11 +322,11 @@ def read_bag(bag, mapping: dict, map_name: str = "map") -> tuple[list, dict]:
     return streams, meta
 
 
-def import_bag(bag, map_path, out, *, vehicle=None, segments=None, tol: float = MERGE_TOL_S) -> dict:
+def import_bag(bag, map_path, out, *, vehicle=None, segments=None, tol: float = MERGE_TOL_S, progress=None) -> dict:
     """Import a bag with a topic map into dataset ``out`` (see the module docstring)."""
     bag, map_path = Path(bag), Path(map_path)
     mapping = load_map(map_path)
-    streams, meta = read_bag(bag, mapping, map_path.name)
+    streams, meta = read_bag(bag, mapping, map_path.name, progress)
     vehicle = vehicle or mapping.get("vehicle")
     if not vehicle:
         raise LogFormatError(f"{map_path}: no 'vehicle' in the map and none given (--vehicle)")

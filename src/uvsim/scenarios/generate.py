@@ -314,15 +314,21 @@ def _truth_record(spec, res, snr, run_records) -> dict:
     return plain(doc)
 
 
-def generate(spec, out_dir) -> Path:
-    """Write the dataset of ``spec`` (a :class:`ScenarioSpec` or its dict) into ``out_dir``.
+def generate(spec, out_dir, progress=None) -> Path:
+    """Write the dataset of ``spec`` (a :class:`ScenarioSpec` or its dict) into ``out_dir``;
+    ``progress``: the truth simulation as a stage (:func:`uvsim.progress.as_progress`).
 
     Returns the dataset directory (``uvsim.logs.read_dataset`` reads it)."""
+    from uvsim.progress import as_progress
+
     if isinstance(spec, dict):
         spec = ScenarioSpec.from_dict(spec)
     spec.validate()
     out = Path(out_dir)
-    res = simulate_spec(spec)
+    seconds = sum(float(r["duration"]) for r in spec.runs)
+    with as_progress(progress).stage(f"truth simulation of {len(spec.runs)} runs ({seconds:.0f} s of data, "
+                                     f"RK4 step {1000 * spec.max_step:g} ms)"):
+        res = simulate_spec(spec)
     veh, sim = res["truth"], res["sim"]
     rng = np.random.default_rng([int(spec.noise_seed), 0x5CE7])
     clock_rng = np.random.default_rng([int(spec.noise_seed), 0x5CE7, 1])   # time stamps: a stream of their own

@@ -18,7 +18,7 @@ from uvsim.scenarios.spec import PROFILE_SUITE, sample_scenario
 
 
 def snr_study(profile: str, effect: str, seeds, *, magnitude: float | str = "low", variant: str | None = None,
-              max_step: float = 0.005, **overrides) -> list[dict]:
+              max_step: float = 0.005, progress=None, **overrides) -> list[dict]:
     """``effect_snr`` of ``effect`` in the scenarios ``seeds`` of ``profile``.
 
     Parameters
@@ -26,6 +26,7 @@ def snr_study(profile: str, effect: str, seeds, *, magnitude: float | str = "low
     magnitude : "low", "high" (ends of the effect's range) or a number in its unit.
     variant : force one variant (default: drawn per scenario).
     max_step : RK4 step bound, s (5 ms: integration error ~1e-8 m, far below any noise).
+    progress : the scenarios as a stage (:func:`uvsim.progress.as_progress`).
     **overrides : passed to :func:`sample_scenario`.
 
     Returns
@@ -46,15 +47,21 @@ def snr_study(profile: str, effect: str, seeds, *, magnitude: float | str = "low
     eff = {"type": effect, "magnitude": mag}
     if variant is not None:
         eff["variant"] = variant
+    from uvsim.progress import as_progress
+
+    seeds = list(seeds)
     out = []
-    for seed in seeds:
-        spec = sample_scenario(int(seed), profile, effects=[eff], **overrides)
-        spec = dataclasses.replace(spec, runs=[r for r in spec.runs if r["split"] == "validation"],
-                                   max_step=max_step)
-        res = simulate_spec(spec)
-        s = effect_snr(spec, res)[0]
-        out.append({"seed": int(seed), "variant": spec.effects[0]["variant"], "magnitude": mag,
-                    "input_kind": spec.input_kind, **s})
+    with as_progress(progress).stage(f"{effect} in {len(seeds)} {profile} scenarios, validation runs with and without "
+                                     "it", total=len(seeds), unit="scenario", short=f"snr {effect}") as stage:
+        for seed in seeds:
+            spec = sample_scenario(int(seed), profile, effects=[eff], **overrides)
+            spec = dataclasses.replace(spec, runs=[r for r in spec.runs if r["split"] == "validation"],
+                                       max_step=max_step)
+            res = simulate_spec(spec)
+            s = effect_snr(spec, res)[0]
+            out.append({"seed": int(seed), "variant": spec.effects[0]["variant"], "magnitude": mag,
+                        "input_kind": spec.input_kind, **s})
+            stage.update(1)
     return out
 
 
@@ -65,19 +72,25 @@ def summarize(results: list[dict]) -> dict:
             "min": float(snr.min()), "fraction_detectable": float(np.mean(snr >= DETECTABLE_SNR))}
 
 
-def step_halving(spec, max_step: float | None = None) -> dict:
+def step_halving(spec, max_step: float | None = None, progress=None) -> dict:
     """Integration error of a scenario's truth trajectories by step halving.
 
     Simulates every run at ``max_step`` (default the spec's) and at half of it and returns
     the largest differences over all runs and samples: ``position_m`` (NED position of the
     body origin), ``attitude_rad`` (angle of the relative rotation) and ``velocity`` (body
     velocity, m/s or rad/s).  RK4's error shrinks 16-fold per halving, so the difference is
-    the error of the coarser run to within ~7 %.
+    the error of the coarser run to within ~7 %.  ``progress``: the two simulations as stages
+    (:func:`uvsim.progress.as_progress`).
     """
     from scipy.spatial.transform import Rotation
 
+    from uvsim.progress import as_progress
+
     h = float(max_step or spec.max_step)
-    sims = [simulate_spec(dataclasses.replace(spec, max_step=s), with_snr=False)["sim"] for s in (h, h / 2)]
+    sims = []
+    for s in (h, h / 2):
+        with as_progress(progress).stage(f"truth simulation of {len(spec.runs)} runs at RK4 step {1000 * s:g} ms"):
+            sims.append(simulate_spec(dataclasses.replace(spec, max_step=s), with_snr=False)["sim"])
     qa, qb = (s["quat"].reshape(-1, 4)[:, [1, 2, 3, 0]] for s in sims)
     ang = (Rotation.from_quat(qa).inv() * Rotation.from_quat(qb)).magnitude()
     return {"max_step_s": h, "position_m": float(np.abs(sims[0]["pos"] - sims[1]["pos"]).max()),
