@@ -202,6 +202,7 @@ def test_kernel_names_are_checked(monkeypatch):
         kernels.current()
     monkeypatch.setenv("UVSIM_KERNEL", "numpy")
     assert kernels.current() == "numpy" and kernels.compiled_advance() is None
+    assert kernels.describe().startswith("numpy (the setting")
     with kernels.use("auto"):
         assert kernels.current() == "auto"
     assert kernels.current() == "numpy"

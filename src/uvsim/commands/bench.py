@@ -98,10 +98,18 @@ def _run(args) -> int:
     if args.json:
         print(json.dumps(results, indent=2))
         return 0
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}")
+    print(_machine_line())
     for k, v in results.items():
         print(f"  {k:34s} {v:14,.1f}   {desc.get(k, '')}")
     return 0
+
+
+def _machine_line() -> str:
+    """The machine, and the RK4 kernel the figures were measured with (uvsim.kernels)."""
+    from uvsim.kernels import describe
+
+    return (f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python "
+            f"{platform.python_version()}; RK4 kernel: {describe()}")
 
 
 def _suite(args, run) -> dict | None:
@@ -120,7 +128,7 @@ def _suite(args, run) -> dict | None:
     if args.json:
         print(json.dumps(out, indent=2, default=float))
         return None
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}")
+    print(_machine_line())
     return out
 
 

@@ -68,6 +68,18 @@ class use:
         return False
 
 
+def describe() -> str:
+    """Which kernel runs the models it can, in words: ``"numba 0.68.1"`` or ``"numpy (...)"``."""
+    choice = current()
+    if choice == "numpy":
+        return "numpy (the setting says numpy)"
+    if not numba_installed():
+        return "numpy (numba is not installed: pip install 'uvsim[fast]')"
+    from importlib.metadata import version
+
+    return f"numba {version('numba')} (models it cannot run: numpy)"
+
+
 def compiled_advance():
     """The compiled :func:`rk4_equations.advance`, or None when the setting or the install says numpy."""
     choice = current()
