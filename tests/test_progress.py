@@ -153,7 +153,7 @@ def test_diagnose_says_its_stages_on_stderr_not_stdout(tiny, capsys):
     stages = [LINE.match(s).group(2) for s in err.splitlines()]
     assert stages[0].startswith("validation cost of the baseline")
     assert any(s.startswith("fit 1: current:") for s in stages)
-    assert stages[-1].startswith("open-loop validation before / after")
+    assert stages[-1].startswith("validation before / after")
     assert "uvsim diagnose:" not in out and "VERDICT" in out
     assert main(argv + ["--quiet"]) == 0  # --quiet: the same as --no-progress
     out_quiet, err_quiet = capsys.readouterr()

@@ -11,7 +11,7 @@ import yaml
 import uvsim
 from contract_data import shipped_vehicle_text
 from uvsim.diagnosis import diagnose, save_fixed_vehicle
-from uvsim.diagnosis.candidates import _gain, catalogue, plain_answer, search_bound_hits
+from uvsim.diagnosis.candidates import _gain, catalogue, plain_answer, reported_variant, search_bound_hits
 from uvsim.scenarios import generate, load_truth, sample_scenario
 
 SMALL = dict(n_runs=10, duration=[8, 10], rate_hz=20.0)
@@ -42,6 +42,11 @@ def test_gain_ranges_are_physical_and_a_dead_unit_is_an_answer_not_an_edge():
     assert plain_answer(unit, {"thruster_gain_1": 0.004}) == "thruster 1 gives no thrust (gain 0.004: a dead unit)"
     assert plain_answer(unit, {"thruster_gain_1": 0.6}) is None
     assert "pushes the wrong way" in plain_answer(reversed_, {"thruster_gain_1": -1.0})
+    # a reversed unit fitted at ~0 is the unit's own variant at 0: a dead unit (field-log dead case, seed 0)
+    assert plain_answer(reversed_, {"thruster_gain_1": -0.004}) == "thruster 1 gives no thrust (gain -0.004: a dead unit)"
+    assert reported_variant(reversed_, {"thruster_gain_1": -0.004}) == "unit_1"
+    assert reported_variant(reversed_, {"thruster_gain_1": -0.9}) == "reversed_1"
+    assert reported_variant(unit, {"thruster_gain_1": 0.0}) == "unit_1"
     variants = {c.variant for c in catalogue(input_kind="pwm", n_thrusters=8, dt=0.05, p_ref=np.zeros(3),
                                              has_position=True, z_max=None) if c.effect == "thruster_gain"}
     assert {"unit_8", "reversed_8", "all"} <= variants

@@ -11,15 +11,15 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from typing import Iterable, Mapping
 
 from uvsim.errors import ResultCheckError
 from uvsim.files import check_not_an_input, check_output_dir, check_output_file
 
-#: A fitted model whose RMSE exceeds this many times the spread of the measured signal
-#: (the RMS of its deviation from the run mean) predicts nothing: the fit "exploded".
-EXPLODE_FACTOR = 10.0
+# a fitted model whose RMSE exceeds EXPLODE_FACTOR times the spread of the measured signal predicts
+# nothing: the fit "exploded" (uvsim.spread; the diagnosis decides by the same test when to judge
+# closed-loop logs over windows)
+from uvsim.spread import EXPLODE_FACTOR, beyond_spread as _exploded, signal_spread as _spread  # noqa: F401
 
 
 def add_allow_argument(p) -> None:
@@ -94,39 +94,6 @@ def unused_voltage_notes(runs, vehicle) -> list[str]:
     return [f"note: the voltage column of {', '.join(logged[:3])}{more} is not used: the vehicle's thrust curves do "
             "not depend on the supply voltage (a battery-aware curve does: curve: {voltage_table: t200, "
             "nominal_voltage: 16}, docs/thrusters.md)"]
-
-
-def _spread(runs) -> dict[str, float]:
-    """{group_unit key: spread of the measured signal} over ``runs``: the RMS, over runs and
-    logged channels, of each channel's deviation from its run mean (angles unwrapped)."""
-    from uvsim.kinematics import quat_to_euler, unwrap_angles
-    from uvsim.measurements import GROUPS
-    from uvsim.metrics import UNIT_SUFFIX
-
-    ss: dict[str, float] = {}
-    nn: dict[str, int] = {}
-    for run in runs:
-        for g in run.signals():
-            if g == "attitude":
-                a = run.euler if not run.has_quaternion else quat_to_euler(run.quaternion)
-                a = unwrap_angles(a)
-            else:
-                cols = [c for c in GROUPS[g] if c in run.data.columns]
-                a = run.data[cols].to_numpy(float)
-            a = a[:, np.isfinite(a).any(axis=0)]
-            if a.size == 0:
-                continue
-            dev = a - np.nanmean(a, axis=0)
-            ok = np.isfinite(dev)
-            ss[g] = ss.get(g, 0.0) + float(np.sum(dev[ok] ** 2))
-            nn[g] = nn.get(g, 0) + int(ok.sum())
-    return {f"{g}_{UNIT_SUFFIX[g]}": float(np.sqrt(ss[g] / nn[g])) for g in ss if nn[g] and g in UNIT_SUFFIX}
-
-
-def _exploded(rmse: Mapping[str, float], spread: Mapping[str, float]) -> set[str]:
-    """The keys of ``rmse`` not finite or beyond EXPLODE_FACTOR x the measured ``spread``."""
-    return {k for k, v in rmse.items()
-            if v is None or not math.isfinite(v) or (spread.get(k, 0) > 0 and v > EXPLODE_FACTOR * spread[k])}
 
 
 def rmse_problems(rmse: Mapping[str, float], runs, what: str,
@@ -215,8 +182,19 @@ def calibration_caveats(rep: Mapping, ds) -> list[str]:
 def diagnosis_caveats(rep: Mapping, val_runs) -> list[str]:
     """What a user should know about a diagnosis that does not change its verdict: where the
     given model's free simulation leaves the validation data (and whether the corrected one
-    still does), as calibrate says it of the start model (:func:`calibration_caveats`)."""
+    still does), as calibrate says it of the start model (:func:`calibration_caveats`); when it
+    left them, the diagnosis judged predictions over windows instead (``rep["judged"]``,
+    :func:`uvsim.diagnosis.core.judged_prediction`), and that is said."""
+    judged = rep.get("judged") or {}
     spread = _spread(val_runs)
+    if judged.get("prediction") == "windows":
+        free = judged.get("free_rmse_given")
+        left = sorted(_exploded(free, spread)) if free else []
+        why = (f"the given model's free simulation of whole runs leaves the validation data ({', '.join(left)} "
+               f"beyond {EXPLODE_FACTOR:g} times the measured spread: a model flown open loop where the vehicle "
+               "was under an autopilot, or a large missing effect), so " if left else "")
+        return [f"{why}the models were judged on predictions over windows of {judged['horizon_s']:g} s from the "
+                "logged states (docs/diagnose.md, 'Closed-loop logs'); the RMSEs reported are of those windows"]
     given = _exploded(rep.get("rmse_before") or {}, spread)
     if not given:
         return []

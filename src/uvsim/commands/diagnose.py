@@ -50,6 +50,11 @@ def register(subparsers) -> None:
     p.add_argument("--attitude-lag", default="auto", metavar="auto|SECONDS",
                    help="time constant of the attitude filter's lag on logged Euler angles: 'auto' (default, "
                         "estimated from the gyro, as uvsim calibrate does), a number, or 0 for none")
+    p.add_argument("--judge-horizon", default="auto", metavar="auto|whole|SECONDS",
+                   help="what the verdict compares on the validation runs: 'auto' (default) free simulations of "
+                        "whole runs, or predictions over 5-s windows from the logged states when the given model's "
+                        "free simulation leaves the data (closed-loop logs, docs/diagnose.md); 'whole'; or a window "
+                        "length in seconds")
     p.add_argument("--workers", type=int, default=1, help="processes for the simulations (same result)")
     p.add_argument("--checkpoint", help="file saved after every finished fit (default: the --json or --out file "
                                         "plus .ckpt; none without either)")
@@ -62,6 +67,26 @@ def register(subparsers) -> None:
 
 def _list(s):
     return [x.strip() for x in s.split(",") if x.strip()] if s else None
+
+
+def judged_label(report: dict) -> str:
+    """What the verdict compared, in a few words (the report's ``judged``)."""
+    j = report.get("judged") or {}
+    if j.get("prediction") == "windows":
+        return f"predictions over {j['horizon_s']:g}-s windows from the logged states"
+    return "free simulations"
+
+
+def _judge_option(s: str):
+    """``--judge-horizon``: "auto", "whole" or a number of seconds."""
+    from uvsim.errors import CalibrationError
+
+    if s in ("auto", "whole"):
+        return s
+    try:
+        return float(s)
+    except ValueError:
+        raise CalibrationError(f"--judge-horizon {s!r}: expected auto, whole or a number of seconds") from None
 
 
 def format_table(report: dict) -> str:
@@ -114,11 +139,12 @@ def format_table(report: dict) -> str:
         lines += [f"  - {c}" for c in v["check"]]
     lines.append("")
     mv = report.get("model_verdict")
+    what = judged_label(report)
     if mv is not None:  # the one measure, as calibrate prints it (uvsim.fitting.verdict)
-        lines.append("verdict on the validation runs (free simulations, every logged channel):")
+        lines.append(f"verdict on the validation runs ({what}, every logged channel):")
         lines += ["  " + line for line in verdict_table(mv)]
     else:
-        lines.append(f"{'validation RMSE (open loop)':28s} {'given model (unchanged)':>24s}")
+        lines.append(f"{'validation RMSE (' + what + ')':28s} {'given model (unchanged)':>24s}")
         for k, v in report["rmse_before"].items():
             lines.append(f"{k:28s} {v:24.5g}")
     lines.append(f"{report['fits']} fits in {report['seconds']:.1f} s")
@@ -163,7 +189,8 @@ def run(args) -> int:
         diag = diagnose(ds, veh, retune=_list(args.retune), only=_list(args.only), noise=noise, weights=weights,
                         horizon=args.horizon, max_effects=args.max_effects, top=args.top, max_iter=args.max_iter,
                         workers=args.workers, progress=progress, allow=parse_allow(args.allow), checkpoint=ckpt,
-                        resume=args.resume, attitude_lag=lag_option(args.attitude_lag))
+                        resume=args.resume, attitude_lag=lag_option(args.attitude_lag),
+                        judge_horizon=_judge_option(args.judge_horizon))
     except KeyboardInterrupt:
         held = ckpt or args.resume
         if held and Path(held).is_file():

@@ -327,6 +327,17 @@ def _gain(k):
 DEAD_GAIN = 0.02
 
 
+def reported_variant(c: Candidate, values: Mapping[str, float]) -> str:
+    """The variant a report names: ``c.variant``, except a reversed unit whose fitted gain is within
+    :data:`DEAD_GAIN` of 0, which is the unit's own variant at 0 (``unit_i``: the same model, a dead
+    unit; field-log benchmark, dead case seed 0, fitted from the reversed side at -0.00)."""
+    if c.effect == "thruster_gain" and c.tags.get("reversed") and "unit" in c.tags:
+        i = c.tags["unit"]
+        if abs(float(values.get(f"thruster_gain_{i}", -1.0))) < DEAD_GAIN:
+            return f"unit_{i}"
+    return c.variant
+
+
 def plain_answer(c: Candidate, values: Mapping[str, float]) -> str | None:
     """The answer in words when it is at a physical limit or names a fault: a dead or a
     reversed thruster (issue 48: "thruster 1 gives no thrust"); None otherwise."""
@@ -342,6 +353,8 @@ def plain_answer(c: Candidate, values: Mapping[str, float]) -> str | None:
                 "no thrust (a dead unit)" + (f"; the other gains {min(rest):.2f}-{max(rest):.2f}" if rest else ""))
     i = c.tags["unit"]
     g = float(values.get(f"thruster_gain_{i}", 1.0))
+    if abs(g) < DEAD_GAIN:  # gain 0 is in both ranges: a reversed unit fitted at 0 is a dead one
+        return f"thruster {i} gives no thrust (gain {g:.3f}: a dead unit)"
     if c.tags.get("reversed"):
         return f"thruster {i} pushes the wrong way (mounted or wired reversed), at {abs(g):.2f} of its curve"
     if g < DEAD_GAIN:

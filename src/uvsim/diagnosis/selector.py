@@ -24,7 +24,7 @@ from uvsim.diagnosis.starts import SLACK_GN_ITERATIONS, candidate_starts, slack_
 from uvsim.errors import CalibrationError, UvsimError, VehicleError
 from uvsim.fitting import fit
 from uvsim.fitting.equation_error import EquationError, motion_or_why
-from uvsim.fitting.evaluate import open_loop
+from uvsim.fitting.evaluate import open_loop, windowed
 from uvsim.fitting.parameters import GAIN_RANGE, FreeParameter, ParameterSpace, default_bounds
 from uvsim.fitting.verdict import score
 from uvsim.forces import make_term
@@ -68,6 +68,9 @@ class Selector:
     def __init__(self, vehicle, train, val, *, retune, noise, weights, horizon, max_iter, workers, say,
                  store=None, on_fit=None, attitude_lag: float = 0.0):
         self.base_vehicle = vehicle
+        #: What the verdict compares (:meth:`predictions`): None, free simulations of whole runs;
+        #: a number, predictions over windows of that many seconds (closed-loop logs)
+        self.judge_horizon: float | None = None
         self.train, self.val = train, val
         self.noise, self.weights = noise, weights
         self.horizon, self.max_iter, self.workers = horizon, max_iter, workers
@@ -159,14 +162,23 @@ class Selector:
         vc["open_loop"] = self.open_loop_blocks(vehicle, values)
         return vc
 
+    def predictions(self, vehicle, values: Mapping | None = None) -> list[dict]:
+        """The validation runs as the verdict compares them (the report's before/after RMSE and
+        plots): free simulations of whole runs (:func:`uvsim.fitting.evaluate.open_loop`), or with
+        :attr:`judge_horizon` set, predictions over windows of that many seconds from the logged
+        states (:func:`uvsim.fitting.evaluate.windowed`, closed-loop logs)."""
+        known = vehicle.parameters()
+        over = {k: v for k, v in (values or {}).items() if k in known}
+        if self.judge_horizon is None:
+            return open_loop(vehicle, self.val, overrides=over, meas=self.meas_va)
+        return windowed(vehicle, self.val, self.judge_horizon, overrides=over, meas=self.meas_va)
+
     def open_loop_blocks(self, vehicle, values: Mapping) -> dict:
-        """Free simulations of the validation runs from their logged starts
-        (:func:`uvsim.fitting.evaluate.open_loop`, the report's before/after RMSE): ``meas``,
+        """The validation runs' predictions (:meth:`predictions`: free simulations from their
+        logged starts, or windows of :attr:`judge_horizon` on closed-loop logs): ``meas``,
         ``preds`` (what :func:`uvsim.fitting.verdict.compare` compares) and ``score`` (the pooled
         score, :func:`uvsim.fitting.verdict.score`; inf when a simulation diverges)."""
-        known = vehicle.parameters()
-        over = {k: v for k, v in values.items() if k in known}
-        preds = [o["pred"] for o in open_loop(vehicle, self.val, overrides=over, meas=self.meas_va)]
+        preds = [o["pred"] for o in self.predictions(vehicle, values)]
         return {"meas": self.meas_va, "preds": preds, "score": score(self.meas_va, preds)}
 
     def open_loop_cost(self, vehicle, values: Mapping) -> float:

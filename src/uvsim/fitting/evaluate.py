@@ -30,6 +30,7 @@ from __future__ import annotations
 import numpy as np
 
 from uvsim.blas import single_thread
+from uvsim.errors import UvsimError
 from uvsim.fitting.fitter import group_by_input
 from uvsim.fitting.objective import gyro_bias_sd
 from uvsim.fitting.parameters import ParameterSpace
@@ -138,3 +139,109 @@ def judged_scales(vehicle, runs, meas, *, overrides=None, initial_velocity: str 
 def pooled(results: list) -> dict:
     """Group RMSEs pooled over runs (outputs of :func:`open_loop`)."""
     return pooled_group_rmse([r["metrics"] for r in results])
+
+
+#: Half-width (s) of the straight-line fit that gives a window's starting velocities and
+#: rates from the logged ones (at least 1.5 of the channel's own sample intervals: a 5 Hz DVL).
+START_HALF_S = 0.25
+
+
+def _local_value(t: np.ndarray, x: np.ndarray, t0: float) -> float:
+    """A logged channel ``x`` (n,) at time ``t0``: a straight-line fit over its valid samples
+    within :data:`START_HALF_S` (widened to 1.5 of its median sample interval), the nearest
+    valid sample when fewer than two, NaN without any."""
+    ok = np.isfinite(x)
+    if not ok.any():
+        return float("nan")
+    tv, xv = t[ok], x[ok]
+    half = max(START_HALF_S, 1.5 * float(np.median(np.diff(tv)))) if tv.size > 1 else START_HALF_S
+    sel = np.abs(tv - t0) <= half
+    if sel.sum() >= 2:
+        return float(np.polyfit(tv[sel] - t0, xv[sel], 1)[-1])
+    return float(xv[np.argmin(np.abs(tv - t0))])
+
+
+def _slice_run(run, s: int, e: int, name: str):
+    """Rows ``s..e`` (inclusive) of ``run`` as a run of their own (not validated again)."""
+    import copy
+
+    out = copy.copy(run)
+    out.data = run.data.iloc[s:e + 1].reset_index(drop=True)
+    out.name = name
+    out.notes = []
+    if getattr(run, "as_logged", None) is not None and len(run.as_logged.data) == len(run.data):
+        out.as_logged = _slice_run(run.as_logged, s, e, name)
+    return out
+
+
+def windowed(vehicle, runs, horizon: float, *, overrides=None, meas=None, gyro_bias: dict | None = None,
+             noise=None, weights=None) -> list[dict]:
+    """Per run (in order) what :func:`open_loop` returns, for predictions over windows of about
+    ``horizon`` seconds (:func:`uvsim.fitting.windows.layout`): each window is simulated from the
+    state logged at its start (position and attitude as a free simulation starts,
+    :func:`uvsim.simulate.initial_state_from_run`; velocities and rates from a straight-line fit
+    to the logged ones around the start, :func:`_local_value`, else derived from the logged
+    motion, else 0) with its logged inputs, and the windows' states are joined into one
+    prediction of the run (the attitude filter's lag restarts at each window,
+    :meth:`uvsim.measurements.RunMeasurements.for_windows`).  No start alignment: every window
+    starts on the log.  Valid in closed loop: an autopilot that holds depth or heading cancels a
+    model's error over the whole run, not over a few seconds (docs/diagnose.md, "Closed-loop
+    logs").  Each result has ``starts`` (the window start rows) and ``horizon_s``."""
+    from uvsim.estimation.derivatives import body_velocity
+    from uvsim.fitting.windows import layout
+
+    veh = load_vehicle(vehicle)
+    runs = list(runs)
+    if meas is None:
+        meas = [measurements_for(r, veh, noise=noise, weights=weights) for r in runs]
+    pieces, owner = [], []          # sliced runs; (run index, start row, end row)
+    N0 = []
+    for i, run in enumerate(runs):
+        bounds = layout([run], horizon).bounds[0]
+        vel = run.velocity
+        try:
+            derived = body_velocity(run)
+        except UvsimError:
+            derived = np.full_like(vel, np.nan)
+        for j, (s, e) in enumerate(bounds):
+            pieces.append(_slice_run(run, s, e, f"{run.name}@{j}"))
+            owner.append((i, s, e))
+            nu = np.array([_local_value(run.t, vel[:, k], run.t[s]) for k in range(6)])
+            nu = np.where(np.isfinite(nu), nu, derived[s])
+            N0.append(np.where(np.isfinite(nu), nu, 0.0))
+    states: list = [None] * len(runs)
+    accs: list = [None] * len(runs)
+    need_acc = any(m.needs_acceleration for m in meas)
+    for idx in group_by_input(pieces):
+        group = [pieces[k] for k in idx]
+        space = ParameterSpace([], veh.parameters(), dict(overrides or {}))
+        sens = [meas[owner[k][0]].sensors for k in idx]
+        with single_thread():
+            Y, acc, _ = whole_runs(veh, group, sens, space, np.zeros(0), nu0=np.array([N0[k] for k in idx]),
+                                   accel=need_acc)
+        for j, k in enumerate(idx):
+            i, s, e = owner[k]
+            n = runs[i].t.size
+            if states[i] is None:
+                states[i] = np.full((n, Y.shape[2]), np.nan)
+                accs[i] = None if acc is None else np.full((n, 6), np.nan)
+            # a window owns its rows up to the next window's start (the run's last window its last row)
+            last = e == n - 1
+            m = e - s + (1 if last else 0)
+            states[i][s:s + m] = Y[j, :m]
+            if acc is not None:
+                accs[i][s:s + m] = acc[j, :m]
+    out = []
+    for i, run in enumerate(runs):
+        starts = [s for (ii, s, _) in owner if ii == i]
+        m = meas[i].for_windows(starts)
+        y, a = states[i], accs[i]
+        b = None
+        if m.has_gyro:
+            b = (np.asarray(gyro_bias[run.name], float) if gyro_bias and run.name in gyro_bias
+                 else gyro_bias_map(m, m.predict(y, a), gyro_bias_sd(veh)))
+        pred = m.predict(y, a, b)
+        out.append({"name": run.name, "states": y, "nu_dot": a, "pred": pred,
+                    "gyro_bias": None if b is None else [float(x) for x in b],
+                    "metrics": measurement_metrics(meas[i], pred), "starts": starts, "horizon_s": float(horizon)})
+    return out

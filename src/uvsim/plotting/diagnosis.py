@@ -40,6 +40,12 @@ def _series(res, meas, group):
     return m, p, [c for c, on in zip(grp.channels, grp.logged) if on], np.flatnonzero(grp.logged)
 
 
+def _judged(diag) -> str:
+    """What the verdict compared (the report's ``judged``): the plots show the same predictions."""
+    j = diag.report.get("judged") or {}
+    return f"{j['horizon_s']:g}-s windows from the logged states" if j.get("prediction") == "windows" else "open loop"
+
+
 def plot_validation_runs(diag, path, max_runs: int = 3) -> Path:
     """Logged channels of the first ``max_runs`` validation runs: measured, given model,
     corrected model (open-loop simulations)."""
@@ -67,7 +73,7 @@ def plot_validation_runs(diag, path, max_runs: int = 3) -> Path:
         axes[0, k].set_title(run.name, fontsize=9)
         axes[max(i - 1, 0), k].set_xlabel("t [s]")
     axes[0, 0].legend(fontsize=7)
-    fig.suptitle(f"Validation runs, open loop: given model vs corrected ({diag.report['effect']})", fontsize=10)
+    fig.suptitle(f"Validation runs, {_judged(diag)}: given model vs corrected ({diag.report['effect']})", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
@@ -99,7 +105,7 @@ def plot_errors(diag, path, max_runs: int = 6) -> Path:
             ax.set_title(run.name, fontsize=8)
             ax.grid(alpha=0.3)
     axes[0, 0].legend(fontsize=7)
-    fig.suptitle(f"Validation errors over time (open loop), effect = {diag.report['effect']} "
+    fig.suptitle(f"Validation errors over time ({_judged(diag)}), effect = {diag.report['effect']} "
                  f"({diag.report['confidence']})", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=100)

@@ -1,0 +1,97 @@
+"""Issue 48, item 2: judging models validly on closed-loop logs.
+
+A vehicle flown under an autopilot (depth hold, heading hold) is logged with the inputs the loop
+chose; the given model flown open loop with them over a whole run leaves the data, so whole-run
+free simulations cannot tell two models apart.  The diagnosis then judges predictions over windows
+of a few seconds, each started from the logged state (uvsim.fitting.evaluate.windowed), and says
+so in report.json (``judged``); open-loop tank data keep whole-run free simulations."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from contract_data import SHIPPED_DATASET
+from uvsim.diagnosis.core import CLOSED_LOOP_HORIZON_S, judged_prediction
+from uvsim.fitting.evaluate import open_loop, windowed
+from uvsim.fitting.verdict import compare
+from uvsim.latency import runs_for
+from uvsim.logs import read_dataset
+from uvsim.measurements import measurements_for
+from uvsim.vehicle import load_vehicle
+
+
+def _field(tmp_path, seed, case, duration=None):
+    from uvsim.scenarios.field import generate_field, sample_field
+
+    out = generate_field(sample_field(seed, case, duration=duration), tmp_path / f"{case}{seed}")
+    ds = read_dataset(out)
+    veh = load_vehicle(ds.vehicle_file)
+    val = runs_for(veh, ds.validation)
+    return veh, val, [measurements_for(r, veh, run_weight=1.0) for r in val]
+
+
+@pytest.fixture(scope="module")
+def dead(tmp_path_factory):
+    return _field(tmp_path_factory.mktemp("closed"), 1, "dead", duration=12.0)
+
+
+def test_each_window_starts_on_the_logged_state(dead):
+    veh, val, meas = dead
+    res = windowed(veh, val, 4.0, meas=meas)
+    for run, r, m in zip(val, res, meas):
+        assert r["horizon_s"] == 4.0 and r["starts"][0] == 0 and len(r["starts"]) == 3   # 12 s in 4-s windows
+        assert np.all(np.isfinite(r["states"]))                                            # every row owned
+        e = m.residuals(r["pred"])
+        for s in r["starts"]:   # the attitude at each window's start is the logged one (filter noise only)
+            assert np.nanmax(np.abs(e["attitude"][s])) < 0.02
+        # a window's error grows from its start: the first rows of windows are closer than their ends
+        first = np.concatenate([np.abs(e["depth"][s:s + 2, 0]) for s in r["starts"]])
+        assert np.nanmean(first) < np.sqrt(np.nanmean(e["depth"] ** 2))
+
+
+def test_a_window_as_long_as_the_run_is_one_free_simulation(dead):
+    veh, val, meas = dead
+    (w,) = windowed(veh, val[:1], 100.0, meas=meas[:1])
+    (f,) = open_loop(veh, val[:1], meas=meas[:1])
+    assert w["starts"] == [0]
+    # the same simulation from the same start attitude (velocities: the logged ones near the start)
+    assert np.allclose(w["states"][0, 3:7], f["states"][0, 3:7], atol=1e-9)
+
+
+def test_closed_loop_logs_are_judged_over_windows_and_tank_runs_over_whole_runs(dead):
+    veh, val, meas = dead
+    j = judged_prediction(veh, val, meas)
+    assert j["prediction"] == "windows" and j["horizon_s"] == CLOSED_LOOP_HORIZON_S and j["left_data"]
+    assert "leaves the validation data" in j["why"]
+    assert judged_prediction(veh, val, meas, "whole")["horizon_s"] is None
+    assert judged_prediction(veh, val, meas, 2.5)["horizon_s"] == 2.5
+    tank = read_dataset(SHIPPED_DATASET)
+    tveh = load_vehicle(tank.vehicle_file or tank.vehicle)
+    tval = runs_for(tveh, tank.validation)
+    jt = judged_prediction(tveh, tval, [measurements_for(r, tveh, run_weight=1.0) for r in tval])
+    assert jt["prediction"] == "whole runs" and jt["horizon_s"] is None
+
+
+def test_the_caveat_says_what_was_judged(dead):
+    from uvsim.commands.checks import diagnosis_caveats
+
+    veh, val, meas = dead
+    rep = {"judged": judged_prediction(veh, val, meas), "rmse_before": {}, "rmse_after": {}}
+    (c,) = diagnosis_caveats(rep, val)
+    assert "leaves the validation data" in c and f"windows of {CLOSED_LOOP_HORIZON_S:g} s" in c
+
+
+@pytest.mark.slow
+def test_the_true_weight_under_depth_hold_is_better_over_windows(tmp_path):
+    """Field-log benchmark case 6 (a 2.5 N lead weight under depth hold): the model with the true
+    weight is judged better than the given one over 5-s windows, and without it the depth error
+    of a window grows with its length (the drift the hold hides over a whole run)."""
+    veh, val, meas = _field(tmp_path, 6, "weight")
+    vb = veh.with_effects([{"type": "ballast", "weight": 0.5}])
+    over = {"ballast_weight": 2.481, "ballast_x": 0.065, "ballast_y": -0.193, "ballast_z": -0.112}
+    a = windowed(veh, val, CLOSED_LOOP_HORIZON_S, meas=meas)
+    b = windowed(vb, val, CLOSED_LOOP_HORIZON_S, meas=meas, overrides=over)
+    v = compare(meas, [r["pred"] for r in a], [r["pred"] for r in b])
+    assert v["status"] == "better" and v["channels"]["depth"]["rmse_b"] < 0.5 * v["channels"]["depth"]["rmse_a"]
+    short = compare(meas, [r["pred"] for r in windowed(veh, val, 2.0, meas=meas)], [r["pred"] for r in a])
+    assert short["channels"]["depth"]["rmse_b"] > 2 * short["channels"]["depth"]["rmse_a"]
