@@ -36,7 +36,8 @@ def full_vehicle() -> dict:
     d["added_mass"].update({"matrix": MA.tolist(), "convention": "positive magnitudes"})
     d["sensors"] = {"imu": {"position": [0.0, 0.0, 0.02], "source": "CAD", "gyro_bias_sd": 0.01, "acc_bias_sd": 0.2},
                     "pressure": {"position": [-0.15, 0.0, 0.0], "source": "measured"},
-                    "dvl": {"position": [0.1, 0.0, 0.1]}, "latency": 0.03}
+                    "dvl": {"position": [0.1, 0.0, 0.1]}, "latency": 0.03,
+                    "noise": {"yaw": 0.02, "depth": 0.005, "rates": 0.003}}
     d["uncertainty"] = {"X_u": 2.0, "m": 0.1}
     return d
 
@@ -75,6 +76,7 @@ def schema_paths(sec: vs.Section = vs.VEHICLE, path: str = "") -> dict:
 def docs_path(path: str) -> str:
     """A concrete path as the schema's docs name it."""
     path = re.sub(r"^sensors\.(imu|pressure|dvl)\.", "sensors.<sensor>.", path)
+    path = re.sub(r"^sensors\.noise\..+", "sensors.noise.<signal>", path)
     return re.sub(r"^uncertainty\..+", "uncertainty.<parameter>", path)
 
 
@@ -137,6 +139,14 @@ FIELD_ERRORS = [
     ("sensors.latency", 0.6, "sensors.latency = 0.6: expected 0 <= latency <= 0.5 s"),
     ("sensors.latency", -0.01, "sensors.latency = -0.01: expected 0 <= latency <= 0.5 s"),
     ("sensors.latency", "30 ms", "sensors.latency: expected a latency in s (a number), got '30 ms'"),
+    ("sensors.noise", [0.02], "sensors.noise: expected a mapping such as noise: {yaw: 0.02, depth: 0.005}"),
+    ("sensors.noise.yaw", 0, "sensors.noise.yaw: expected a positive number, got 0.0"),
+    ("sensors.noise.depth", -0.005, "sensors.noise.depth: expected a positive number, got -0.005"),
+    ("sensors.noise.yaw", float("nan"), "sensors.noise.yaw: expected a finite number, got nan"),
+    ("sensors.noise.u", float("inf"), "sensors.noise.u: expected a finite number, got inf"),
+    ("sensors.noise.yaw", "1 deg", "sensors.noise.yaw: expected a number, got '1 deg'"),
+    ("sensors.noise.yaw", True, "sensors.noise.yaw: expected a number, got True"),
+    ("sensors.noise.attitude", None, "sensors.noise.attitude: missing (expected a number)"),
     ("uncertainty", [1.0], "uncertainty: expected a mapping such as uncertainty: {X_u: 2.0"),
     ("uncertainty.X_u", -2.0, "uncertainty.X_u: expected a positive number, got -2.0"),
     ("uncertainty.m", None, "uncertainty.m: missing (expected a number)"),
@@ -223,6 +233,9 @@ RULE_CASES = {
                           "environment.current_ned [0.0, 12.0, 0.0]: 12 m/s is faster than any current"),
     "points_on_the_vehicle": (lambda d: mutate(d, "rigid_body.r_b", [0, 0, -20]),
                               "rigid_body.r_b [0.0, 0.0, -20.0] is 20 m from the body origin"),
+    "noise_signal_names": (lambda d: mutate(d, "sensors.noise.yawn", 0.02),
+                           "sensors.noise: unknown signal 'yawn' (did you mean 'yaw'?); expected x, y, z, depth, "
+                           "roll, pitch, yaw, u, v, w, p, q, r, acc_x, acc_y, acc_z, position, attitude, velocity"),
     "vehicle_parameter_names": (lambda d: mutate(d, "uncertainty.X_uq", 1.0),
                                 "uncertainty: unknown key 'X_uq' (did you mean"),
     "cb_not_below_cg": (lambda d: mutate(d, "rigid_body.r_b", [0, 0, 0.024]),
@@ -269,6 +282,27 @@ def test_the_imu_may_state_only_its_bias_specs():
     assert "sensors.imu.position: missing" in error_of(mutate(d, "sensors.imu", {"source": "x"}))
 
 
+def test_declared_noise_is_read_saved_and_loaded_again(tmp_path):
+    """``sensors.noise`` reaches the vehicle (Vehicle.sensor_noise), a save writes it and a load
+    reads it back unchanged; without it the vehicle declares nothing."""
+    from uvsim.vehicle import load_vehicle, save_vehicle
+
+    v = vehicle_from_dict(full_vehicle(), source=FILE)
+    assert v.sensor_noise == {"yaw": 0.02, "depth": 0.005, "rates": 0.003}
+    back = load_vehicle(save_vehicle(v, tmp_path / "v.yaml"))
+    assert back.sensor_noise == v.sensor_noise and back.to_dict()["sensors"]["noise"] == v.sensor_noise
+    assert back.with_parameters({"X_u": -5.0}).sensor_noise == v.sensor_noise  # a fit's vehicle keeps it
+    assert vehicle_from_dict(mutate(full_vehicle(), "sensors.noise", None), source=FILE).sensor_noise == {}
+    assert "noise" not in vehicle_from_dict(mutate(full_vehicle(), "sensors.noise", DELETE),
+                                            source=FILE).to_dict()["sensors"]
+
+
+def test_noise_signals_are_the_measurement_groups():
+    from uvsim.measurements import GROUPS
+
+    assert vehicle_rules.NOISE_SIGNALS == {g: tuple(c) for g, c in GROUPS.items()}
+
+
 def test_principal_moments_use_the_vehicles_inertia_tensor():
     i = {"I_xx": 0.3, "I_yy": 0.4, "I_zz": 0.5, "I_xy": 0.05, "I_xz": -0.02, "I_yz": 0.01}
     np.testing.assert_allclose(vehicle_rules._principal_moments(i), np.linalg.eigvalsh(inertia_tensor(*i.values())), rtol=1e-15)
@@ -290,7 +324,7 @@ def test_unknown_keys_get_a_did_you_mean(section, key, suggestion):
 
 
 def test_every_section_rejects_a_key_absent_from_the_schema_and_lists_its_keys():
-    sections = {p for p, f in schema_paths().items() if f.kind == "section"} - {"uncertainty"}
+    sections = {p for p, f in schema_paths().items() if f.kind == "section"} - {"uncertainty", "sensors.noise"}
     for path in sorted(sections | {""}):
         concrete = path.replace("<sensor>", "dvl")
         msg = error_of(mutate(full_vehicle(), f"{concrete}.zz_unheard_of" if concrete else "zz_unheard_of", 1))

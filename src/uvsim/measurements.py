@@ -35,12 +35,25 @@ plots all read it, so "roll got worse" means the same thing everywhere.  (Near p
 the split of an attitude into roll and yaw is ill-conditioned; an ROV does not go there, and
 for a hydrobatic vehicle that does, the roll and yaw errors there are large but bounded by pi.)
 
-Every logged channel has a noise level (``sigma``, estimated on its native samples
-by :mod:`uvsim.estimation.noise` or given by the user) and a weight; residuals are
-divided by ``sigma`` and multiplied by ``sqrt(weight)``, so metres, radians, rad/s and
-m/s^2 add up and a correct model leaves about 1 per entry.  A slow sensor logged on a
-faster grid by holding or interpolating its value counts only at its native samples
-(:func:`uvsim.estimation.noise.sample_kind`); :attr:`RunMeasurements.notes` says so.
+Every logged channel has a noise level (``sigma``) and a weight; residuals are divided by
+``sigma`` and multiplied by ``sqrt(weight)``, so metres, radians, rad/s and m/s^2 add up and a
+correct model leaves about 1 per entry.  The level of a channel (:func:`noise_level`, kept with
+where it comes from as :class:`uvsim.estimation.noise.NoiseLevel`) is, first found first:
+
+1. given: the ``noise`` option (``--noise``), by channel then by group;
+2. declared: the vehicle file's ``sensors.noise`` (:attr:`uvsim.vehicle.Vehicle.sensor_noise`),
+   by channel then by group;
+3. estimated on the channel's native samples (:func:`uvsim.estimation.noise.noise_sigma`), at
+   least the rounding of a channel logged to a resolution (``q / sqrt(12)``) and, for an attitude
+   angle that is an estimator's output (:func:`uvsim.estimation.noise.filter_output`: no more
+   visible noise than the integrated gyro's), at least
+   :data:`uvsim.estimation.noise.FILTER_FLOOR` (a *floor*).
+
+The fits, the diagnosis' costs and shares, report.json and the plots all divide by this one
+level; :attr:`RunMeasurements.notes` names the floors and declarations used.
+
+A slow sensor logged on a faster grid by holding or interpolating its value counts only at its
+native samples (:func:`uvsim.estimation.noise.sample_kind`); :attr:`RunMeasurements.notes` says so.
 
 Attitude filter lag: angles reported by an attitude filter (EKF, complementary
 filter) trail the motion.  With ``attitude_lag = tau > 0`` the predicted Euler angles
@@ -60,7 +73,8 @@ import numpy as np
 from uvsim.fit_settings import SAMPLE_WEIGHTINGS  # noqa: F401 (its home: uvsim.fit_settings)
 from uvsim.errors import CalibrationError
 from uvsim.estimation.lag import UNIFORM_RTOL, first_order_lag, lag_time_constant
-from uvsim.estimation.noise import SampleKind, noise_sigma, sample_kind
+from uvsim.estimation.noise import (FILTER_FLOOR, FILTER_GATE, NoiseLevel, SampleKind, filter_output, noise_sigma,
+                                    quantisation_sigma, quantum, sample_kind)
 from uvsim.accelerometer import _components, _specific_force, specific_force  # noqa: F401  (specific_force: re-exported)
 from uvsim.kinematics import (cross_components, down_axis_components, quat_to_euler,  # noqa: F401
                               rotation_vector_error, unwrap_angles, wrap)  # (rotation_vector_error: re-exported)
@@ -110,6 +124,8 @@ class Group:
     kinds : per channel, how it was logged (:class:`uvsim.estimation.noise.SampleKind`) or None.
     mode : attitude only: "quaternion" (logged as a quaternion: all three angles, a sample is all or
         nothing) or "euler" (logged as angles, any subset).
+    noise : per channel, where its ``sigma`` comes from (:class:`uvsim.estimation.noise.NoiseLevel`)
+        or None (not logged, or a group built by hand).
     """
 
     name: str
@@ -119,6 +135,7 @@ class Group:
     sigma: np.ndarray
     kinds: list
     mode: str = ""
+    noise: list = field(default_factory=list)
 
     @property
     def channels(self) -> tuple:
@@ -193,7 +210,10 @@ class RunMeasurements:
         groups = {}
         for g, grp in self.groups.items():
             new = np.array([float(sigma.get(c, s)) for c, s in zip(grp.channels, grp.sigma)])
-            groups[g] = replace(grp, sigma=np.where(grp.logged, new, grp.sigma))
+            noise = [replace(lv, sigma=float(sigma[c]), source="judged",
+                             basis="the model's RMS open-loop error (the verdict's scale)")
+                     if lv is not None and c in sigma else lv for c, lv in zip(grp.channels, grp.noise)]
+            groups[g] = replace(grp, sigma=np.where(grp.logged, new, grp.sigma), noise=noise)
         return replace(self, groups=groups, _restart_cache=None)
 
     def n_used(self) -> int:
@@ -382,14 +402,17 @@ class RunMeasurements:
         return np.concatenate(rows) if rows else np.zeros(0, int)
 
     def describe(self) -> dict:
-        """JSON-ready summary: per logged channel its noise level, unit and sampling."""
+        """JSON-ready summary: per logged channel its noise level, where the level comes from
+        (:meth:`uvsim.estimation.noise.NoiseLevel.describe`: ``source``, ``basis``, ``estimate``,
+        ``quantum``), unit and sampling."""
         out = {}
         for g, grp in self.groups.items():
             for j, c in enumerate(grp.channels):
                 if not grp.logged[j]:
                     continue
                 k = grp.kinds[j]
-                out[c] = {"sigma": float(grp.sigma[j]), "unit": UNITS[g],
+                lv = grp.noise[j] if j < len(grp.noise) else None
+                out[c] = {**(lv.describe() if lv is not None else {}), "sigma": float(grp.sigma[j]), "unit": UNITS[g],
                           "sampling": k.kind if k is not None else "native",
                           "native_rate_hz": (float(1.0 / k.native_interval_s)
                                              if k is not None and np.isfinite(k.native_interval_s) else None),
@@ -397,10 +420,62 @@ class RunMeasurements:
         return out
 
 
-def _noise_for(group: str, values: np.ndarray, native: np.ndarray) -> float:
+def _lookup(levels: Mapping[str, float], group: str, channel: str) -> float | None:
+    """``levels`` of ``channel``, else of its ``group``, else None."""
+    v = levels.get(channel, levels.get(group))
+    return None if v is None else float(v)
+
+
+def noise_level(group: str, channel: str, values: np.ndarray, native: np.ndarray, *,
+                given: Mapping[str, float] | None = None, declared: Mapping[str, float] | None = None) -> NoiseLevel:
+    """The noise level of ``channel`` of ``group`` (values (n,), native (n,) bool), without the
+    attitude filter's floor (:func:`measurements_for` adds it, it needs the gyro): ``given`` (the
+    ``noise`` option), else ``declared`` (the vehicle file's ``sensors.noise``), else the
+    fourth-difference estimate, at least the rounding of its resolution (module docstring).
+    ``sigma`` is NaN with neither a level given nor 8 native samples."""
     if group == "attitude":
         values = unwrap_angles(values)
-    return noise_sigma(values, native)
+    est = noise_sigma(values, native)
+    q = quantum(values, native)
+    g, d = _lookup(given or {}, group, channel), _lookup(declared or {}, group, channel)
+    if g is not None:
+        key = channel if channel in (given or {}) else group
+        return NoiseLevel(g, "declared", f"the noise option ({key})", est, q)
+    unit = UNITS[group]
+    if d is not None:
+        key = channel if channel in (declared or {}) else group
+        return NoiseLevel(d, "declared", f"the vehicle file (sensors.noise.{key})", est, q,
+                          f"{channel}: noise {d:.3g} {unit}, declared in the vehicle file (sensors.noise.{key})")
+    fq = quantisation_sigma(q)
+    if q > 0 and fq > est:
+        basis = f"the rounding of values logged to {q:.4g} {unit} (q / sqrt(12))"
+        return NoiseLevel(fq, "floor", basis, est, q, f"{channel}: noise {fq:.3g} {unit}, {basis}, more than the "
+                                                      "samples show")
+    return NoiseLevel(est, "estimated", "fourth differences of the native samples", est, q)
+
+
+def _filter_floor(groups: Mapping[str, "Group"]) -> None:
+    """Raise the attitude angles that are an estimator's output to :data:`FILTER_FLOOR`
+    (:func:`uvsim.estimation.noise.filter_output`; module docstring), in place."""
+    att, rates = groups.get("attitude"), groups.get("rates")
+    if att is None or rates is None or not rates.logged.any():
+        return
+    s_gyro = float(np.median(rates.sigma[rates.logged]))
+    for j, c in enumerate(att.channels):
+        lv = att.noise[j]
+        if lv is None or lv.source == "declared" or not FILTER_FLOOR[c] > lv.sigma:
+            continue
+        k = att.kinds[j]
+        if k is None or not filter_output(lv.estimate, s_gyro, k.native_interval_s):
+            continue
+        att.noise[j] = replace(
+            lv, sigma=FILTER_FLOOR[c], source="floor",
+            basis=(f"an attitude filter's output (estimate {lv.estimate:.2g} rad, within {FILTER_GATE:g} x the gyro's "
+                   f"noise over a sample, {s_gyro * k.native_interval_s:.2g} rad): the floor of an estimator's {c}"),
+            note=(f"{c}: noise {FILTER_FLOOR[c]:.3g} rad, the floor of an attitude filter's output (its samples change "
+                  f"only as the integrated gyro does and its error is not in them: declare sensors.noise.{c} in the "
+                  "vehicle file to set it)"))
+        att.sigma[j] = FILTER_FLOOR[c]
 
 
 def check_sample_weighting(value) -> str:
@@ -464,8 +539,9 @@ def measurements_for(run, vehicle=None, *, noise: Mapping[str, float] | None = N
     vehicle : gives the sensor positions (``vehicle.sensors``) and ``g``; None: sensors
         at the body origin, g = 9.81.
     noise : 1-sigma noise levels by group or channel name (e.g. ``{"depth": 0.01,
-        "attitude": 0.005, "yaw": 0.02}``), in the channel units; estimated from the
-        log (native samples, fourth differences) where not given.
+        "attitude": 0.005, "yaw": 0.02}``), in the channel units; where not given, the
+        vehicle's declared ``sensors.noise``, else estimated from the log with its floors
+        (module docstring).
     weights : weights by group or channel (default 1; 0 leaves a channel out of fits).
     run_weight : the run's weight (default: ``run.weight`` from the manifest).
     sensors : sensor positions overriding the vehicle's.
@@ -478,6 +554,7 @@ def measurements_for(run, vehicle=None, *, noise: Mapping[str, float] | None = N
     check_sample_weighting(sample_weighting)
     noise = dict(noise or {})
     check_signal_settings(noise, weights)
+    declared = dict(getattr(vehicle, "sensor_noise", {}) or {})
     sens = dict(getattr(vehicle, "sensors", {}) or {})
     sens.update(sensors or {})
     g = float(getattr(vehicle, "g", G_DEFAULT))
@@ -491,6 +568,7 @@ def measurements_for(run, vehicle=None, *, noise: Mapping[str, float] | None = N
         valid = np.zeros((n, k), bool)
         sigma = np.full(k, np.nan)
         kinds: list = [None] * k
+        levels: list = [None] * k
         for j in range(k):
             if not logged[j]:
                 continue
@@ -501,15 +579,15 @@ def measurements_for(run, vehicle=None, *, noise: Mapping[str, float] | None = N
             if sk.kind in ("held", "interpolated"):
                 notes.append(f"run {run.name}: " + sk.describe(GROUPS[name][j]))
             ch = GROUPS[name][j]
-            given = noise.get(ch, noise.get(name))
-            sigma[j] = float(given) if given is not None else _noise_for(name, col, sk.native)
+            levels[j] = noise_level(name, ch, col, sk.native, given=noise, declared=declared)
+            sigma[j] = levels[j].sigma
             if not np.isfinite(sigma[j]):
                 raise CalibrationError(
                     f"run {run.name}: cannot estimate the noise level of {ch!r} (fewer than 8 native samples); "
-                    f"give it (noise={{'{ch}': ...}} or --noise {ch}=...)")
+                    f"give it (noise={{'{ch}': ...}}, --noise {ch}=... or sensors.noise.{ch} in the vehicle file)")
         if name == "attitude" and mode == "quaternion":
             valid[:] = valid.all(axis=1, keepdims=True)  # a quaternion sample is all or nothing
-        groups[name] = Group(name, values, np.asarray(logged, bool), valid, sigma, kinds, mode)
+        groups[name] = Group(name, values, np.asarray(logged, bool), valid, sigma, kinds, mode, levels)
 
     cols = run.data.columns
     if run.has_position:
@@ -527,6 +605,8 @@ def measurements_for(run, vehicle=None, *, noise: Mapping[str, float] | None = N
         build("rates", run.velocity[:, 3:], [c in cols for c in RATE_COLUMNS])
     if run.has_acceleration:
         build("acceleration", run.acceleration, [True, True, True])
+    _filter_floor(groups)
+    notes += [f"run {run.name}: {lv.note}" for grp in groups.values() for lv in grp.noise if lv is not None and lv.note]
     factors = per_second_factors(groups) if sample_weighting == "per_second" else {}
     return RunMeasurements(run.name, t, groups, sens, g, dict(weights or {}), notes,
                            float(run.weight if run_weight is None else run_weight), attitude_lag,

@@ -95,6 +95,10 @@ class Vehicle:
     #: docs/model.md, "Sensor latency"): a prediction applies each input this much later than its
     #: time stamp (:mod:`uvsim.latency`)
     sensor_latency: float = 0.0
+    #: declared 1-sigma noise levels, channel or group -> level in the channel's unit
+    #: (``sensors.noise``; docs/model.md, "Sensor noise"): used instead of the level estimated from
+    #: a log (:func:`uvsim.measurements.noise_level`)
+    sensor_noise: dict = field(default_factory=dict)
     description: str = ""
     source: str = "<memory>"
     raw: dict = field(default_factory=dict, repr=False)
@@ -226,6 +230,8 @@ class Vehicle:
                 d.setdefault("sensors", {}).setdefault("imu", {})[key] = float(getattr(self, key))
         if self.sensor_latency:
             d.setdefault("sensors", {})["latency"] = float(self.sensor_latency)
+        if self.sensor_noise:
+            d.setdefault("sensors", {})["noise"] = {k: float(x) for k, x in self.sensor_noise.items()}
         if self.uncertainty:
             d["uncertainty"] = {k: float(x) for k, x in self.uncertainty.items()}
         if self.raw.get("thrusters") is not None:
@@ -379,6 +385,7 @@ def vehicle_from_dict(d: dict, *, source: str = "<dict>", actuators: Actuators |
         gyro_bias_sd=imu.get("gyro_bias_sd"),
         acc_bias_sd=imu.get("acc_bias_sd"),
         sensor_latency=sensors["latency"],
+        sensor_noise=dict(sensors.get("noise") or {}),
         description=s["description"],
         source=source,
         raw=d,

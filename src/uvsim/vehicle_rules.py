@@ -32,6 +32,12 @@ MAX_LATENCY = 0.5
 #: the IMU's bias specs: key -> (unit, largest plausible value (exclusive), what it is)
 IMU_BIAS_SPECS = {"gyro_bias_sd": ("rad/s", 1.0, "a MEMS gyro's in-run bias (0.001-0.05 rad/s)"),
                   "acc_bias_sd": ("m/s^2", 2.0, "a MEMS accelerometer's offset (0.01-0.8 m/s^2)")}
+#: The log's measured channels by group, the keys ``sensors.noise`` accepts (its levels are in the
+#: channel's unit: m, rad, m/s, rad/s, m/s^2); :data:`uvsim.measurements.GROUPS` with the column
+#: names of docs/log_format.md (tests/test_vehicle_schema.py holds them equal; this module imports
+#: nothing that reads logs).
+NOISE_SIGNALS = {"position": ("x", "y", "z"), "depth": ("depth",), "attitude": ("roll", "pitch", "yaw"),
+                 "velocity": ("u", "v", "w"), "rates": ("p", "q", "r"), "acceleration": ("acc_x", "acc_y", "acc_z")}
 #: Buoyancy / weight accepted (exclusive) unless B = 0: a neutrally trimmed ROV is near 1;
 #: a buoyancy given in kg (a factor g too small) or a weight in N as the mass falls outside.
 BUOYANCY_RATIO = (0.2, 5.0)
@@ -180,6 +186,12 @@ def current_a_current(v: dict, ctx: Context) -> None:
     cur = v.get("current_ned")
     if cur is not None:
         check_current_speed(cur, f"{ctx.at('current_ned')} {np.asarray(cur).tolist()}")
+
+
+def noise_signal_names(ctx: Context) -> list:
+    """The keys of `sensors.noise`: log channels (`depth`, `roll`, `u`, `p`, `acc_x`, ...) or their groups."""
+    channels = [c for cs in NOISE_SIGNALS.values() for c in cs]
+    return channels + [g for g in NOISE_SIGNALS if g not in channels]
 
 
 def vehicle_parameter_names(ctx: Context) -> list:

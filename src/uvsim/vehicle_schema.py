@@ -25,7 +25,7 @@ from uvsim.vehicle_rules import (  # noqa: F401 (the rules and their constants, 
     inertia_triangle_inequality, added_mass_matrix, added_mass_symmetric, added_mass_diagonal_non_negative,
     added_mass_positive_semidefinite, imu_bias_only_on_imu, sensor_position_given, sensor_on_the_vehicle,
     check_current_speed, check_water_density, water_density, gravity_in_m_per_s2, current_a_current,
-    vehicle_parameter_names, mass_matrix_positive_definite, points_on_the_vehicle, cb_not_below_cg)
+    noise_signal_names, vehicle_parameter_names, mass_matrix_positive_definite, points_on_the_vehicle, cb_not_below_cg)
 
 FILE_STEM = "<file stem>"  # the default of ``name``: the file's name without ``.yaml``
 _ABSENT = object()  # a field neither given nor defaulted: left out of the validated dict
@@ -66,10 +66,11 @@ class Section:
     each: Field | None = None  # an open section: every key's field ...
     keys: Callable | None = None  # ... and keys(ctx), the accepted keys
     doc_path: str = ""  # its name in the docs when several fields share it
+    each_doc: str = "<parameter>"  # an open section's key in the docs
 
     @property
     def shown(self) -> Mapping[str, Field]:  # the fields as the docs list them
-        return {"<parameter>": self.each} if self.each else self.fields
+        return {self.each_doc: self.each} if self.each else self.fields
 
 
 def _join(path: str, key: str) -> str:
@@ -288,6 +289,12 @@ SENSOR = Section({
 }, key_rules=(imu_bias_only_on_imu, sensor_position_given), rules=(sensor_on_the_vehicle,),
     doc_path="sensors.<sensor>")
 
+NOISE = Section({}, each=Field("number", positive=True, unit="the channel's",
+                               meaning="1-sigma noise of a log channel or group (m, rad, m/s, rad/s, m/s^2), used "
+                                       "instead of the level estimated from the logs"),
+                keys=noise_signal_names, noun="signal", each_doc="<signal>",
+                hint=" (a log channel such as 'yaw', 'depth', 'u', or a group such as 'attitude')")
+
 SENSORS = Section({
     **{n: Field("section", section=SENSOR, meaning=what,
                 expected="{where}: expected a mapping {{position: [x, y, z]}} (m, body frame; optional source)")
@@ -295,6 +302,8 @@ SENSORS = Section({
                                           "(depth of its position)", "the DVL (velocity of its position)"))},
     "latency": Field("number", default=0.0, parse=check_latency, unit="s",
                      meaning=f"how late every sensor reads relative to the inputs, 0 to {MAX_LATENCY:g} s"),
+    "noise": Field("section", section=NOISE, nullable=True, example="noise: {yaw: 0.02, depth: 0.005}",
+                   meaning="declared noise levels by channel or group (docs/model.md, 'Sensor noise')"),
 }, noun="sensor")
 
 UNCERTAINTY = Section({}, each=Field("number", positive=True, unit="the parameter's",
@@ -317,7 +326,8 @@ VEHICLE = Section({
                        meaning="thruster curve(s) and geometry or configuration matrix"),
     "effects": Field("list", builder="uvsim.forces.make_term", expected="{where}: expected a list",
                      meaning="extra force terms [{type: tether, ...}, ...]"),
-    "sensors": Field("section", section=SENSORS, default={}, nullable=True, meaning="sensor positions and latency",
+    "sensors": Field("section", section=SENSORS, default={}, nullable=True,
+                     meaning="sensor positions, latency and noise",
                      expected="{where}: expected a mapping such as {{pressure: {{position: [x, y, z]}}}}"),
     "uncertainty": Field("section", section=UNCERTAINTY, default={}, nullable=True, after_build=True,
                          example="uncertainty: {X_u: 2.0, N_rdot: 0.05}", meaning="1-sigma of named parameters"),

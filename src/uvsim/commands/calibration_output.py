@@ -105,6 +105,12 @@ def _grouped_notes(notes) -> dict:
     return out
 
 
+def note_lines(notes) -> list[str]:
+    """Per-run notes (:func:`_grouped_notes`) as the commands print them: ``note: TEXT (N runs: A, B, C, ...)``."""
+    return [f"note: {text} ({len(runs)} run{'s' if len(runs) > 1 else ''}: {', '.join(runs[:3])}"
+            f"{', ...' if len(runs) > 3 else ''})" for text, runs in _grouped_notes(notes).items()]
+
+
 def print_summary(cal, out=None) -> None:
     """The summary table of a fitted Calibrator (docs/calibration.md)."""
     out = sys.stdout if out is None else out
@@ -178,9 +184,8 @@ def print_summary(cal, out=None) -> None:
         say(f"supply voltage (auto): refit on the T200 voltage family found {sv['value']:.2f} V; training Fit % "
             f"{'higher in every channel (lowest gain ' if sv['used'] else 'not higher in every channel ('}"
             f"{low:+.1f} points): {'kept' if sv['used'] else 'the first fit kept'}")
-    for text, runs in _grouped_notes(rep["notes"]).items():
-        say(f"note: {text} ({len(runs)} run{'s' if len(runs) > 1 else ''}: {', '.join(runs[:3])}"
-            f"{', ...' if len(runs) > 3 else ''})")
+    for line in note_lines(rep["notes"]):
+        say(line)
     say(f"training RMSE {_rmse_text(rep['training_rmse'])}")
     say(f"validation RMSE {_rmse_text(rep['validation_rmse'])} (initial {_rmse_text(rep['initial_validation_rmse'])})")
     if rep["validation_fit_percent"]:

@@ -168,6 +168,7 @@ def _pct(x):
 
 
 def run(args) -> int:
+    from uvsim.commands.calibration_output import note_lines
     from uvsim.diagnosis import diagnose, save_fixed_vehicle
     from uvsim.errors import CalibrationError
     from uvsim.logs import read_dataset
@@ -205,8 +206,8 @@ def run(args) -> int:
         line = f"note: {ds.path / 'manifest.yaml'}: {split}"
         say("diagnose", line)
         notes.append(line)
-    for n in rep.get("sampling_notes", []):
-        say("diagnose", f"note: {n}")
+    for line in note_lines(rep.get("sampling_notes", [])):  # held, interpolated, noise floors and declarations
+        say("diagnose", line)
     if rep["attitude_lag"]["tau"]:
         say("diagnose", f"attitude filter lag {rep['attitude_lag']['tau']:.3f} s ({rep['attitude_lag']['source']})")
     rep["input_notes"] = notes
