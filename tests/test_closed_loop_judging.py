@@ -95,3 +95,16 @@ def test_the_true_weight_under_depth_hold_is_better_over_windows(tmp_path):
     assert v["status"] == "better" and v["channels"]["depth"]["rmse_b"] < 0.5 * v["channels"]["depth"]["rmse_a"]
     short = compare(meas, [r["pred"] for r in windowed(veh, val, 2.0, meas=meas)], [r["pred"] for r in a])
     assert short["channels"]["depth"]["rmse_b"] > 2 * short["channels"]["depth"]["rmse_a"]
+
+
+def test_evidence_says_what_was_compared():
+    """An effect accepted on the validation runs' evidence says whether whole runs or windows were
+    compared (closed-loop logs are judged over windows: 'free simulation' would be wrong there)."""
+    from uvsim.diagnosis.decision import open_loop_evidence
+
+    guard = {"ok": True, "why": "better", "channels": {"z": {"mse_ratio": 0.2, "better": True, "rmse_change": -0.55}}}
+    cmp = {"guard": dict(guard, horizon_s=None), "wald": {"p": 1e-12}, "relative": 0.4, "p_better": 1.0}
+    assert "free simulation" in open_loop_evidence(cmp)
+    cmp["guard"] = dict(guard, horizon_s=5.0)
+    why = open_loop_evidence(cmp)
+    assert "5-s windows" in why and "free simulation" not in why

@@ -99,6 +99,8 @@ def compare(before: dict, after: dict, fit, c) -> dict:
     cmp["wald"] = wald(fit, c)
     if "open_loop" in before:
         cmp["guard"] = open_loop_verdict(before["open_loop"], after["open_loop"])
+        # what the guard compared: whole runs, or windows of closed-loop logs (uvsim.fitting.evaluate.windowed)
+        cmp["guard"]["horizon_s"] = before["open_loop"].get("horizon_s")
     return cmp
 
 
@@ -171,7 +173,10 @@ def open_loop_evidence(cmp) -> str | None:
     if not gained:
         return None
     parts = ", ".join(f"{k} {100 * v['rmse_change']:+.0f} %" for k, v in gained.items())
-    return (f"significant in the free simulation of the validation runs: open-loop RMSE {parts}, windowed "
+    h = g.get("horizon_s")
+    judged = ("the free simulation of the validation runs: open-loop RMSE" if h is None else
+              f"the validation runs' predictions over {h:g}-s windows from the logged states: RMSE")
+    return (f"significant in {judged} {parts}, windowed "
             f"validation cost -{100 * cmp['relative']:.1f} % (better in {100 * cmp['p_better']:.1f} % of "
             f"resamples), Wald p = {w['p']:.1g} in training; {g['why']}")
 

@@ -176,10 +176,12 @@ class Selector:
     def open_loop_blocks(self, vehicle, values: Mapping) -> dict:
         """The validation runs' predictions (:meth:`predictions`: free simulations from their
         logged starts, or windows of :attr:`judge_horizon` on closed-loop logs): ``meas``,
-        ``preds`` (what :func:`uvsim.fitting.verdict.compare` compares) and ``score`` (the pooled
-        score, :func:`uvsim.fitting.verdict.score`; inf when a simulation diverges)."""
+        ``preds`` (what :func:`uvsim.fitting.verdict.compare` compares), ``score`` (the pooled
+        score, :func:`uvsim.fitting.verdict.score`; inf when a simulation diverges) and
+        ``horizon_s`` (the windows' length, None for whole runs)."""
         preds = [o["pred"] for o in self.predictions(vehicle, values)]
-        return {"meas": self.meas_va, "preds": preds, "score": score(self.meas_va, preds)}
+        return {"meas": self.meas_va, "preds": preds, "score": score(self.meas_va, preds),
+                "horizon_s": self.judge_horizon}
 
     def open_loop_cost(self, vehicle, values: Mapping) -> float:
         """The pooled score of the free simulations of the validation runs (:meth:`open_loop_blocks`);
