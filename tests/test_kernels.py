@@ -235,3 +235,15 @@ def test_effects_with_a_compiled_form_equal_numpy(kind, horizontal):
     r = _both(lambda: uvsim.simulate_batch(veh, t, U, input_kind=kind, overrides=ov, return_acceleration=True))
     _close(r["numba"].y, r["numpy"].y)
     _close(r["numba"].nu_dot, r["numpy"].nu_dot)
+
+
+def test_without_numba_everything_runs_on_numpy(monkeypatch):
+    """An installation without the extra: 'auto' falls back, 'numba' is refused by name."""
+    monkeypatch.setattr(kernels, "numba_installed", lambda: False)
+    monkeypatch.delenv("UVSIM_KERNEL", raising=False)
+    assert kernels.compiled_advance() is None and "not installed" in kernels.describe()
+    with pytest.raises(SimulationError, match="numba is not installed.*uvsim\\[fast\\]"):
+        kernels.use("numba")
+    t = np.arange(0.0, 1.0, 0.02)
+    res = uvsim.simulate("bluerov2_heavy", t, np.full((t.size, 8), 1600.0), input_kind="pwm")
+    assert np.isfinite(res.y).all() and res.y[-1, 7] > 0.0
