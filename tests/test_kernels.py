@@ -212,7 +212,7 @@ def test_kernel_names_are_checked(monkeypatch):
 @pytest.mark.parametrize("kind,horizontal", [("pwm", False), ("force", False), ("pwm", True)])
 def test_effects_with_a_compiled_form_equal_numpy(kind, horizontal):
     """Ballast (a force linear in the down axis), current (through nu_r), the thrust scale
-    and asymmetry (held over each interval) and a tether (3-D or horizontal, attached off
+    and asymmetry (held over each interval), named coupled-damping terms and a tether (3-D or horizontal, attached off
     the origin, taut and slack) run compiled, with per-row effect parameters."""
     rng = np.random.default_rng(6 + horizontal)
     veh = load_vehicle("bluerov2_heavy").with_effects([
@@ -220,6 +220,7 @@ def test_effects_with_a_compiled_form_equal_numpy(kind, horizontal):
         {"type": "current", "n": 0.1, "e": -0.05},
         {"type": "thrust_scale", "scale": 0.9},
         {"type": "thrust_asymmetry", "ratio": 0.7},
+        {"type": "coupled_damping", "K_vv": -2.0, "M_u": 0.5, "X_qq": 0.3},
         {"type": "tether", "attach_x": -0.2, "attach_z": -0.05, "anchor_n": -1.0, "anchor_e": 0.5,
          "anchor_d": -0.3, "tension": 2.0, "stiffness": 5.0, "slack_length": 1.2, "length": 5.0,
          "lumped_drag": 2.0, "horizontal": horizontal}])
@@ -231,7 +232,8 @@ def test_effects_with_a_compiled_form_equal_numpy(kind, horizontal):
     ov = {nm: rng.uniform(0.6, 1.1, n) for nm in names if nm.endswith(("scale", "ratio"))}
     ov.update({nm: rng.uniform(1.0, 4.0, n) for nm in names if nm.endswith(("weight", "stiffness"))})
     ov.update({nm: rng.uniform(0.5, 2.0, n) for nm in names if nm.endswith("slack_length")})
-    assert len(ov) == 5 and why_not_compiled(Model(veh, ov, n=n, input_kind=kind)) is None
+    ov.update({nm: rng.uniform(-3.0, -1.0, n) for nm in names if nm.endswith("K_vv")})
+    assert len(ov) == 6 and why_not_compiled(Model(veh, ov, n=n, input_kind=kind)) is None
     r = _both(lambda: uvsim.simulate_batch(veh, t, U, input_kind=kind, overrides=ov, return_acceleration=True))
     _close(r["numba"].y, r["numpy"].y)
     _close(r["numba"].nu_dot, r["numpy"].nu_dot)

@@ -110,6 +110,14 @@ class CoupledDampingEffect(Effect):
     def prepare(self, params, n):
         return [(i, j, quad, self.p(params, name, n)) for i, j, quad, name in self.terms]
 
+    def kernel_part(self, prep):
+        # the named terms as the full matrices of the compiled kernel's coupled damping
+        n = max([np.size(c) for *_, c in prep] or [1])
+        DL, DQ = np.zeros((n, 6, 6)), np.zeros((n, 6, 6))
+        for i, j, quad, c in prep:
+            (DQ if quad else DL)[:, i, j] += c
+        return ("coupled", DL, DQ)
+
     def forces(self, ctx, prep):
         nr = ctx.nu_r
         tau = np.zeros((nr.shape[0], 6))
