@@ -72,7 +72,7 @@ import numpy as np
 
 from uvsim.fit_settings import SAMPLE_WEIGHTINGS  # noqa: F401 (its home: uvsim.fit_settings)
 from uvsim.errors import CalibrationError
-from uvsim.estimation.lag import UNIFORM_RTOL, first_order_lag, lag_time_constant
+from uvsim.estimation.lag import first_order_lag, lag_time_constant, uniform_steps
 from uvsim.estimation.noise import (FILTER_FLOOR, FILTER_GATE, NoiseLevel, SampleKind, filter_output, noise_sigma,
                                     quantisation_sigma, quantum, sample_kind)
 from uvsim.accelerometer import _components, _specific_force, specific_force  # noqa: F401  (specific_force: re-exported)
@@ -259,7 +259,8 @@ class RunMeasurements:
         bounds = np.array(list(rows) + [self.n])
         out = np.empty_like(euler)
         # segments of one length on one uniform clock (a windowed fit's windows) in one call:
-        # each segment is filtered on its own all the same (the same operations, to the bit)
+        # each segment is still filtered on its own, with the first segment's filter coefficient
+        # (equal to the others' on a uniform clock to round-off, 1e-13 measured)
         lengths = np.diff(bounds)
         same = np.flatnonzero(lengths == lengths[0])
         i_run = int(same.size if np.array_equal(same, np.arange(same.size)) else 1)
@@ -285,8 +286,7 @@ class RunMeasurements:
     def _uniform_clock(self) -> bool:
         """True when the run's time steps are uniform (the lag's one-coefficient filter)."""
         if self._uniform is None:
-            dt = np.diff(self.t)
-            self._uniform = bool(dt.size and np.ptp(dt) <= UNIFORM_RTOL * max(float(np.median(dt)), 1e-300))
+            self._uniform = uniform_steps(np.diff(self.t))
         return self._uniform
 
     # ------------------------------------------------------------------ prediction

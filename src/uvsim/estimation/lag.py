@@ -39,6 +39,12 @@ LAG_MIN_SAMPLES = 1.5
 UNIFORM_RTOL = 1e-6
 
 
+def uniform_steps(dt: np.ndarray) -> bool:
+    """True when the time steps ``dt`` are uniform to :data:`UNIFORM_RTOL` (the one-coefficient
+    filter of :func:`first_order_lag`)."""
+    return bool(dt.size) and bool(np.ptp(dt) <= UNIFORM_RTOL * max(float(np.median(dt)), 1e-300))
+
+
 def first_order_lag(t: np.ndarray, x: np.ndarray, tau: float, y0=None) -> np.ndarray:
     """Lagged signal (module docstring) of ``x`` (..., n, k) at times ``t`` (n,), started
     at ``y0`` (..., k) (default ``x`` at the first sample)."""
@@ -49,7 +55,7 @@ def first_order_lag(t: np.ndarray, x: np.ndarray, tau: float, y0=None) -> np.nda
     dt = np.diff(np.asarray(t, float))
     out = np.empty_like(x)
     out[..., 0, :] = y0
-    if np.ptp(dt) <= UNIFORM_RTOL * max(float(np.median(dt)), 1e-300):
+    if uniform_steps(dt):
         a = float(np.exp(-dt[0] / tau))
         from scipy.signal import lfilter  # here, not at import (0.6 s of every command's start)
 
