@@ -16,6 +16,7 @@ it with :func:`use` (also a context manager) or the environment variable ``UVSIM
 """
 from __future__ import annotations
 
+import functools
 import importlib.util
 import os
 
@@ -33,8 +34,10 @@ def _check(name) -> str:
     return name
 
 
+@functools.lru_cache(maxsize=None)
 def numba_installed() -> bool:
-    """True when numba can be imported (without importing it)."""
+    """True when numba can be imported (without importing it; looked up once per process: every
+    integration asks)."""
     return importlib.util.find_spec("numba") is not None
 
 

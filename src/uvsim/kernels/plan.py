@@ -42,23 +42,29 @@ class CompiledPlan:
 KNOWN_PARTS = ("restoring", "diagonal", "coupled", "tether", "held", "none")
 
 
-def why_not_compiled(model) -> str | None:
-    """Why ``model`` runs on the numpy path (None: the compiled kernel can run it)."""
+def _parts(model):
+    """``(parts, None)``: each term's :meth:`~uvsim.forces.ForceTerm.kernel_part` (computed once),
+    or ``(None, reason)`` when the compiled kernel cannot run ``model``."""
     if model.n_y != 13:
-        return "a term has its own states (" + ", ".join(model.state_names[13:]) + ")"
+        return None, "a term has its own states (" + ", ".join(model.state_names[13:]) + ")"
     if model.changes_mass:
-        return "a term changes the mass properties"
+        return None, "a term changes the mass properties"
     if model.current_fn is not None:
-        return "the current varies with time"
-    tethers = 0
+        return None, "the current varies with time"
+    parts = []
     for term, prep in zip(model.terms, model.preps):
         part = term.kernel_part(prep)
         if part is None or part[0] not in KNOWN_PARTS:
-            return f"the term {type(term).__name__} has no compiled form"
-        tethers += part[0] == "tether"
-    if tethers > 1:
-        return "the compiled kernel has one tether"
-    return None
+            return None, f"the term {type(term).__name__} has no compiled form"
+        parts.append(part)
+    if sum(part[0] == "tether" for part in parts) > 1:
+        return None, "the compiled kernel has one tether"
+    return parts, None
+
+
+def why_not_compiled(model) -> str | None:
+    """Why ``model`` runs on the numpy path (None: the compiled kernel can run it)."""
+    return _parts(model)[1]
 
 
 def _rows(a, n: int, shape: tuple) -> np.ndarray:
@@ -69,7 +75,8 @@ def _rows(a, n: int, shape: tuple) -> np.ndarray:
 
 def compiled_plan(model) -> CompiledPlan | None:
     """``model`` packed for the compiled RK4, or None when :func:`why_not_compiled` says why not."""
-    if why_not_compiled(model) is not None:
+    parts_of_terms, why = _parts(model)
+    if why is not None:
         return None
     n = model.n
     TH = np.zeros((n, eq.N_TH))
@@ -79,8 +86,7 @@ def compiled_plan(model) -> CompiledPlan | None:
     TH[:, eq.O_MA:eq.O_MA + 36] = _rows(model.M_A, n, (6, 6))
     parts = eq.CURRENT if model.has_current else 0
     held = []
-    for term, prep in zip(model.terms, model.preps):
-        part = term.kernel_part(prep)
+    for term, prep, part in zip(model.terms, model.preps, parts_of_terms):
         if part[0] == "restoring":
             TH[:, eq.O_G:eq.O_G + 18] += _rows(part[1], n, (3, 6))
         elif part[0] == "diagonal":
