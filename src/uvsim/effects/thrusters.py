@@ -112,16 +112,15 @@ class _ActuatorEffect(Effect):
         n, m, k = U.shape
         fc = self._act.delivered(U.reshape(n * m, k), kind, prep["act"], None if V is None else V.reshape(n * m),
                                  repeat=m)
-        f = self._extra(fc, prep, m)
-        tau = f if kind == "force" else matvec(repeat_rows(prep["act"]["B"], m, 2), f)
-        return tau.reshape(n, m, 6)
+        return self.to_tau(kind, self._extra(fc, prep, m), prep, m).reshape(n, m, 6)
 
-    def to_tau(self, ctx, f, prep):
-        """Generalized force of per-thruster forces ``f`` (or ``f`` itself for force inputs),
-        through the allocation with the units' (possibly fitted) positions."""
-        if ctx.input_kind == "force":
+    def to_tau(self, kind, f, prep, repeat: int = 1):
+        """Generalized force of per-thruster forces ``f`` (or ``f`` itself for ``kind`` "force"),
+        through the allocation with the units' (possibly fitted) positions; each prepared row
+        stands for ``repeat`` rows of ``f``."""
+        if kind == "force":
             return f
-        return matvec(prep["act"]["B"], f)
+        return matvec(repeat_rows(prep["act"]["B"], repeat, 2), f)
 
 
 @register("thruster_lag")
@@ -158,7 +157,7 @@ class ThrusterLag(_ActuatorEffect):
     def forces(self, ctx, prep):
         fc = self.commanded(ctx, prep)
         f = ctx.states[self._index][:, : fc.shape[1]]
-        return self.to_tau(ctx, f - fc, prep)
+        return self.to_tau(ctx.input_kind, f - fc, prep)
 
     def state_derivative(self, ctx, prep, x):
         fc = self.commanded(ctx, prep)
@@ -214,7 +213,7 @@ class ThrustAsymmetry(_ActuatorEffect):
 
     def forces(self, ctx, prep):
         fc = self.commanded(ctx, prep)
-        return self.to_tau(ctx, self._extra(fc, prep, 1), prep)
+        return self.to_tau(ctx.input_kind, self._extra(fc, prep, 1), prep)
 
 
 @register("thrust_scale")
@@ -238,4 +237,4 @@ class ThrustScale(_ActuatorEffect):
 
     def forces(self, ctx, prep):
         fc = self.commanded(ctx, prep)
-        return self.to_tau(ctx, self._extra(fc, prep, 1), prep)
+        return self.to_tau(ctx.input_kind, self._extra(fc, prep, 1), prep)
