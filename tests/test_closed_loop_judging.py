@@ -108,3 +108,39 @@ def test_evidence_says_what_was_compared():
     cmp["guard"] = dict(guard, horizon_s=5.0)
     why = open_loop_evidence(cmp)
     assert "5-s windows" in why and "free simulation" not in why
+
+
+def test_calibrate_judges_closed_loop_logs_as_diagnose_does(tmp_path):
+    """Calibrate chooses what the verdict compares by the same rule as diagnose (issue 45: one
+    verdict): on a closed-loop log whose start model leaves the data, windows from the logged
+    states, and the verdict's per-channel RMSEs, the report's RMSEs and the plots' predictions are
+    those windows' (the start model's windowed RMSE, recomputed here, is the verdict's)."""
+    from uvsim.calibration import Calibrator
+    from uvsim.calibration.report import judged_for
+    from uvsim.metrics import pooled_metrics
+    from uvsim.scenarios.field import generate_field, sample_field
+
+    out = generate_field(sample_field(1, "dead", duration=12.0), tmp_path / "dead1")
+    cal = Calibrator(max_iter=3).fit(out)
+    rep = cal.report_
+    assert rep["judged"]["prediction"] == "windows" and rep["judged"]["horizon_s"] == CLOSED_LOOP_HORIZON_S
+    assert rep["judged"]["left_data"] and "starting model" in rep["judged"]["why"]
+    ds = read_dataset(out)
+    val = runs_for(cal.initial_vehicle_, ds.validation)
+    meas = [cal.evaluation_["meas"][r.name] for r in val]
+    again = windowed(cal.initial_vehicle_, val, CLOSED_LOOP_HORIZON_S, meas=meas)
+    ch = pooled_metrics([r["metrics"] for r in again])["channels"]
+    for c, v in rep["verdict"]["channels"].items():
+        assert v["rmse_a"] == pytest.approx(ch[c]["rmse"], rel=1e-9), c
+    assert cal.predict(val)[val[0].name]["horizon_s"] == CLOSED_LOOP_HORIZON_S
+    # asked for whole runs, the same data are judged on free simulations
+    cal.judge_horizon = "whole"
+    assert judged_for(cal, ds.runs, cal._meas(ds.runs))["horizon_s"] is None
+
+
+def test_calibrate_refuses_a_judge_horizon_it_cannot_use():
+    from uvsim.calibration import Calibrator
+    from uvsim.errors import CalibrationError
+
+    with pytest.raises(CalibrationError, match="judge_horizon"):
+        Calibrator(judge_horizon="5 s").fit(SHIPPED_DATASET)

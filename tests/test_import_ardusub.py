@@ -281,8 +281,8 @@ def test_tlog_compares_and_bin_calibrates(tmp_path, capsys, monkeypatch):
 def test_calibrate_accepts_an_imported_dataset_with_a_dof_segment(tmp_path, capsys):
     """The imported dataset passes every input contract and the calibration runs; on this
     short surface log with a stand-in vehicle the fit predicts nothing (docs/import_export.md):
-    when the verdict does not call it better, the message says that neither model's simulation
-    follows the log (exit 2, nothing written); never a silent success."""
+    when the verdict does not call it better, the message says that the starting model's simulation
+    leaves the log, so windows were judged (exit 2, nothing written); never a silent success."""
     seg = tmp_path / "seg.yaml"
     seg.write_text(yaml.safe_dump({"segments": [{"start": 896.2, "end": 912.1, "dof": "yaw", "name": "yaw_1"}]}))
     ds = tmp_path / "ds"
@@ -293,7 +293,8 @@ def test_calibrate_accepts_an_imported_dataset_with_a_dof_segment(tmp_path, caps
         assert load_vehicle(out).name
     else:
         err = capsys.readouterr().err
-        assert rc == 2 and "verdict worse: " in err and "simulations of both models leave the data" in err, err
+        assert rc == 2 and "verdict worse: " in err and "free simulation of whole runs leaves the training data" in err \
+            and "judged on predictions over windows" in err, err
         assert not out.exists()
 
 
@@ -312,5 +313,6 @@ def test_calibrate_accepts_the_default_mixed_import(tmp_path, capsys):
     if rc in (0, 3):  # better, or a trade-off (written, the channels named)
         assert load_vehicle(out).name
     else:
-        assert rc == 2 and "verdict worse: " in err and "simulations of both models leave the data" in err, err
+        assert rc == 2 and "verdict worse: " in err and "free simulation of whole runs leaves the training data" in err \
+            and "judged on predictions over windows" in err, err
         assert not out.exists()

@@ -220,7 +220,8 @@ def reference_checks(cal, dataset_dir, models: dict) -> dict:
     md, base = cal.evaluation_["meas"], cal.evaluation_["initial"]
     out = {}
     for name, veh in models.items():
-        ev = evaluate_runs(veh, runs, [md[r.name] for r in runs], None, initial_velocity=cal.initial_velocity)
+        ev = evaluate_runs(veh, runs, [md[r.name] for r in runs], None, initial_velocity=cal.initial_velocity,
+                           judged_as=cal.evaluation_.get("judged"))
         j = judge({"verdict": calibration_verdict(runs, ev, base, md)})
         out[name] = {"ok": j["check_ok"], "status": j["status"], "gain": j["gain"], "worse": j["worse"],
                      "pooled_rmse_change": j["pooled_rmse_change"]}

@@ -43,7 +43,7 @@ from uvsim.calibration.selection import check_bounds, effective_inertia_start, e
 from uvsim.calibration import supply_voltage as supply
 from uvsim.errors import CalibrationError
 from uvsim.estimation.lag import attitude_lag_setting
-from uvsim.fitting.evaluate import judged_scales
+from uvsim.fitting.evaluate import check_judge_horizon, judged_scales
 from uvsim.fitting.objective import check_loss, continuity_factors
 from uvsim.fitting.parameters import cb_not_below_cg, default_bounds, physical_bounds
 from uvsim.latency import runs_for
@@ -137,6 +137,12 @@ class Calibrator:
         needs the vehicle's thrusters on the shipped ``t200_16v`` curve.
     initial_velocity : "zero" | "differentiate" for the GA's and the open-loop
         evaluation's unknown initial velocities (the joint stage estimates them).
+    judge_horizon : what the verdict, the report's RMSEs and Fit % and the plots compare
+        (:func:`uvsim.fitting.evaluate.judged_prediction`, as ``uvsim diagnose`` does): "auto"
+        (default) free simulations of whole runs, or predictions over windows of
+        :data:`uvsim.fitting.evaluate.CLOSED_LOOP_HORIZON_S` from the logged states when the
+        starting model's free simulation leaves the validation data (a vehicle flown under an
+        autopilot the model does not have); "whole"; or a window length in seconds.
     prior : the joint stage fits maximum a posteriori with the starting vehicle as the prior
         (default True): each free parameter's prior mean is the vehicle file's value, its
         width the file's ``uncertainty:`` entry or :func:`uvsim.fitting.priors.default_prior_sd`
@@ -179,7 +185,7 @@ class Calibrator:
                  max_iter: int = 80, gyro_bias: bool = True, attitude_bias: bool = True, acc_bias: bool = True,
                  screen: bool = True,
                  attitude_lag="auto", latency=None, supply_voltage=None,
-                 initial_velocity: str = "zero", prior: bool = True, loss: str = "linear",
+                 initial_velocity: str = "zero", judge_horizon="auto", prior: bool = True, loss: str = "linear",
                  workers: int = 1, dask: str | None = None, batch_rows: int = DEFAULT_BATCH_ROWS, checkpoint=None,
                  resume=None, progress=False, effects=None, allow=()):
         self.dofs = dofs
@@ -199,6 +205,7 @@ class Calibrator:
         self.attitude_bias = attitude_bias
         self.acc_bias = acc_bias
         self.initial_velocity = initial_velocity
+        self.judge_horizon = judge_horizon
         self.prior = prior
         self.loss = loss
         self.workers, self.dask, self.batch_rows = workers, dask, batch_rows
@@ -268,6 +275,7 @@ class Calibrator:
         whole_number(self.max_iter, "max_iter", minimum=1, error=err)
         whole_number(self.batch_rows, "batch_rows", minimum=1, error=err)
         check_workers(self.workers, "workers", error=err, none_ok=True)
+        check_judge_horizon(self.judge_horizon)
         for name in ("crossover", "mutation", "mutation_indpb", "mutation_sigma", "seeded_fraction", "seeded_sigma",
                      "low_speed_exponent"):
             real_number(getattr(self, name), name, error=err)  # not NaN, inf or text (GASettings checks ranges)
@@ -531,14 +539,16 @@ class Calibrator:
 
     # ------------------------------------------------------------------ results
     def predict(self, runs) -> dict:
-        """Open-loop evaluation of ``runs`` with the fitted vehicle
-        (:func:`uvsim.calibration.report.evaluate_runs`; gyro biases of training runs
-        from the joint stage)."""
+        """Evaluation of ``runs`` with the fitted vehicle as the verdict judged them (the report's
+        ``judged``: free simulations of whole runs, or windows on closed-loop logs;
+        :func:`uvsim.calibration.report.evaluate_runs`; gyro biases of training runs from the
+        joint stage)."""
         self._check_fitted()
         runs = list(runs)
         meas = self._meas(runs)
         gb = self.fit_.gyro_bias if self.fit_ is not None else None
-        return evaluate_runs(self.vehicle_, runs, meas, gb, initial_velocity=self.initial_velocity)
+        return evaluate_runs(self.vehicle_, runs, meas, gb, initial_velocity=self.initial_velocity,
+                             judged_as=self.report_.get("judged"))
 
     def _check_fitted(self):
         if not hasattr(self, "vehicle_"):

@@ -2,7 +2,11 @@
 
 Every run (training and validation) is simulated from its estimated initial state with
 its logged inputs (:func:`uvsim.fitting.evaluate.open_loop`) and compared with what it
-logged through the one measure (:mod:`uvsim.metrics`).  A run that logs gyro rates is
+logged through the one measure (:mod:`uvsim.metrics`).  When the starting model's free
+simulation leaves the validation data (a vehicle flown under an autopilot the model does not
+have), the runs are predicted over windows from the logged states instead, as diagnosis does
+(:func:`uvsim.fitting.evaluate.judged_prediction`; the report's ``judged``): the verdict, the
+RMSEs, Fit % and the plots all show those predictions.  A run that logs gyro rates is
 compared after removing its gyro bias: the joint fit's estimate for a training run; for a
 validation run (and for the initial model) the median rate residual of the run (a constant
 sensor offset, estimated from the run itself as a bias-calibrated gyro would be; not a model
@@ -16,7 +20,7 @@ import time
 import numpy as np
 
 from uvsim.calibration.params import EFFECTIVE_INERTIA, LINEAR_DAMPING, QUADRATIC_DAMPING
-from uvsim.fitting.evaluate import open_loop
+from uvsim.fitting.evaluate import judged_prediction, judged_predictions
 from uvsim.fitting.objective import ATTITUDE_BIAS_SIGMA, acc_bias_sd, gyro_bias_sd
 from uvsim.fitting.verdict import compare
 from uvsim.metrics import pooled_fit_percent, pooled_group_rmse
@@ -25,12 +29,27 @@ from uvsim.metrics import pooled_fit_percent, pooled_group_rmse
 WEAK_RELATIVE_SIGMA = 0.25
 
 
-def evaluate_runs(vehicle, runs, meas, gyro_bias: dict | None = None, *, initial_velocity: str = "zero") -> dict:
+def evaluate_runs(vehicle, runs, meas, gyro_bias: dict | None = None, *, initial_velocity: str = "zero",
+                  judged_as: dict | None = None) -> dict:
     """Per run name: ``{"metrics", "pred", "states", "gyro_bias"}`` of the open-loop
     simulation of ``vehicle`` (:func:`uvsim.fitting.evaluate.open_loop`: start-aligned position,
-    gyro biases of ``gyro_bias`` (run name -> (3,)) or else the run's median rate residual)."""
-    return {r["name"]: r for r in open_loop(vehicle, runs, meas=meas, initial_velocity=initial_velocity,
-                                            gyro_bias=gyro_bias)}
+    gyro biases of ``gyro_bias`` (run name -> (3,)) or else the run's median rate residual), or
+    of its predictions over windows when ``judged_as`` (a
+    :func:`uvsim.fitting.evaluate.judged_prediction` record) says so."""
+    return {r["name"]: r for r in judged_predictions(vehicle, runs, judged_as or {}, meas=meas, gyro_bias=gyro_bias,
+                                                     initial_velocity=initial_velocity)}
+
+
+def judged_for(cal, runs, meas) -> dict:
+    """How the verdict compares the models (:func:`uvsim.fitting.evaluate.judged_prediction`
+    with the starting model on the validation runs, else on the training runs)."""
+    split = "validation" if any(r.split == "validation" for r in runs) else "train"
+    idx = [i for i, r in enumerate(runs) if r.split == split]
+    if not idx:
+        return judged_prediction(None, [], [], "whole")
+    return judged_prediction(cal.initial_vehicle_, [runs[i] for i in idx], [meas[i] for i in idx],
+                             cal.judge_horizon, initial_velocity=cal.initial_velocity, who="starting",
+                             split="training" if split == "train" else split)
 
 
 def run_entry(run, fitted: dict, initial: dict) -> dict:
@@ -174,9 +193,12 @@ def build_report(cal, ds, runs, problems, ga, bounds_of, t0, t_ga, t_ref) -> dic
     """The JSON-ready report of a fitted Calibrator (docs/calibration.md, report.json)."""
     meas = cal._meas(ds.runs, cal.signal_weights)
     gb = cal.fit_.gyro_bias if cal.fit_ is not None else None
-    fitted = evaluate_runs(cal.vehicle_, ds.runs, meas, gb, initial_velocity=cal.initial_velocity)
-    initial = evaluate_runs(cal.initial_vehicle_, ds.runs, meas, None, initial_velocity=cal.initial_velocity)
-    cal.evaluation_ = {"fitted": fitted, "initial": initial, "meas": {r.name: m for r, m in zip(ds.runs, meas)}}
+    judged = judged_for(cal, ds.runs, meas)
+    fitted = evaluate_runs(cal.vehicle_, ds.runs, meas, gb, initial_velocity=cal.initial_velocity, judged_as=judged)
+    initial = evaluate_runs(cal.initial_vehicle_, ds.runs, meas, None, initial_velocity=cal.initial_velocity,
+                            judged_as=judged)
+    cal.evaluation_ = {"fitted": fitted, "initial": initial, "meas": {r.name: m for r, m in zip(ds.runs, meas)},
+                       "judged": judged}
     per_run = {r.name: run_entry(r, fitted[r.name], initial[r.name]) for r in ds.runs}
     val, val_fit = pooled(fitted, ds.runs, "validation")
     tr, tr_fit = pooled(fitted, ds.runs, "train")
@@ -218,6 +240,8 @@ def build_report(cal, ds, runs, problems, ga, bounds_of, t0, t_ga, t_ref) -> dic
         "initial_training_rmse": tr0,
         "per_run": per_run,
         "verdict": calibration_verdict(ds.runs, fitted, initial, cal.evaluation_["meas"]),
+        # what the verdict, the RMSEs, Fit % and the plots compare (whole runs, or windows on closed-loop logs)
+        "judged": judged,
         "identifiability": cal.identifiability_,
         "refinement": {} if res is None else {"stages": res.stages, "cost": res.cost,
                                               "n_residuals": res.n_residuals},
@@ -245,7 +269,8 @@ def build_report(cal, ds, runs, problems, ga, bounds_of, t0, t_ga, t_ref) -> dic
                      "gyro_bias": cal.gyro_bias, "acc_bias": cal.acc_bias, "screen": cal.screen,
                      "attitude_lag": cal.attitude_lag,
                      "latency": cal.latency, "supply_voltage": cal.supply_voltage,
-                     "initial_velocity": cal.initial_velocity, "prior": cal.prior, "loss": cal.loss,
+                     "initial_velocity": cal.initial_velocity, "judge_horizon": cal.judge_horizon,
+                     "prior": cal.prior, "loss": cal.loss,
                      "sample_weighting": cal.sample_weighting},
         "logbook": {d: [dict(rec) for rec in lb] for d, lb in ga["logbooks"].items()},
     }

@@ -17,8 +17,9 @@ import logging
 from pathlib import Path
 
 from uvsim.commands import lag_option, parse_pairs
-from uvsim.commands.checks import (add_allow_argument, add_progress_arguments, check_outputs, check_runs_at_door,
-                                   command_progress, remove_checkpoints, say)
+from uvsim.commands.checks import (add_allow_argument, add_judge_horizon_argument, add_progress_arguments,
+                                   check_outputs, check_runs_at_door, command_progress, judge_option,
+                                   remove_checkpoints, say)
 from uvsim.commands.calibration_output import (jsonable, print_summary, print_verdict,  # noqa: F401 (re-exported)
                                                record_outcome, save_fitted_vehicle)
 from uvsim.errors import UvsimError
@@ -117,6 +118,7 @@ def register(sub) -> None:
                         "stays 2 and report.json says status.verdict: worse")
     p.add_argument("--plots", default=None, help="directory for plots (measured vs simulated, error boxplots, "
                                                  "GA convergence); written whatever the verdict")
+    add_judge_horizon_argument(p, "starting")
     add_allow_argument(p)
     add_progress_arguments(p)
     p.set_defaults(func=_run)
@@ -202,8 +204,9 @@ def _run(args) -> int:
                      sample_weighting=args.sample_weighting,
                      screen=not args.no_screen,
                      ga_channels=args.ga_channels,
-                     attitude_lag=lag, latency=args.latency, supply_voltage=args.supply_voltage, low_speed_exponent=args.low_speed_exponent, progress=progress,
-                     allow=parse_allow(args.allow))
+                     attitude_lag=lag, latency=args.latency, supply_voltage=args.supply_voltage,
+                     low_speed_exponent=args.low_speed_exponent, progress=progress,
+                     judge_horizon=judge_option(args.judge_horizon), allow=parse_allow(args.allow))
     logger = logging.getLogger("uvsim")
     handler = None
     if not logger.handlers:  # "resuming from ..." and other notes reach the user

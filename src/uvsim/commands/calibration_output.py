@@ -242,12 +242,13 @@ def record_outcome(cal, ds, *, keep_worse: bool = False) -> tuple[str, str, bool
 
 def print_verdict(rep, status: str, why: str, out=None) -> None:
     """The verdict's per-channel table and its one-paragraph message ``why`` (:func:`outcome`)."""
+    from uvsim.commands.checks import judged_label
     from uvsim.fitting.verdict import table
 
     out = sys.stdout if out is None else out
     v = rep.get("verdict")
     if v is not None:
-        print(f"verdict on the {v['split']} runs (free simulations, every logged channel):", file=out)
+        print(f"verdict on the {v['split']} runs ({judged_label(rep)}, every logged channel):", file=out)
         for line in table(v):
             print("  " + line, file=out)
     print(f"VERDICT (exit {EXIT_CODES[status]}) {why}", file=out)

@@ -30,6 +30,36 @@ def add_allow_argument(p) -> None:
                    help=f"turn these plausibility checks of the runs into warnings ({names}; docs/contracts.md)")
 
 
+def add_judge_horizon_argument(p, who: str) -> None:
+    """``--judge-horizon auto|whole|SECONDS`` (:func:`uvsim.fitting.evaluate.judged_prediction`); ``who``:
+    the reference model ("given" for diagnose, "starting" for calibrate)."""
+    p.add_argument("--judge-horizon", default="auto", metavar="auto|whole|SECONDS",
+                   help="what the verdict, the RMSEs and the plots compare: 'auto' (default) free simulations of "
+                        f"whole runs, or predictions over 5-s windows from the logged states when the {who} model's "
+                        "free simulation leaves the validation data (closed-loop logs, docs/diagnose.md); 'whole'; "
+                        "or a window length in seconds")
+
+
+def judge_option(s: str):
+    """``--judge-horizon``: "auto", "whole" or a number of seconds."""
+    from uvsim.errors import CalibrationError
+
+    if s in ("auto", "whole"):
+        return s
+    try:
+        return float(s)
+    except ValueError:
+        raise CalibrationError(f"--judge-horizon {s!r}: expected auto, whole or a number of seconds") from None
+
+
+def judged_label(report: Mapping) -> str:
+    """What the verdict compared, in a few words (the report's ``judged``)."""
+    j = report.get("judged") or {}
+    if j.get("prediction") == "windows":
+        return f"predictions over {j['horizon_s']:g}-s windows from the logged states"
+    return "free simulations"
+
+
 def add_progress_arguments(p, quiet: bool = False) -> None:
     """``--progress`` / ``--no-progress`` (and ``--quiet``, the same as ``--no-progress``)."""
     g = p.add_mutually_exclusive_group()
@@ -169,6 +199,16 @@ def calibration_caveats(rep: Mapping, ds) -> list[str]:
         out.append(f"unfinished: the joint fit's last stage stopped at the iteration limit "
                    f"({stages[-1].get('iterations')} iterations) before converging; the verdict judges the model "
                    "it reached, and raising --max-iter may move it")
+    judged = rep.get("judged") or {}
+    if judged.get("prediction") == "windows":
+        left = judged.get("left_data")
+        why = (f"the starting model's free simulation of whole runs leaves the {judged.get('split', 'validation')} "
+               f"data ({', '.join(left)} beyond {EXPLODE_FACTOR:g} times the measured spread: a model flown open loop where the vehicle "
+               "was under an autopilot, or a large missing effect), so " if left else "")
+        out.append(f"{why}the models were judged on predictions over windows of {judged['horizon_s']:g} s from the "
+                   "logged states (docs/calibration.md, 'Closed-loop logs'); the RMSEs, Fit % and plots are of "
+                   "those windows")
+        return out
     for split, key in (("train", "training_rmse"), ("validation", "validation_rmse")):
         spread = _spread([r for r in ds.runs if r.split == split])
         names = sorted(_exploded(rep.get(key) or {}, spread) & _exploded(rep.get("initial_" + key) or {}, spread))

@@ -11,7 +11,8 @@ import json
 from pathlib import Path
 
 from uvsim.commands import lag_option, parse_pairs
-from uvsim.commands.checks import (add_allow_argument, add_progress_arguments, check_outputs, check_runs_at_door,
+from uvsim.commands.checks import (add_allow_argument, add_judge_horizon_argument, add_progress_arguments,
+                                   check_outputs, check_runs_at_door, judge_option, judged_label,
                                    command_progress, diagnosis_caveats, diagnosis_problems, remove_checkpoints, say)
 from uvsim.fitting.verdict import EXIT_CODES
 from uvsim.fitting.verdict import table as verdict_table
@@ -50,11 +51,7 @@ def register(subparsers) -> None:
     p.add_argument("--attitude-lag", default="auto", metavar="auto|SECONDS",
                    help="time constant of the attitude filter's lag on logged Euler angles: 'auto' (default, "
                         "estimated from the gyro, as uvsim calibrate does), a number, or 0 for none")
-    p.add_argument("--judge-horizon", default="auto", metavar="auto|whole|SECONDS",
-                   help="what the verdict compares on the validation runs: 'auto' (default) free simulations of "
-                        "whole runs, or predictions over 5-s windows from the logged states when the given model's "
-                        "free simulation leaves the data (closed-loop logs, docs/diagnose.md); 'whole'; or a window "
-                        "length in seconds")
+    add_judge_horizon_argument(p, "given")
     p.add_argument("--workers", type=int, default=1, help="processes for the simulations (same result)")
     p.add_argument("--checkpoint", help="file saved after every finished fit (default: the --json or --out file "
                                         "plus .ckpt; none without either)")
@@ -67,26 +64,6 @@ def register(subparsers) -> None:
 
 def _list(s):
     return [x.strip() for x in s.split(",") if x.strip()] if s else None
-
-
-def judged_label(report: dict) -> str:
-    """What the verdict compared, in a few words (the report's ``judged``)."""
-    j = report.get("judged") or {}
-    if j.get("prediction") == "windows":
-        return f"predictions over {j['horizon_s']:g}-s windows from the logged states"
-    return "free simulations"
-
-
-def _judge_option(s: str):
-    """``--judge-horizon``: "auto", "whole" or a number of seconds."""
-    from uvsim.errors import CalibrationError
-
-    if s in ("auto", "whole"):
-        return s
-    try:
-        return float(s)
-    except ValueError:
-        raise CalibrationError(f"--judge-horizon {s!r}: expected auto, whole or a number of seconds") from None
 
 
 def format_table(report: dict) -> str:
@@ -191,7 +168,7 @@ def run(args) -> int:
                         horizon=args.horizon, max_effects=args.max_effects, top=args.top, max_iter=args.max_iter,
                         workers=args.workers, progress=progress, allow=parse_allow(args.allow), checkpoint=ckpt,
                         resume=args.resume, attitude_lag=lag_option(args.attitude_lag),
-                        judge_horizon=_judge_option(args.judge_horizon))
+                        judge_horizon=judge_option(args.judge_horizon))
     except KeyboardInterrupt:
         held = ckpt or args.resume
         if held and Path(held).is_file():

@@ -45,7 +45,9 @@ from uvsim.diagnosis.residual import concentration, verdict
 from uvsim.diagnosis.selector import VARIANT_SHARE, Selector
 from uvsim.estimation.lag import attitude_lag_setting
 from uvsim.errors import CalibrationError, UvsimError
-from uvsim.fitting.evaluate import open_loop, pooled
+# (CLOSED_LOOP_HORIZON_S and judged_prediction live in uvsim.fitting.evaluate: calibration judges alike)
+from uvsim.fitting.evaluate import (CLOSED_LOOP_HORIZON_S, check_judge_horizon, judged_prediction,  # noqa: F401
+                                   pooled)
 from uvsim.fitting.verdict import compare as compare_models
 from uvsim.forces import make_term
 from uvsim.latency import runs_for
@@ -68,48 +70,6 @@ AT_NOISE = 1.5
 #: a current (foreign case b: the tether named after base_model:hydrodynamics left 221 mm of validation
 #: RMSE, 9 mm alone).  ``supply_voltage`` exists for thrusters on a voltage-family curve only.
 STEP0_VARIANTS = ("thrust_scale", "supply_voltage")
-#: Closed-loop logs (an autopilot holding depth or heading) are judged on predictions over windows of
-#: this many seconds from the logged states (:func:`uvsim.fitting.evaluate.windowed`;
-#: :func:`judged_prediction`): longer than the fits' windows (DEFAULT_HORIZON, 3 s) so that a drift
-#: the fits' node states absorb (a weight's sink, a current's push) shows, short enough that the
-#: loop the model does not have cannot turn the free model over (field-log benchmark, dead unit:
-#: roll RMSE 1.13 rad over whole runs, 0.04 rad over 5-s windows with the fault modelled).
-CLOSED_LOOP_HORIZON_S = 5.0
-
-
-def judged_prediction(vehicle, val, meas, setting="auto") -> dict:
-    """What the verdict compares on the validation runs ``val`` (``meas``: their measurement
-    models), by ``setting``: ``"auto"`` -- free simulations of whole runs, unless the given
-    ``vehicle``'s leaves the data (some channel's RMSE beyond :data:`uvsim.spread.EXPLODE_FACTOR`
-    times the measured spread: a vehicle flown under an autopilot whose loop the model does not
-    have), then predictions over windows of :data:`CLOSED_LOOP_HORIZON_S`; ``"whole"`` (or 0) --
-    whole runs; a number of seconds -- windows of that length.  Returns the report's ``judged``:
-    ``{"prediction": "whole runs"|"windows", "horizon_s" (None for whole runs), "setting", "why",
-    "free_rmse_given"}``."""
-    from uvsim.spread import EXPLODE_FACTOR, beyond_spread, signal_spread
-
-    if setting in ("whole", 0, 0.0, None):
-        return {"prediction": "whole runs", "horizon_s": None, "setting": "whole",
-                "why": "free simulations of whole runs (asked)", "free_rmse_given": None}
-    if setting != "auto":
-        h = float(setting)
-        return {"prediction": "windows", "horizon_s": h, "setting": h,
-                "why": f"predictions over windows of {h:g} s from the logged states (asked)", "free_rmse_given": None}
-    free = pooled(open_loop(vehicle, val, meas=meas))
-    left = sorted(beyond_spread(free, signal_spread(val)))
-    if not left:
-        return {"prediction": "whole runs", "horizon_s": None, "setting": "auto",
-                "why": "free simulations of whole runs: the given model's stays with the validation data",
-                "free_rmse_given": free}
-    h = CLOSED_LOOP_HORIZON_S
-    return {"prediction": "windows", "horizon_s": h, "setting": "auto", "left_data": left,
-            "why": (f"predictions over windows of {h:g} s from the logged states: the given model's free "
-                    f"simulation of whole runs leaves the validation data ({', '.join(left)} beyond "
-                    f"{EXPLODE_FACTOR:g} times the measured spread), as a model flown open loop does where an "
-                    "autopilot held the vehicle, so whole runs cannot tell models apart"),
-            "free_rmse_given": free}
-
-
 @dataclass
 class Diagnosis:
     """Result of :func:`diagnose`.
@@ -208,10 +168,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     check_workers(workers, "workers", error=CalibrationError)  # and not more processes than the machine runs
     if not (horizon is None or (np.isfinite(horizon) and horizon > 0)):
         raise CalibrationError(f"horizon must be a positive number of seconds, got {horizon!r}")
-    if judge_horizon not in ("auto", "whole") and not (
-            isinstance(judge_horizon, (int, float)) and np.isfinite(judge_horizon) and judge_horizon >= 0):
-        raise CalibrationError(f"judge_horizon must be 'auto', 'whole' or a number of seconds >= 0, got "
-                               f"{judge_horizon!r}")
+    check_judge_horizon(judge_horizon)
     train, val, split_note = _split(dataset)
     train, val = runs_for(veh, train), runs_for(veh, val)  # the vehicle's sensors.latency (uvsim.latency)
     lag = attitude_lag_setting(train, attitude_lag)

@@ -37,8 +37,10 @@ def _series(meas, pred) -> list:
             for c, s in channel_series(meas, pred).items()]
 
 
-def plot_runs(runs, meas, fitted, initial, out_dir) -> list[Path]:
-    """One figure per run: measured vs initial vs fitted model, every logged channel."""
+def plot_runs(runs, meas, fitted, initial, out_dir, what: str = "free simulation") -> list[Path]:
+    """One figure per run: measured vs initial vs fitted model, every logged channel; ``what``: the
+    predictions' kind in the legend (the free simulation, or windows on closed-loop logs: the
+    report's ``judged``)."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = []
@@ -48,8 +50,8 @@ def plot_runs(runs, meas, fitted, initial, out_dir) -> list[Path]:
         fig, axes = plt.subplots(len(fit), 1, figsize=(7, 1.7 * len(fit) + 0.6), sharex=True, squeeze=False)
         for ax, (c, unit, ok, y, yf, _, _), (_, _, _, _, yi, _, _) in zip(axes[:, 0], fit, ini):
             ax.plot(run.t[ok], y[ok], ".", ms=2, color="0.4", label="measured")
-            ax.plot(run.t[ok], yi[ok], "--", lw=1, color="tab:orange", label="initial model (free simulation)")
-            ax.plot(run.t[ok], yf[ok], "-", lw=1.2, color="tab:blue", label="fitted model (free simulation)")
+            ax.plot(run.t[ok], yi[ok], "--", lw=1, color="tab:orange", label=f"initial model ({what})")
+            ax.plot(run.t[ok], yf[ok], "-", lw=1.2, color="tab:blue", label=f"fitted model ({what})")
             ax.set_ylabel(f"{c} ({unit})")
         axes[0, 0].set_title(f"{run.name} ({run.dof or 'no dof'}, {run.split})")
         axes[0, 0].legend(fontsize=7, loc="best")
@@ -141,7 +143,10 @@ def plot_calibration(cal, dataset, out_dir, *, run_plots: str = "all") -> list[P
     meas = [ev["meas"][r.name] for r in runs]
     val = [i for i, r in enumerate(runs) if r.split == "validation"] or list(range(len(runs)))
     sel = {"all": list(range(len(runs))), "validation": val, "none": []}[run_plots]
-    paths = plot_runs([runs[i] for i in sel], [meas[i] for i in sel], ev["fitted"], ev["initial"], out_dir / "runs")
+    j = ev.get("judged") or {}
+    what = f"{j['horizon_s']:g}-s windows" if j.get("prediction") == "windows" else "free simulation"
+    paths = plot_runs([runs[i] for i in sel], [meas[i] for i in sel], ev["fitted"], ev["initial"], out_dir / "runs",
+                      what)
     vr, vm = [runs[i] for i in val], [meas[i] for i in val]
     paths.append(plot_channel_errors(vr, vm, ev["fitted"], out_dir / "channel_errors.png"))
     if any(r.dof in LINEAR + ROTATIONAL for r in vr):
