@@ -36,6 +36,8 @@ from uvsim.estimation.savgol import is_uniform, savgol_on_stamps
 from uvsim.blas import single_thread
 from uvsim.errors import CalibrationError
 from uvsim.estimation.derivatives import body_acceleration, body_velocity
+from uvsim.kernels import compiled_accelerations
+from uvsim.kernels.plan import compiled_plan
 from uvsim.kinematics import euler_to_quat, unwrap_angles
 from uvsim.model import Model
 
@@ -264,18 +266,22 @@ class EquationError:
             for (kind, _), idx in groups.items():
                 ms = [self.motions[i] for i in idx]
                 N = sum(m.sub.size for m in ms)
-                model = Model(self.vehicle, self.space.overrides(Z, N), n=P * N, input_kind=kind)
-                Yp = np.tile(np.concatenate([m.y_sub for m in ms]), (P, 1))
-                if model.n_y > 13:  # term states per run and parameter set, stacked like Yp
-                    xs = self._term_states(Z, ms, kind)
-                    xs = np.concatenate([x[:, m.sub] for x, m in zip(xs, ms)], axis=1)
-                    Yp = np.concatenate([Yp, xs.reshape(P * N, -1)], 1)
-                Up = np.tile(np.concatenate([m.U_sub for m in ms]), (P, 1))
-                Vp = None
+                Y = np.concatenate([m.y_sub for m in ms])
+                U = np.concatenate([m.U_sub for m in ms])
+                V = None
                 if any(m.V is not None for m in ms):
-                    Vp = np.tile(np.concatenate([m.V_sub if m.V is not None else np.full(m.sub.size, np.nan)
-                                                 for m in ms]), P)
-                acc = model.rhs(0.0, Yp, Up, Vp)[:, 7:13].reshape(P, N, 6)
+                    V = np.concatenate([m.V_sub if m.V is not None else np.full(m.sub.size, np.nan) for m in ms])
+                acc = self._compiled_accelerations(Z, kind, Y, U, V)
+                if acc is None:  # the numpy path: one model row per parameter set and sample
+                    model = Model(self.vehicle, self.space.overrides(Z, N), n=P * N, input_kind=kind)
+                    Yp = np.tile(Y, (P, 1))
+                    if model.n_y > 13:  # term states per run and parameter set, stacked like Yp
+                        xs = self._term_states(Z, ms, kind)
+                        xs = np.concatenate([x[:, m.sub] for x, m in zip(xs, ms)], axis=1)
+                        Yp = np.concatenate([Yp, xs.reshape(P * N, -1)], 1)
+                    Up = np.tile(U, (P, 1))
+                    Vp = None if V is None else np.tile(V, P)
+                    acc = model.rhs(0.0, Yp, Up, Vp)[:, 7:13].reshape(P, N, 6)
                 starts = np.cumsum([0] + [m.sub.size for m in ms])
                 buckets: dict = {}
                 for j, m in enumerate(ms):
@@ -291,6 +297,30 @@ class EquationError:
                         res[:, ~m.valid_sub] = np.nan
                         out[idx[j]] = res
         return out
+
+    def _compiled_accelerations(self, Z: np.ndarray, kind: str, Y, U, V) -> np.ndarray | None:
+        """The accelerations (P, N, 6) of the parameter sets ``Z`` (P, p) at the states ``Y``
+        (N, 13) with inputs ``U`` (N, k) and voltages ``V`` (N,) or None, by the compiled
+        equations (:func:`uvsim.kernels.rk4_equations.accelerations`: one model row per
+        parameter set, the actuators' held forces by their own numpy code with the thrust curves
+        once for the shared inputs); None where the setting, the install or the model says numpy
+        (:func:`uvsim.kernels.plan.why_not_compiled`), which :meth:`forces` then runs."""
+        kernel = compiled_accelerations()
+        if kernel is None:
+            return None
+        P = Z.shape[0]
+        model = Model(self.vehicle, self.space.overrides(Z), n=P, input_kind=kind)
+        plan = compiled_plan(model)
+        if plan is None:
+            return None
+        N = Y.shape[0]
+        # every parameter set sees the same inputs: distinct_histories' answer, known here
+        same = (np.zeros(1, int), np.zeros(P, int))
+        tau = plan.held_forces(np.broadcast_to(U, (P,) + U.shape), kind,
+                               None if V is None else np.broadcast_to(V, (P, N)), same)
+        acc = np.empty((P, N, 6))
+        kernel(np.ascontiguousarray(Y, dtype=float), np.ascontiguousarray(tau), plan.TH, plan.parts, acc)
+        return acc
 
     def residuals(self, Z: np.ndarray) -> np.ndarray:
         """Normalized residual vectors (P, m) over the valid entries.  Large batches of
