@@ -96,6 +96,10 @@ class Motion:
 
 #: Model rows (parameter sets x evaluation samples) per batched equation-error evaluation.
 CHUNK_ROWS = 25000
+#: The same on the compiled path, which holds no (rows, ...) intermediate of the numpy ``rhs``:
+#: a Jacobian's parameter sets in one call (one model, one packing; the per-set numbers are
+#: the same in any chunking)
+CHUNK_ROWS_COMPILED = 500000
 
 
 def _sg(x, win, deriv=0, dt=1.0, axis=-2, mode="interp"):
@@ -191,6 +195,7 @@ class EquationError:
             raise CalibrationError("no run allows an equation-error fit (need complete position + attitude, or "
                                    "velocities and rates, without gaps)")
         self.M0 = np.asarray(vehicle.M if M0 is None else M0, float)
+        self._compiled_path = None
         self.scale = None
         if scale is None:
             r = self.forces(space.z0[None])
@@ -322,6 +327,15 @@ class EquationError:
         kernel(np.ascontiguousarray(Y, dtype=float), np.ascontiguousarray(tau), plan.TH, plan.parts, acc)
         return acc
 
+    def _compiled(self) -> bool:
+        """Whether :meth:`forces` takes the compiled path (:meth:`_compiled_accelerations`) for
+        this model (looked up once, on a one-row model: what the chunk size depends on)."""
+        if self._compiled_path is None:
+            self._compiled_path = compiled_accelerations() is not None and all(
+                compiled_plan(Model(self.vehicle, self.space.overrides(self.space.z0[None]), n=1, input_kind=kind))
+                is not None for kind in {m.input_kind for m in self.motions})
+        return self._compiled_path
+
     def residuals(self, Z: np.ndarray) -> np.ndarray:
         """Normalized residual vectors (P, m) over the valid entries.  Large batches of
         parameter sets are evaluated in chunks of about :data:`CHUNK_ROWS` model rows
@@ -330,7 +344,7 @@ class EquationError:
         the same."""
         Z = np.atleast_2d(Z)
         rows = sum(m.sub.size for m in self.motions)
-        per = max(1, CHUNK_ROWS // max(rows, 1))
+        per = max(1, (CHUNK_ROWS_COMPILED if self._compiled() else CHUNK_ROWS) // max(rows, 1))
         if Z.shape[0] > per:
             return np.concatenate([self._residuals(Z[a:a + per]) for a in range(0, Z.shape[0], per)], axis=0)
         return self._residuals(Z)
