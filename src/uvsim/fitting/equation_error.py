@@ -34,7 +34,7 @@ from scipy.optimize import least_squares
 
 from uvsim.estimation.savgol import is_uniform, savgol_on_stamps
 from uvsim.blas import single_thread
-from uvsim.errors import CalibrationError
+from uvsim.errors import CalibrationError, UvsimError
 from uvsim.estimation.derivatives import body_acceleration, body_velocity
 from uvsim.kernels import compiled_accelerations
 from uvsim.kernels.plan import compiled_plan
@@ -331,9 +331,12 @@ class EquationError:
         """Whether :meth:`forces` takes the compiled path (:meth:`_compiled_accelerations`) for
         this model (looked up once, on a one-row model: what the chunk size depends on)."""
         if self._compiled_path is None:
-            self._compiled_path = compiled_accelerations() is not None and all(
-                compiled_plan(Model(self.vehicle, self.space.overrides(self.space.z0[None]), n=1, input_kind=kind))
-                is not None for kind in {m.input_kind for m in self.motions})
+            try:
+                self._compiled_path = compiled_accelerations() is not None and all(
+                    compiled_plan(Model(self.vehicle, self.space.overrides(self.space.z0[None]), n=1,
+                                        input_kind=kind)) is not None for kind in {m.input_kind for m in self.motions})
+            except (UvsimError, ValueError, np.linalg.LinAlgError):  # a start the model refuses: the evaluation says why
+                self._compiled_path = False
         return self._compiled_path
 
     def residuals(self, Z: np.ndarray) -> np.ndarray:
