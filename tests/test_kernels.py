@@ -249,3 +249,51 @@ def test_without_numba_everything_runs_on_numpy(monkeypatch):
     t = np.arange(0.0, 1.0, 0.02)
     res = uvsim.simulate("bluerov2_heavy", t, np.full((t.size, 8), 1600.0), input_kind="pwm")
     assert np.isfinite(res.y).all() and res.y[-1, 7] > 0.0
+
+
+@needs_numba
+@pytest.mark.parametrize("kind", ["pwm", "force"])
+def test_equation_error_accelerations_equal_numpy(kind):
+    """The equation error's accelerations along measured motions (uvsim.fitting.equation_error,
+    rk4_equations.accelerations: one parameter row per set, the held forces once for the shared
+    inputs) equal the numpy path's (one model row per set and sample) for parameter sets that
+    differ in mass, added mass, damping, thruster gains and the effects' parameters."""
+    from uvsim.fitting import make_space
+    from uvsim.fitting.equation_error import EquationError, measured_motion
+    from uvsim.synthetic import generate_runs
+
+    veh = load_vehicle("bluerov2_heavy").with_effects([
+        {"type": "ballast", "weight": 3.0, "x": 0.05, "z": 0.1, "mass": 0.3},
+        {"type": "current", "n": 0.1, "e": -0.05},
+        {"type": "thrust_asymmetry", "ratio": 0.7},
+        {"type": "coupled_damping", "K_vv": -2.0, "M_u": 0.5},
+        {"type": "tether", "attach_x": -0.2, "attach_z": -0.05, "anchor_n": -1.0, "anchor_e": 0.5,
+         "anchor_d": -0.3, "tension": 2.0, "stiffness": 5.0, "slack_length": 1.2, "length": 5.0,
+         "lumped_drag": 2.0}])
+    runs, _ = generate_runs("bluerov2_heavy", dofs=("surge", "yaw", "heave"), runs_per_dof=1, validation_per_dof=0,
+                            duration=6.0, rate=25.0, seed=3, off=3.0, input_kind=kind)
+    motions = [measured_motion(r) for r in runs]
+    p = Model(veh).params
+    free = ["m", "X_udot", "X_uu", "N_r", "tether_stiffness", "tether_slack_length", "tether_attach_x", "ballast_weight",
+            "ballast_mass", "K_vv"]
+    free = [nm for nm in free if nm in p] + (["thruster_gain_1", "thruster_gain_5"] if kind == "pwm" else [])
+    assert len(free) == 10 + 2 * (kind == "pwm")
+    space = make_space(p, free)
+    rng = np.random.default_rng(8)
+    Z = space.z0[None] * rng.uniform(0.8, 1.2, (5, space.p))
+    assert why_not_compiled(Model(veh, space.overrides(Z), n=5, input_kind=kind)) is None
+    r = _both(lambda: EquationError(veh, motions, space, scale=np.ones(6)).forces(Z))
+    for a, b in zip(r["numba"], r["numpy"]):
+        assert np.isfinite(b).any()
+        _close(a, b)
+    # the uncompiled text gives the same numbers (the packing without numba)
+    model = Model(veh, space.overrides(Z[:2]), n=2, input_kind=kind)
+    plan = compiled_plan(model)
+    m0 = motions[0]
+    Y, U = m0.y_sub[:20], m0.U_sub[:20]
+    tau = plan.held_forces(np.broadcast_to(U, (2,) + U.shape), kind, None)
+    acc = np.empty((2, 20, 6))
+    rk4_equations.accelerations(Y, tau, plan.TH, plan.parts, acc)
+    ref = Model(veh, space.overrides(Z[:2], 20), n=40, input_kind=kind).rhs(0.0, np.tile(Y, (2, 1)),
+                                                                             np.tile(U, (2, 1)))[:, 7:13]
+    _close(acc.reshape(40, 6), ref)

@@ -28,6 +28,7 @@ repeats none of them and reaches the same answer.
 """
 from __future__ import annotations
 
+import functools
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -36,6 +37,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from uvsim.fit_settings import DEFAULT_HORIZON  # noqa: F401 (its home: uvsim.fit_settings)
+from uvsim.blas import single_thread
 from uvsim.checkpoint import Checkpoint, fingerprint
 from uvsim.diagnosis.candidates import BASE_MODEL, EFFECTS, Candidate, plain_answer, reported_variant
 from uvsim.diagnosis.decision import (LEVEL, MIN_RELATIVE, VAL_LEVEL, WALD_P, alternative_challenger,
@@ -110,6 +112,20 @@ def _split(dataset: Dataset) -> tuple[list, list, str]:
                         f"({', '.join(r.name for r in val)})")
 
 
+def _one_blas_thread(fn):
+    """``fn`` run with one BLAS thread (:func:`uvsim.blas.single_thread`).  The screening's least
+    squares (:mod:`uvsim.diagnosis.regression`: thousands of small problems on ~10^4 residual rows)
+    only synchronised the threads of a multi-threaded BLAS: one screening of the tethered tank
+    dataset took 7 s with them and 1.8 s with one thread on a loaded 2-core machine
+    (docs/performance.md).  The fits' worker processes give the parallelism."""
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        with single_thread():
+            return fn(*args, **kwargs)
+    return wrapper
+
+
+@_one_blas_thread
 def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: Sequence[str] | None = None,
              noise: Mapping[str, float] | None = None, weights: Mapping[str, float] | None = None,
              horizon: float = DEFAULT_HORIZON, max_effects: int = 2, top: int = 3, max_iter: int = 12,

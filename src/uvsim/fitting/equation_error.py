@@ -34,8 +34,10 @@ from scipy.optimize import least_squares
 
 from uvsim.estimation.savgol import is_uniform, savgol_on_stamps
 from uvsim.blas import single_thread
-from uvsim.errors import CalibrationError
+from uvsim.errors import CalibrationError, UvsimError
 from uvsim.estimation.derivatives import body_acceleration, body_velocity
+from uvsim.kernels import compiled_accelerations
+from uvsim.kernels.plan import compiled_plan
 from uvsim.kinematics import euler_to_quat, unwrap_angles
 from uvsim.model import Model
 
@@ -94,6 +96,10 @@ class Motion:
 
 #: Model rows (parameter sets x evaluation samples) per batched equation-error evaluation.
 CHUNK_ROWS = 25000
+#: The same on the compiled path, which holds no (rows, ...) intermediate of the numpy ``rhs``:
+#: a Jacobian's parameter sets in one call (one model, one packing; the per-set numbers are
+#: the same in any chunking)
+CHUNK_ROWS_COMPILED = 500000
 
 
 def _sg(x, win, deriv=0, dt=1.0, axis=-2, mode="interp"):
@@ -189,6 +195,7 @@ class EquationError:
             raise CalibrationError("no run allows an equation-error fit (need complete position + attitude, or "
                                    "velocities and rates, without gaps)")
         self.M0 = np.asarray(vehicle.M if M0 is None else M0, float)
+        self._compiled_path = None
         self.scale = None
         if scale is None:
             r = self.forces(space.z0[None])
@@ -264,18 +271,22 @@ class EquationError:
             for (kind, _), idx in groups.items():
                 ms = [self.motions[i] for i in idx]
                 N = sum(m.sub.size for m in ms)
-                model = Model(self.vehicle, self.space.overrides(Z, N), n=P * N, input_kind=kind)
-                Yp = np.tile(np.concatenate([m.y_sub for m in ms]), (P, 1))
-                if model.n_y > 13:  # term states per run and parameter set, stacked like Yp
-                    xs = self._term_states(Z, ms, kind)
-                    xs = np.concatenate([x[:, m.sub] for x, m in zip(xs, ms)], axis=1)
-                    Yp = np.concatenate([Yp, xs.reshape(P * N, -1)], 1)
-                Up = np.tile(np.concatenate([m.U_sub for m in ms]), (P, 1))
-                Vp = None
+                Y = np.concatenate([m.y_sub for m in ms])
+                U = np.concatenate([m.U_sub for m in ms])
+                V = None
                 if any(m.V is not None for m in ms):
-                    Vp = np.tile(np.concatenate([m.V_sub if m.V is not None else np.full(m.sub.size, np.nan)
-                                                 for m in ms]), P)
-                acc = model.rhs(0.0, Yp, Up, Vp)[:, 7:13].reshape(P, N, 6)
+                    V = np.concatenate([m.V_sub if m.V is not None else np.full(m.sub.size, np.nan) for m in ms])
+                acc = self._compiled_accelerations(Z, kind, Y, U, V)
+                if acc is None:  # the numpy path: one model row per parameter set and sample
+                    model = Model(self.vehicle, self.space.overrides(Z, N), n=P * N, input_kind=kind)
+                    Yp = np.tile(Y, (P, 1))
+                    if model.n_y > 13:  # term states per run and parameter set, stacked like Yp
+                        xs = self._term_states(Z, ms, kind)
+                        xs = np.concatenate([x[:, m.sub] for x, m in zip(xs, ms)], axis=1)
+                        Yp = np.concatenate([Yp, xs.reshape(P * N, -1)], 1)
+                    Up = np.tile(U, (P, 1))
+                    Vp = None if V is None else np.tile(V, P)
+                    acc = model.rhs(0.0, Yp, Up, Vp)[:, 7:13].reshape(P, N, 6)
                 starts = np.cumsum([0] + [m.sub.size for m in ms])
                 buckets: dict = {}
                 for j, m in enumerate(ms):
@@ -292,6 +303,42 @@ class EquationError:
                         out[idx[j]] = res
         return out
 
+    def _compiled_accelerations(self, Z: np.ndarray, kind: str, Y, U, V) -> np.ndarray | None:
+        """The accelerations (P, N, 6) of the parameter sets ``Z`` (P, p) at the states ``Y``
+        (N, 13) with inputs ``U`` (N, k) and voltages ``V`` (N,) or None, by the compiled
+        equations (:func:`uvsim.kernels.rk4_equations.accelerations`: one model row per
+        parameter set, the actuators' held forces by their own numpy code with the thrust curves
+        once for the shared inputs); None where the setting, the install or the model says numpy
+        (:func:`uvsim.kernels.plan.why_not_compiled`), which :meth:`forces` then runs."""
+        kernel = compiled_accelerations()
+        if kernel is None:
+            return None
+        P = Z.shape[0]
+        model = Model(self.vehicle, self.space.overrides(Z), n=P, input_kind=kind)
+        plan = compiled_plan(model)
+        if plan is None:
+            return None
+        N = Y.shape[0]
+        # every parameter set sees the same inputs: distinct_histories' answer, known here
+        same = (np.zeros(1, int), np.zeros(P, int))
+        tau = plan.held_forces(np.broadcast_to(U, (P,) + U.shape), kind,
+                               None if V is None else np.broadcast_to(V, (P, N)), same)
+        acc = np.empty((P, N, 6))
+        kernel(np.ascontiguousarray(Y, dtype=float), np.ascontiguousarray(tau), plan.TH, plan.parts, acc)
+        return acc
+
+    def _compiled(self) -> bool:
+        """Whether :meth:`forces` takes the compiled path (:meth:`_compiled_accelerations`) for
+        this model (looked up once, on a one-row model: what the chunk size depends on)."""
+        if self._compiled_path is None:
+            try:
+                self._compiled_path = compiled_accelerations() is not None and all(
+                    compiled_plan(Model(self.vehicle, self.space.overrides(self.space.z0[None]), n=1,
+                                        input_kind=kind)) is not None for kind in {m.input_kind for m in self.motions})
+            except (UvsimError, ValueError, np.linalg.LinAlgError):  # a start the model refuses: the evaluation says why
+                self._compiled_path = False
+        return self._compiled_path
+
     def residuals(self, Z: np.ndarray) -> np.ndarray:
         """Normalized residual vectors (P, m) over the valid entries.  Large batches of
         parameter sets are evaluated in chunks of about :data:`CHUNK_ROWS` model rows
@@ -300,7 +347,7 @@ class EquationError:
         the same."""
         Z = np.atleast_2d(Z)
         rows = sum(m.sub.size for m in self.motions)
-        per = max(1, CHUNK_ROWS // max(rows, 1))
+        per = max(1, (CHUNK_ROWS_COMPILED if self._compiled() else CHUNK_ROWS) // max(rows, 1))
         if Z.shape[0] > per:
             return np.concatenate([self._residuals(Z[a:a + per]) for a in range(0, Z.shape[0], per)], axis=0)
         return self._residuals(Z)

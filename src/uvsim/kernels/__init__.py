@@ -91,3 +91,14 @@ def compiled_advance():
     from uvsim.kernels.numba_rk4 import advance
 
     return advance
+
+
+def compiled_accelerations():
+    """The compiled :func:`rk4_equations.accelerations` (the equation error's accelerations along a
+    measured motion), or None when the setting or the install says numpy."""
+    choice = current()
+    if choice == "numpy" or not numba_installed():
+        return None
+    from uvsim.kernels.numba_rk4 import accelerations
+
+    return accelerations

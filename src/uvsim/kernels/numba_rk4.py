@@ -20,7 +20,9 @@ def _compile():
     for name in eq.KERNEL_FUNCTIONS:
         f = getattr(eq, name)
         g[name] = numba.njit(types.FunctionType(f.__code__, g, name, f.__defaults__), cache=True, nogil=True)
-    return g["advance"]
+    return g
 
 
-advance = _compile()
+_compiled = _compile()
+advance = _compiled["advance"]
+accelerations = _compiled["accelerations"]

@@ -51,7 +51,7 @@ O_TE = 249     # tether: attachment r_a (3, body, m), anchor p_0 (3, NED, m), ho
 N_TH = 261
 
 #: The functions numba compiles (:mod:`uvsim.kernels.numba_rk4`), callees first.
-KERNEL_FUNCTIONS = ("_tether_add", "_coriolis_sub", "rhs", "advance")
+KERNEL_FUNCTIONS = ("_tether_add", "_coriolis_sub", "rhs", "advance", "accelerations")
 
 # bits of ``parts``
 CURRENT = 1
@@ -305,3 +305,24 @@ def advance(y, T, TAU, TH, substeps, parts, Y, ACC, want_acc, i0, n_t, speed_max
                 last_check = i
         for c in range(13):
             y[row, c] = yc[c]
+
+
+def accelerations(Y, TAU, TH, parts, ACC):
+    """The acceleration ``nu_dot`` of every parameter row at every given state, in place:
+    ``Y`` (N, 13) states (shared by the rows), ``TAU`` (P, N, 6) the held actuator forces,
+    ``TH`` (P, N_TH) the parameter rows; ``ACC`` (P, N, 6) receives :func:`rhs`'s
+    ``out[7:13]``.  What the equation error (:mod:`uvsim.fitting.equation_error`) evaluates
+    along a measured motion for a batch of parameter sets (no integration)."""
+    P = TH.shape[0]
+    N = Y.shape[0]
+    out = np.empty(13)
+    tau = np.empty(6)
+    yc = np.empty(13)
+    for p in range(P):
+        th = TH[p]
+        for s in range(N):
+            for c in range(13):
+                yc[c] = Y[s, c]
+            rhs(yc, TAU[p, s], th, parts, out, tau)
+            for c in range(6):
+                ACC[p, s, c] = out[7 + c]
