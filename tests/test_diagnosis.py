@@ -643,3 +643,50 @@ def test_a_richer_variant_accepted_after_a_refusal_is_chosen_though_not_signific
     assert sel.fitted[0] == rich.label
     assert win is not None and win["candidate"] is rich and win["accepted"]
     assert "in place of tether:slack_attach" in win["why"]
+
+
+def test_an_effect_clearly_better_than_the_base_models_thrust_scale_takes_its_place():
+    """Field-log benchmark, dead case seed 1 (issue 48), in stubs: step 0 accepted the thrust
+    scale on its 0.5 bound (validation cost 6786 squared noise sigmas per residual) and pre-empted
+    the dead unit, which on the given model gives 489; the effect now wins.  A curve mismatch, where
+    the units' gains explain no more than the one scale, keeps the base model, and so does a step
+    without an accepted effect."""
+    from uvsim.diagnosis.decision import base_effect_challenge, base_effect_kept
+
+    (scale,) = [c for c in catalogue(input_kind="pwm", n_thrusters=8, dt=0.2, p_ref=np.zeros(3), has_position=False,
+                                     z_max=None, only=["base_model"], base={}) if c.variant == "thrust_scale"]
+    units = {c.variant: c for c in catalogue(input_kind="pwm", n_thrusters=8, dt=0.2, p_ref=np.zeros(3),
+                                             has_position=False, z_max=None, only=["thruster_gain"])}
+
+    def row(c, cost, seed):
+        r = _row(c, cost, seed=seed)
+        r["val"]["per_entry"] = cost / 100.0
+        return r
+
+    base = row(scale, 678_600.0, 0)
+    why = base_effect_challenge(base, row(units["reversed_6"], 48_900.0, 1))
+    assert why is not None and "thruster_gain:reversed_6" in why and "clearly better" in why
+    # as good as the scale (a curve mismatch that every unit's gain says again): the scale stays
+    same = row(units["all"], 678_000.0, 2)
+    assert base_effect_challenge(base, same) is None
+    assert "not clearly better" in base_effect_kept(base, same)
+    assert base_effect_challenge(base, None) is None and "no effect" in base_effect_kept(base, None)
+
+
+def test_a_dead_vertical_thruster_is_not_pre_empted_by_the_base_models_thrust_scale(tmp_path):
+    """A vertical thruster dead (gain 0), nothing else wrong, 4 short PWM runs at 10 Hz: the thrust
+    scale of step 0 is accepted (it absorbs part of the missing thrust) but the dead unit on the
+    given model explains the validation runs clearly better, so it takes the scale's place.  Before,
+    the scale stayed and the unit was named reversed, "at 0.10 of its curve" (issue 48's dead case
+    in a small open-loop scenario)."""
+    out, truth = _scenario(tmp_path, 0, input_kind="pwm", n_runs=4, duration=[6, 8], rate_hz=10.0,
+                           effects=[{"type": "weak_thruster", "magnitude": 1.0}])
+    eff = truth["effects"][0]
+    assert eff["gain"] == 0.0 and eff["thruster"] == 8
+    rep = diagnose(out).report
+    step0 = rep["steps"][0]
+    assert step0["chosen"] is None and not step0["base_challenge"]["kept"]
+    assert step0["candidates"][0]["accepted"] and "set aside" in step0["candidates"][0]["why"]
+    assert (rep["base_model"] or {}).get("variant") != "thrust_scale"
+    assert [e["effect"] for e in rep["effects"]] == ["thruster_gain"]
+    assert "thruster 8 gives no thrust" in rep["effects"][0]["answer"]

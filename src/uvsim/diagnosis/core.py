@@ -17,7 +17,11 @@ Procedure (issue 10; docs/diagnose.md gives the method with its references):
    test, and a validation improvement confirmed by a block bootstrap over windows; the
    simplest sufficient variant and the most parsimonious effect win.
 5. **Forward selection.**  The accepted effect joins the model and steps 2-4 repeat with
-   the remaining effects until nothing significant is left or ``max_effects`` are in.
+   the remaining effects until nothing significant is left or ``max_effects`` are in.  Step 0
+   tries the base model's thrust curve alone (:data:`STEP0_VARIANTS`); when it is accepted, the
+   effects that screen at least as well are fitted on the given model too, and one that explains
+   the validation runs clearly better takes step 1 in its place
+   (:func:`uvsim.diagnosis.decision.base_effect_challenge`).
 6. **Report** every step (before/after costs, each candidate's numbers and why it was
    or was not accepted), the validation RMSE of the given and the corrected model (of free
    simulations, or on closed-loop logs of windowed predictions: :func:`judged_prediction`),
@@ -41,8 +45,9 @@ from uvsim.blas import single_thread
 from uvsim.checkpoint import Checkpoint, fingerprint
 from uvsim.diagnosis.candidates import BASE_MODEL, EFFECTS, Candidate, plain_answer, reported_variant
 from uvsim.diagnosis.decision import (LEVEL, MIN_RELATIVE, VAL_LEVEL, WALD_P, alternative_challenger,
-                                      blocked_fallback, inertia_challenger, open_loop_verdict, parsimonious,
-                                      richer_challenger, simplest_sufficient, still_needed)
+                                      base_effect_challenge, base_effect_kept, blocked_fallback, inertia_challenger,
+                                      open_loop_verdict, parsimonious, richer_challenger, simplest_sufficient,
+                                      still_needed)
 from uvsim.diagnosis.residual import concentration, verdict
 from uvsim.diagnosis.selector import VARIANT_SHARE, Selector
 from uvsim.estimation.lag import attitude_lag_setting
@@ -234,12 +239,9 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     if not base_first:
         exclude.add(BASE_MODEL)
 
-    def forward(k) -> bool:
-        """One forward-selection step (screen, fit, judge, choose); True when an effect joined."""
-        nonlocal values, val_cur
-        st = sel.step(accepted, values, val_cur, exclude=exclude, only=[BASE_MODEL] if k == 0 else only, top=top,
-                      k_step=k, variants=STEP0_VARIANTS if k == 0 else None)
-        table = []
+    def choose(st):
+        """The step's winner: the simplest accepted candidate, or a fallback for one the verdict
+        alone refused, then its variants' challenges (uvsim.diagnosis.decision); None."""
         winners = [row for row in st["fitted"] if row.get("accepted")]
         best = parsimonious(winners)
         if best is None:
@@ -249,14 +251,18 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
             best = simplest_sufficient(sel, best, st, val_cur) or best
             best = alternative_challenger(sel, best, st, val_cur) or best
             best = inertia_challenger(sel, best, st, val_cur) or best
-        for row in st["fitted"]:
-            table.append(_row_report(row, best))
+        return best
+
+    def record(k, st, best) -> dict:
         step_rep = {"step": k, "model": " + ".join(c.label for c in accepted) or "the given model",
                     "before_cost_per_entry": val_cur["per_entry"], "screening": st["screening"],
-                    "screened": st["screened"], "candidates": table, "chosen": None}
+                    "screened": st["screened"], "candidates": [_row_report(row, best) for row in st["fitted"]],
+                    "chosen": None}
         steps.append(step_rep)
-        if best is None:
-            return False
+        return step_rep
+
+    def adopt(best, step_rep) -> None:
+        nonlocal values, val_cur
         c = best["candidate"]
         accepted.append(c)
         exclude.add(c.effect)
@@ -269,9 +275,47 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
                         joint_fit={"values": joint.values, "std": joint.std, "cost": joint.cost,
                                    "at_bounds": joint.at_bounds})
         accepted_values.append(joint)
+
+    def forward(k) -> bool:
+        """One forward-selection step (screen, fit, judge, choose); True when an effect joined."""
+        st = sel.step(accepted, values, val_cur, exclude=exclude, only=[BASE_MODEL] if k == 0 else only, top=top,
+                      k_step=k, variants=STEP0_VARIANTS if k == 0 else None)
+        best = choose(st)
+        challenge = None
+        if k == 0 and best is not None and (only is None or set(only) - {BASE_MODEL}):
+            # the base model's variant competes with the catalogue's effects on the given model
+            # (base_effect_challenge): a dead unit must not be pre-empted by a thrust scale that
+            # absorbs part of what it does.  Only effects that remove at least as much of the
+            # equation error as the base model's variant are fitted to challenge it
+            floor = next((r["screening_reduction"] for r in st["screened"]
+                          if r["variant"] == best["candidate"].variant), None)
+            st1 = sel.step(accepted, values, val_cur, exclude=exclude | {BASE_MODEL}, only=only, top=top, k_step=1,
+                           floor=floor)
+            best1 = choose(st1)
+            why = base_effect_challenge(best, best1)
+            challenge = {"base_model": best["candidate"].label, "screening_floor": floor,
+                         "fitted": [_row_report(row, best1) for row in st1["fitted"]],
+                         "best_effect": None if best1 is None else best1["candidate"].label,
+                         "kept": why is None}
+            if why is not None:
+                best["why"] += "; set aside: " + why
+                record(k, st, None)["base_challenge"] = {**challenge, "fitted": "step 1", "why": why}
+                adopt(best1, record(1, st1, best1))
+                return True
+            kept = base_effect_kept(best, best1)
+            best["why"] += f"; kept against the effects on the given model ({kept})"
+            challenge["why"] = kept
+        step_rep = record(k, st, best)
+        if k == 0 and best is not None and challenge is not None:
+            step_rep["base_challenge"] = challenge
+        if best is None:
+            return False
+        adopt(best, step_rep)
         return True
 
     for k in plan:
+        if steps and steps[-1]["step"] >= k:  # step 1 taken already: its effect won against the base model
+            continue
         if not forward(k) and k != 0:
             break
     # stepwise selection: each earlier effect must still earn its place beside the later ones

@@ -432,3 +432,34 @@ def _open_loop_costs(sel, rows) -> None:
     for row in rows:
         if "open_loop_cost" not in row:
             row["open_loop_cost"] = sel.open_loop_cost(row["vehicle"], row["all_values"])
+
+
+def base_effect_challenge(base_row, effect_row) -> str | None:
+    """Whether the catalogue's best effect on the *given* model (``effect_row``, the winner of a
+    forward step without the base model) replaces the base model's variant accepted in step 0
+    (``base_row``): it does when its validation cost is clearly lower (:func:`clearly_better`: the
+    block bootstrap at :data:`LEVEL` and by at least :data:`MIN_RELATIVE`).  Returns why, or None
+    to keep the base model.
+
+    Why: step 0 fits the thrust curve first so that a curve mismatch is not taken for per-thruster
+    faults (issue 22), but a global scale also absorbs part of what a single fault does, and once
+    accepted it pre-empts that fault (field-log benchmark, issue 48: a dead thruster 6 under an
+    autopilot, the thrust scale accepted on its 0.5 bound with a validation cost of 6786 squared
+    noise sigmas per residual, where thruster 6 at gain 0 on the given model gives 489).  A curve
+    mismatch keeps the base model: one scale explains it as well as the units' gains, so no effect
+    is clearly better."""
+    if effect_row is None:
+        return None
+    if not clearly_better(base_row["val"]["windows"], effect_row["val"]["windows"]):
+        return None
+    b, e = base_row["val"]["per_entry"], effect_row["val"]["per_entry"]
+    return (f"{effect_row['candidate'].label} on the given model explains the validation runs clearly better "
+            f"(validation cost {e:.4g} against {b:.4g} squared noise sigmas per residual)")
+
+
+def base_effect_kept(base_row, effect_row) -> str:
+    """The reason :func:`base_effect_challenge` kept the base model, in a few words."""
+    if effect_row is None:
+        return "no effect accepted without it"
+    return (f"the best of them, {effect_row['candidate'].label}, validation cost {effect_row['val']['per_entry']:.4g} "
+            f"against {base_row['val']['per_entry']:.4g}, is not clearly better")

@@ -323,7 +323,12 @@ class Selector:
         bounds = {**self.retune_bounds, **{n: a.bounds[n] for a in accepted for n in a.free}}
         return {"vehicle": self.vehicle_for(accepted), "values": dict(values), "free": free, "bounds": bounds}
 
-    def step(self, accepted, values_cur, val_cur, *, exclude, only, top, k_step, variants=None) -> dict:
+    def step(self, accepted, values_cur, val_cur, *, exclude, only, top, k_step, variants=None,
+             floor: float | None = None) -> dict:
+        """One forward step on the model of ``accepted`` (module docstring).  ``floor``: only effects
+        whose screening reduction reaches it are fitted (the challengers of the base model's thrust
+        scale, :func:`uvsim.diagnosis.decision.base_effect_challenge`: an effect that removes less of
+        the equation error than the scale is not fitted to compete with it); None: no floor."""
         cur = self.current(accepted, values_cur)
         vehicle_cur = cur["vehicle"]
         run0 = self.train[0]
@@ -378,6 +383,8 @@ class Selector:
         for c, s, red in choice:
             rows.append({"effect": c.effect, "variant": c.variant, "screening_reduction": s["reduction"] if s else None,
                          "fitted": False})
+        if floor is not None and ee_info.get("available"):
+            choice = [x for x in choice if x[2] >= floor]
         fitted = []
         no_velocity = not any(m.have[:3].any() for m in self.motions if m is not None)
         if ee_info.get("available") and no_velocity:
@@ -390,7 +397,7 @@ class Selector:
         if ee_info.get("available"):
             lead = choice[0][2] if choice else 0.0
             picked = [x for x in choice if x[2] >= max(SCREEN_SHARE * lead, SCREEN_FLOOR)][: max(top, 1)]
-            if no_velocity:
+            if no_velocity and floor is None:
                 # no linear velocities in the log (IMU + depth): the equation error has only the
                 # rotational DOFs and cannot rank effects that act mainly as forces, so the
                 # simplest variant of each of them that can exert a moment is fitted through the
