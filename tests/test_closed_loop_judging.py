@@ -144,3 +144,15 @@ def test_calibrate_refuses_a_judge_horizon_it_cannot_use():
 
     with pytest.raises(CalibrationError, match="judge_horizon"):
         Calibrator(judge_horizon="5 s").fit(SHIPPED_DATASET)
+
+
+def test_the_supply_voltage_choice_is_judged_by_the_same_rule(dead):
+    """--supply-voltage auto keeps its refit by a verdict on the training runs: judged like the
+    calibration's own (windows where the first fit's free simulation leaves the data)."""
+    from uvsim.calibration.supply_voltage import training_verdict
+
+    veh, val, meas = dead
+    v = training_verdict(veh, veh.with_parameters({"X_uu": veh.parameters()["X_uu"] * 1.1}), val, meas)
+    assert v["judged"]["prediction"] == "windows" and v["judged"]["split"] == "training"
+    assert v["status"] in ("better", "trade-off", "worse")
+    assert training_verdict(veh, veh, val, meas, judge_horizon="whole")["judged"]["horizon_s"] is None

@@ -403,7 +403,8 @@ class Calibrator:
                     lambda v, bounds, names, mean: joint(v, bounds, names, ".supply",
                                                          mean if self.prior else None)[0],
                     veh, dict(params), start_veh, fit_res, runs, meas, joint_bounds, margin=float(self.margin),
-                    prior_mean=self.initial_vehicle_.parameters(), initial_velocity=self.initial_velocity)
+                    prior_mean=self.initial_vehicle_.parameters(), initial_velocity=self.initial_velocity,
+                    judge_horizon=self.judge_horizon)
                 if kept is not None:
                     log.info("supply voltage %.2f V: better on the training runs, in every channel; keeping that fit",
                              self.supply_voltage_["value"])

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 from uvsim.calibration.report import evaluate_runs
 from uvsim.errors import CalibrationError
+from uvsim.fitting.evaluate import judged_prediction
 from uvsim.fitting.parameters import physical_bounds
 from uvsim.fitting.verdict import compare
 
@@ -86,12 +87,20 @@ def on_voltage_family(vehicle):
     return vehicle_from_dict(d, source=f"{vehicle.name} on the T200 voltage family")
 
 
-def training_verdict(first, refit_vehicle, runs, meas, initial_velocity: str = "zero") -> dict:
-    """The verdict on ``refit_vehicle`` against ``first`` on the training runs' free simulations."""
-    a = evaluate_runs(first, runs, meas, initial_velocity=initial_velocity)
-    b = evaluate_runs(refit_vehicle, runs, meas, initial_velocity=initial_velocity)
-    return compare(meas, [a[r.name]["pred"] for r in runs], [b[r.name]["pred"] for r in runs],
-                   names=("the first fit", "the refit on the voltage family"))
+def training_verdict(first, refit_vehicle, runs, meas, initial_velocity: str = "zero",
+                     judge_horizon="auto") -> dict:
+    """The verdict on ``refit_vehicle`` against ``first`` on the training runs, judged as the
+    calibration's verdict is (:func:`uvsim.fitting.evaluate.judged_prediction`, ``first`` the
+    reference: free simulations of whole runs, or windows where its simulation leaves the data);
+    ``judged`` in the result says which."""
+    judged = judged_prediction(first, runs, meas, judge_horizon, initial_velocity=initial_velocity,
+                               who="first fit's", split="training")
+    a = evaluate_runs(first, runs, meas, initial_velocity=initial_velocity, judged_as=judged)
+    b = evaluate_runs(refit_vehicle, runs, meas, initial_velocity=initial_velocity, judged_as=judged)
+    v = compare(meas, [a[r.name]["pred"] for r in runs], [b[r.name]["pred"] for r in runs],
+                names=("the first fit", "the refit on the voltage family"))
+    v["judged"] = judged
+    return v
 
 
 def choose(verdict: dict) -> bool:
@@ -103,7 +112,7 @@ def choose(verdict: dict) -> bool:
 
 
 def refit(joint, veh, start: dict, start_veh, fit_res, runs, meas, bounds_of, *, margin: float, prior_mean: dict,
-          initial_velocity: str = "zero"):
+          initial_velocity: str = "zero", judge_horizon="auto"):
     """The refit of the module docstring and its choice.
 
     Parameters
@@ -116,6 +125,7 @@ def refit(joint, veh, start: dict, start_veh, fit_res, runs, meas, bounds_of, *,
     runs, meas : the training runs and their measurement models.
     bounds_of : the first fit's bounds; ``margin``: the calibration's (the voltage's bounds do not use it).
     prior_mean : the prior's means (the start vehicle's values); None: no prior.
+    judge_horizon : the calibration's (:func:`training_verdict`).
 
     Returns
     -------
@@ -137,10 +147,11 @@ def refit(joint, veh, start: dict, start_veh, fit_res, runs, meas, bounds_of, *,
     if res is None:
         return record, None
     v = training_verdict(start_veh.with_parameters(fit_res.values), fam_start.with_parameters(res.values), runs,
-                         meas, initial_velocity)
+                         meas, initial_velocity, judge_horizon)
     gain = {c: d["fit_b"] - d["fit_a"] for c, d in v["channels"].items()}
     record.update(value=float(res.values["supply_voltage"]), training_fit_gain=gain, used=choose(v),
-                  training_verdict={"status": v["status"], "message": v["message"]},
+                  training_verdict={"status": v["status"], "message": v["message"],
+                                    "judged": v["judged"]["prediction"]},
                   refit={"cost": float(res.cost), "stages": res.stages})
     if not record["used"]:
         return record, None
