@@ -78,3 +78,32 @@ def test_a_current_under_jittered_stamps_is_named_by_the_screening(tmp_path):
     assert e["effect"] == "current"
     got = [e["parameters"][f"current_{c}"]["value"] for c in "ned" if f"current_{c}" in e["parameters"]]
     assert np.allclose(got, truth[:len(got)], atol=0.01) and len(got) == 3
+
+
+def test_an_effect_on_its_bounds_is_judged_by_the_final_fit_and_a_dead_units_gain_is_no_bound():
+    """The sanity check behind exit 2 reads the corrected model's own fit (``at_bound`` of each
+    parameter of ``effects`` and ``base_model``): field logs, dead case seed 21, exited 2 for the
+    thrust scale step 0 had put on its 0.5 bound (0.61 in the final fit beside the dead unit) and
+    for the dead unit's gain 0 (a physical floor).  A parameter really on its bound still counts."""
+    val, _, fixed = _reports()
+
+    def rep(scale_at_bound, gain_at_bound):
+        return {"rmse_before": fixed, "rmse_after": fixed,
+                "steps": [{"candidates": [{"chosen": True, "effect": "base_model", "variant": "thrust_scale",
+                                           "free": ["thrust_scale_scale"], "at_bounds": ["thrust_scale_scale"]}]}],
+                "base_model": {"variant": "thrust_scale", "parameters": {
+                    "thrust_scale_scale": {"value": 0.5 if scale_at_bound else 0.61, "at_bound": scale_at_bound}}},
+                "effects": [{"effect": "thruster_gain", "variant": "unit_7", "parameters": {
+                    "thruster_gain_7": {"value": 1.5 if gain_at_bound else 0.0, "at_bound": gain_at_bound}}}]}
+
+    assert diagnosis_problems(rep(False, False), val) == []
+    (p,) = diagnosis_problems(rep(True, False), val)
+    assert "base_model:thrust_scale" in p and "ended on a bound" in p
+    (p,) = diagnosis_problems(rep(False, True), val)
+    assert "thruster_gain:unit_7" in p
+    old = rep(False, False)
+    for f in [old["base_model"], *old["effects"]]:  # a report without at_bound: each step's own fit
+        for d in f["parameters"].values():
+            del d["at_bound"]
+    (p,) = diagnosis_problems(old, val)
+    assert "base_model:thrust_scale" in p

@@ -269,7 +269,18 @@ def diagnosis_problems(rep: Mapping, val_runs) -> list[str]:
     model's own simulation leaving the data is not one (an open-loop model of a vehicle flown
     under an autopilot drifts; issue 48): :func:`diagnosis_caveats` says so."""
     probs = rmse_problems(rep["rmse_after"], val_runs, "validation RMSE after the fit", rep["rmse_before"])
-    for step in rep.get("steps", []):
+    final = ([{**rep["base_model"], "effect": "base_model"}] if rep.get("base_model") else []) + list(rep.get("effects") or [])
+    if final and all("at_bound" in d for f in final for d in f["parameters"].values()):
+        # the corrected model's own values (the final joint fit): a step's fit can end on a bound that a
+        # later step's leaves (field logs, dead case seed 21: the thrust scale 0.5 in step 0, 0.61 beside
+        # the dead unit); a dead unit's gain 0 is a physical floor, not a bound (uvsim.diagnosis.core)
+        for f in final:
+            if f["parameters"] and all(d["at_bound"] for d in f["parameters"].values()):
+                probs.append(f"every fitted parameter of the accepted effect {f['effect']}:{f['variant']} "
+                             f"({', '.join(f['parameters'])}) ended on a bound of its search range, so the data do "
+                             "not determine them")
+        return probs
+    for step in rep.get("steps", []):  # a report without the final fit's bounds
         chosen = next((c for c in step["candidates"] if c.get("chosen")), None)
         if chosen is not None and chosen.get("free") and set(chosen["free"]) <= set(chosen.get("at_bounds", ())):
             probs.append(f"every fitted parameter of the accepted effect {chosen['effect']}:{chosen['variant']} "

@@ -43,11 +43,12 @@ import numpy as np
 from uvsim.fit_settings import DEFAULT_HORIZON  # noqa: F401 (its home: uvsim.fit_settings)
 from uvsim.blas import single_thread
 from uvsim.checkpoint import Checkpoint, fingerprint
-from uvsim.diagnosis.candidates import BASE_MODEL, EFFECTS, Candidate, plain_answer, reported_variant
+from uvsim.diagnosis.candidates import (BASE_MODEL, DEAD_GAIN, EFFECTS, Candidate, plain_answer, reported_variant,
+                                        search_bound_hits)
 from uvsim.diagnosis.decision import (LEVEL, MIN_RELATIVE, VAL_LEVEL, WALD_P, alternative_challenger,
                                       base_effect_challenge, base_effect_kept, blocked_fallback, inertia_challenger,
                                       open_loop_verdict, parsimonious, richer_challenger, simplest_sufficient,
-                                      still_needed)
+                                      still_needed, unit_beside_base)
 from uvsim.diagnosis.residual import concentration, verdict
 from uvsim.diagnosis.selector import VARIANT_SHARE, Selector
 from uvsim.estimation.lag import attitude_lag_setting
@@ -297,6 +298,26 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
                          "fitted": [_row_report(row, best1) for row in st1["fitted"]],
                          "best_effect": None if best1 is None else best1["candidate"].label,
                          "kept": why is None}
+            nested = None if why is None else unit_beside_base(sel, best, best1, st1["all_screened"])
+            if nested is not None:
+                challenge["nested"] = _row_report(nested, nested if nested["accepted"] else None)
+            if nested is not None and nested["accepted"]:
+                # every gain won, but all except one unit's are the base model's common curve: the
+                # nested model (the curve + that unit) is as good, so the base model stays and the
+                # unit is the effect (decision.unit_beside_base)
+                kept = (f"{best1['candidate'].label} on the given model is clearly better ({why}), but "
+                        f"{nested['candidate'].label} beside it is as good")
+                best["why"] += f"; kept against the effects on the given model ({kept})"
+                challenge.update(why=kept, kept=True)
+                step_rep = record(k, st, best)
+                step_rep["base_challenge"] = challenge
+                adopt(best, step_rep)
+                adopt(nested, record(1, {"screening": None, "screened": [], "fitted": [nested]}, nested))
+                # the scale kept here stands beside a unit the challenge found: the hydrodynamic variants
+                # still compete in the later steps, as after a base model set aside (the catalogue leaves
+                # out those that free the scale again, Selector.step)
+                exclude.discard(BASE_MODEL)
+                return True
             if why is not None:
                 best["why"] += "; set aside: " + why
                 record(k, st, None)["base_challenge"] = {**challenge, "fitted": "step 1", "why": why}
@@ -351,12 +372,24 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     final = accepted_values[-1] if accepted_values else None
     effects_rep, base_rep = [], None
     for c in accepted:
-        params = {n: {"value": values[n], "std": (final.std.get(n) if final else None), "unit": _unit(c, n)}
+        # on the edge of its search range in the final fit (a base-model coefficient at its bound is;
+        # a physical floor is not, candidates.search_bound_hits, nor a unit's gain within DEAD_GAIN of 0
+        # from either side: a dead unit, which a reversed unit's range reaches at its upper end)
+        hits = [n for n in c.free if final is not None and n in final.at_bounds]
+        edge = set(hits if c.effect == BASE_MODEL else search_bound_hits(c, values, hits))
+        if c.effect == "thruster_gain":
+            edge = {n for n in edge if not abs(values[n]) < DEAD_GAIN}
+        params = {n: {"value": values[n], "std": (final.std.get(n) if final else None), "unit": _unit(c, n),
+                      "at_bound": n in edge}
                   for n in c.free}
         if c.effect == BASE_MODEL:
             for n in c.free:
                 params[n]["before"] = veh.parameters().get(n, 1.0)
-            base_rep = {"variant": c.variant, "notes": c.notes, "parameters": params}
+            if base_rep is None:
+                base_rep = {"variant": c.variant, "notes": c.notes, "parameters": params}
+            else:  # a thrust scale kept beside a unit, then a hydrodynamic variant (decision.unit_beside_base)
+                base_rep = {"variant": f"{base_rep['variant']}+{c.variant}", "notes": f"{base_rep['notes']}; {c.notes}",
+                            "parameters": {**base_rep["parameters"], **params}}
         else:
             effects_rep.append({"effect": c.effect, "variant": reported_variant(c, values), "notes": c.notes,
                                 "parameters": params,

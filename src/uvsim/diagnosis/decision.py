@@ -10,6 +10,9 @@
   winning effect, a richer one replaces the winner only when significantly better on
   validation, and a simpler one when its validation cost is within MIN_RELATIVE of the
   winner's.
+* :func:`unit_beside_base` -- when every unit's gain wins the challenge of the base model's
+  thrust curve (:func:`base_effect_challenge`), the curve plus the one outlying unit
+  (:func:`outlying_unit`), which the winner nests, replaces it when as good on validation.
 * :func:`still_needed` -- backward elimination: with two effects in, the earlier one is
   judged again on top of a model without it, and dropped when no longer significant (the
   diagnosis then takes another forward step).
@@ -463,3 +466,63 @@ def base_effect_kept(base_row, effect_row) -> str:
         return "no effect accepted without it"
     return (f"the best of them, {effect_row['candidate'].label}, validation cost {effect_row['val']['per_entry']:.4g} "
             f"against {base_row['val']['per_entry']:.4g}, is not clearly better")
+
+
+def outlying_unit(effect_row) -> int | None:
+    """The unit whose fitted gain is farthest from the median of all the gains, when ``effect_row``
+    is the every-gain variant of ``thruster_gain`` (None otherwise): the one fault that
+    :func:`unit_beside_base` tries beside the base model's common thrust curve."""
+    if effect_row is None:
+        return None
+    c = effect_row["candidate"]
+    if c.effect != "thruster_gain" or "unit" in c.tags or len(c.free) < 3:
+        return None
+    g = np.array([float(effect_row["values"][n]) for n in c.free])
+    return int(c.free[int(np.argmax(np.abs(g - np.median(g))))].rsplit("_", 1)[1])
+
+
+def unit_beside_base(sel, base_row, effect_row, screened):
+    """When the every-gain variant (``effect_row``) won :func:`base_effect_challenge` against the
+    base model's thrust-curve variant (``base_row``, step 0), the nested model "the base model's
+    common curve plus one unit's gain" (the unit farthest from the others, :func:`outlying_unit`)
+    is fitted on the base model and replaces the winner when it is accepted (:func:`judge`, against
+    the base model) and its validation cost is within :data:`MIN_RELATIVE` of the winner's (the
+    rule of :func:`simplest_sufficient`: the winner nests it).  Returns the unit's row (fitted on
+    the base model, ``row["accepted"]`` whether it replaces the winner, ``row["nested_in"]`` the
+    winner's label), or None when there is nothing to fit.
+
+    Why: every gain with all but one near a common value is a thrust curve off for every unit and
+    one unit's fault: two parameters, not eight, and the fault is the unit's (field-log benchmark,
+    issue 48, dead case seed 21: thruster 7 at 0.00, the other seven 0.55-0.67, named
+    ``thruster_gain:all``).  ``screened``: the challenge step's ``all_screened`` (where the unit's
+    candidate is)."""
+    k = outlying_unit(effect_row)
+    if k is None:
+        return None
+    cc = next((c for c, _ in screened if c.effect == "thruster_gain" and c.variant == f"unit_{k}"), None)
+    if cc is None:
+        return None
+    c_all = effect_row["candidate"]
+    g = {n: float(effect_row["values"][n]) for n in c_all.free}
+    name = f"thruster_gain_{k}"
+    common = float(np.median([v for n, v in g.items() if n != name]))
+    start = {name: float(np.clip(g[name] / common, *cc.bounds[name])) if common > 0 else cc.start[name]}
+    base_c = base_row["candidate"]
+    if "thrust_scale_scale" in base_c.free and common > 0:  # the given model's scale is 1: the common gain is the scale
+        start["thrust_scale_scale"] = float(np.clip(common, *base_c.bounds["thrust_scale_scale"]))
+    cur = sel.current([base_c], base_row["all_values"])
+    row = sel.fit_candidate(cc, {"values": start}, cur, base_row["val"])
+    if "compare" not in row:
+        return None
+    ok, why = judge(row, base_row["val"])
+    worse = row["val"]["cost"] / effect_row["val"]["cost"] - 1.0
+    row["nested_in"] = c_all.label
+    if ok and worse <= MIN_RELATIVE:
+        row["accepted"] = True
+        row["why"] = why + (f"; beside {base_c.label}, as good as {c_all.label} on the given model (validation "
+                            f"cost {100 * worse:+.1f} %), which nests it")
+        return row
+    row["accepted"] = False
+    row["why"] = why if not ok else (f"beside {base_c.label}: validation cost {100 * worse:.1f} % above "
+                                     f"{c_all.label}'s on the given model (needs <= {100 * MIN_RELATIVE:.0f} %)")
+    return row
