@@ -202,8 +202,9 @@ def calibration_caveats(rep: Mapping, ds) -> list[str]:
     judged = rep.get("judged") or {}
     if judged.get("prediction") == "windows":
         left = judged.get("left_data")
-        why = (f"the starting model's free simulation of whole runs leaves the {judged.get('split', 'validation')} "
-               f"data ({', '.join(left)} beyond {EXPLODE_FACTOR:g} times the measured spread: a model flown open loop where the vehicle "
+        split = judged.get("split", "validation")
+        why = (f"the starting model's free simulation of whole runs leaves the {split} data ({', '.join(left)} "
+               f"beyond {EXPLODE_FACTOR:g} times the measured spread: a model flown open loop where the vehicle "
                "was under an autopilot, or a large missing effect), so " if left else "")
         out.append(f"{why}the models were judged on predictions over windows of {judged['horizon_s']:g} s from the "
                    "logged states (docs/calibration.md, 'Closed-loop logs'); the RMSEs, Fit % and plots are of "
