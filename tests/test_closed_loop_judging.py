@@ -11,8 +11,7 @@ import numpy as np
 import pytest
 
 from contract_data import SHIPPED_DATASET
-from uvsim.diagnosis.core import CLOSED_LOOP_HORIZON_S, judged_prediction
-from uvsim.fitting.evaluate import open_loop, windowed
+from uvsim.fitting.evaluate import CLOSED_LOOP_HORIZON_S, judged_prediction, open_loop, windowed
 from uvsim.fitting.verdict import compare
 from uvsim.latency import runs_for
 from uvsim.logs import read_dataset

@@ -3,7 +3,7 @@
 A model whose RMSE in a channel exceeds :data:`EXPLODE_FACTOR` times the spread of the measured
 signal (the RMS of its deviation from the run mean) predicts nothing there.  The commands' sanity
 checks (:mod:`uvsim.commands.checks`) and the diagnosis' choice of how to judge closed-loop logs
-(:func:`uvsim.diagnosis.core.judged_prediction`) use this one test.  Light to import (the commands
+(:func:`uvsim.fitting.evaluate.judged_prediction`, calibration's and diagnosis') use this one test.  Light to import (the commands
 import it at start-up).
 """
 from __future__ import annotations

@@ -94,7 +94,7 @@ def training_verdict(first, refit_vehicle, runs, meas, initial_velocity: str = "
     reference: free simulations of whole runs, or windows where its simulation leaves the data);
     ``judged`` in the result says which."""
     judged = judged_prediction(first, runs, meas, judge_horizon, initial_velocity=initial_velocity,
-                               who="first fit's", split="training")
+                               who="first-fit", split="training")
     a = evaluate_runs(first, runs, meas, initial_velocity=initial_velocity, judged_as=judged)
     b = evaluate_runs(refit_vehicle, runs, meas, initial_velocity=initial_velocity, judged_as=judged)
     v = compare(meas, [a[r.name]["pred"] for r in runs], [b[r.name]["pred"] for r in runs],

@@ -53,11 +53,22 @@ def judge_option(s: str):
 
 
 def judged_label(report: Mapping) -> str:
-    """What the verdict compared, in a few words (the report's ``judged``)."""
-    j = report.get("judged") or {}
-    if j.get("prediction") == "windows":
-        return f"predictions over {j['horizon_s']:g}-s windows from the logged states"
-    return "free simulations"
+    """What the verdict compared, in a few words (:func:`uvsim.fitting.evaluate.judged_label` of the
+    report's ``judged``; imported here when used, so that the commands start light)."""
+    from uvsim.fitting.evaluate import judged_label as label
+
+    return label(report.get("judged"))
+
+
+def _windows_caveat(judged: Mapping, who: str, doc: str, shown: str) -> str:
+    """The caveat of a verdict judged over windows (``judged``: the report's record): why, when the
+    reference model (``who``) left the data (its ``left_data``), and that ``shown`` are of the windows."""
+    left = judged.get("left_data")
+    why = (f"the {who} model's free simulation of whole runs leaves the {judged.get('split', 'validation')} data "
+           f"({', '.join(left)} beyond {EXPLODE_FACTOR:g} times the measured spread: a model flown open loop where "
+           "the vehicle was under an autopilot, or a large missing effect), so " if left else "")
+    return (f"{why}the models were judged on predictions over windows of {judged['horizon_s']:g} s from the "
+            f"logged states ({doc}, 'Closed-loop logs'); {shown} of those windows")
 
 
 def add_progress_arguments(p, quiet: bool = False) -> None:
@@ -201,14 +212,7 @@ def calibration_caveats(rep: Mapping, ds) -> list[str]:
                    "it reached, and raising --max-iter may move it")
     judged = rep.get("judged") or {}
     if judged.get("prediction") == "windows":
-        left = judged.get("left_data")
-        split = judged.get("split", "validation")
-        why = (f"the starting model's free simulation of whole runs leaves the {split} data ({', '.join(left)} "
-               f"beyond {EXPLODE_FACTOR:g} times the measured spread: a model flown open loop where the vehicle "
-               "was under an autopilot, or a large missing effect), so " if left else "")
-        out.append(f"{why}the models were judged on predictions over windows of {judged['horizon_s']:g} s from the "
-                   "logged states (docs/calibration.md, 'Closed-loop logs'); the RMSEs, Fit % and plots are of "
-                   "those windows")
+        out.append(_windows_caveat(judged, "starting", "docs/calibration.md", "the RMSEs, Fit % and plots are"))
         return out
     for split, key in (("train", "training_rmse"), ("validation", "validation_rmse")):
         spread = _spread([r for r in ds.runs if r.split == split])
@@ -225,17 +229,11 @@ def diagnosis_caveats(rep: Mapping, val_runs) -> list[str]:
     given model's free simulation leaves the validation data (and whether the corrected one
     still does), as calibrate says it of the start model (:func:`calibration_caveats`); when it
     left them, the diagnosis judged predictions over windows instead (``rep["judged"]``,
-    :func:`uvsim.diagnosis.core.judged_prediction`), and that is said."""
+    :func:`uvsim.fitting.evaluate.judged_prediction`), and that is said."""
     judged = rep.get("judged") or {}
+    if judged.get("prediction") == "windows":  # (judged_prediction recorded which channels the given model left)
+        return [_windows_caveat(judged, "given", "docs/diagnose.md", "the RMSEs reported are")]
     spread = _spread(val_runs)
-    if judged.get("prediction") == "windows":
-        free = judged.get("free_rmse_given")
-        left = sorted(_exploded(free, spread)) if free else []
-        why = (f"the given model's free simulation of whole runs leaves the validation data ({', '.join(left)} "
-               f"beyond {EXPLODE_FACTOR:g} times the measured spread: a model flown open loop where the vehicle "
-               "was under an autopilot, or a large missing effect), so " if left else "")
-        return [f"{why}the models were judged on predictions over windows of {judged['horizon_s']:g} s from the "
-                "logged states (docs/diagnose.md, 'Closed-loop logs'); the RMSEs reported are of those windows"]
     given = _exploded(rep.get("rmse_before") or {}, spread)
     if not given:
         return []
@@ -270,7 +268,8 @@ def diagnosis_problems(rep: Mapping, val_runs) -> list[str]:
     model's own simulation leaving the data is not one (an open-loop model of a vehicle flown
     under an autopilot drifts; issue 48): :func:`diagnosis_caveats` says so."""
     probs = rmse_problems(rep["rmse_after"], val_runs, "validation RMSE after the fit", rep["rmse_before"])
-    final = ([{**rep["base_model"], "effect": "base_model"}] if rep.get("base_model") else []) + list(rep.get("effects") or [])
+    final = (([{**rep["base_model"], "effect": "base_model"}] if rep.get("base_model") else [])
+             + list(rep.get("effects") or []))
     if final and all("at_bound" in d for f in final for d in f["parameters"].values()):
         # the corrected model's own values (the final joint fit): a step's fit can end on a bound that a
         # later step's leaves (field logs, dead case seed 21: the thrust scale 0.5 in step 0, 0.61 beside

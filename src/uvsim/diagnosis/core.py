@@ -53,9 +53,7 @@ from uvsim.diagnosis.residual import concentration, verdict
 from uvsim.diagnosis.selector import VARIANT_SHARE, Selector
 from uvsim.estimation.lag import attitude_lag_setting
 from uvsim.errors import CalibrationError, UvsimError
-# (CLOSED_LOOP_HORIZON_S and judged_prediction live in uvsim.fitting.evaluate: calibration judges alike)
-from uvsim.fitting.evaluate import (CLOSED_LOOP_HORIZON_S, check_judge_horizon, judged_prediction,  # noqa: F401
-                                   pooled)
+from uvsim.fitting.evaluate import check_judge_horizon, judged_prediction, pooled
 from uvsim.fitting.verdict import compare as compare_models
 from uvsim.forces import make_term
 from uvsim.latency import runs_for
@@ -166,8 +164,8 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         longer than 1.5 sample intervals, as the calibration does
         (:func:`uvsim.estimation.lag.attitude_lag_setting`); 0: none.
     judge_horizon : what the verdict compares on the validation runs (:func:`judged_prediction`):
-        "auto" (default: whole runs, or windows of CLOSED_LOOP_HORIZON_S when the given model's free
-        simulation leaves the data), "whole", or a window length in seconds.
+        "auto" (default: whole runs, or windows of :data:`uvsim.fitting.evaluate.CLOSED_LOOP_HORIZON_S`
+        when the given model's free simulation leaves the data), "whole", or a window length in seconds.
     """
     t_start = time.perf_counter()
     progress = as_progress(progress)

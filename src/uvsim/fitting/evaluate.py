@@ -306,6 +306,15 @@ def judged_prediction(vehicle, val, meas, setting="auto", *, initial_velocity: s
 
 
 
+def judged_label(judged: dict | None, whole: str = "free simulations") -> str:
+    """What a verdict compared, in a few words, from its ``judged`` record (:func:`judged_prediction`):
+    the windows, or ``whole`` for free simulations of whole runs (the commands' tables, the plots)."""
+    j = judged or {}
+    if j.get("prediction") == "windows":
+        return f"predictions over {j['horizon_s']:g}-s windows from the logged states"
+    return whole
+
+
 def judged_predictions(vehicle, runs, judged_as: dict, *, overrides=None, meas=None, gyro_bias: dict | None = None,
            initial_velocity: str = "zero") -> list[dict]:
     """The predictions a verdict compares, as ``judged_as`` (a :func:`judged_prediction` record)

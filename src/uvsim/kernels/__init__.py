@@ -83,22 +83,22 @@ def describe() -> str:
     return f"numba {version('numba')} (models it cannot run: numpy)"
 
 
+def _compiled(name: str):
+    """The compiled function ``name`` of :mod:`uvsim.kernels.numba_rk4`, or None when the setting
+    or the install says numpy."""
+    if current() == "numpy" or not numba_installed():
+        return None
+    from uvsim.kernels import numba_rk4
+
+    return getattr(numba_rk4, name)
+
+
 def compiled_advance():
     """The compiled :func:`rk4_equations.advance`, or None when the setting or the install says numpy."""
-    choice = current()
-    if choice == "numpy" or not numba_installed():
-        return None
-    from uvsim.kernels.numba_rk4 import advance
-
-    return advance
+    return _compiled("advance")
 
 
 def compiled_accelerations():
     """The compiled :func:`rk4_equations.accelerations` (the equation error's accelerations along a
     measured motion), or None when the setting or the install says numpy."""
-    choice = current()
-    if choice == "numpy" or not numba_installed():
-        return None
-    from uvsim.kernels.numba_rk4 import accelerations
-
-    return accelerations
+    return _compiled("accelerations")

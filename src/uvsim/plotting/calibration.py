@@ -19,6 +19,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt  # the package __init__ selects the Agg backend
 import numpy as np  # noqa: E402
 
+from uvsim.fitting.evaluate import judged_label  # noqa: E402
 from uvsim.metrics import channel_series  # noqa: E402
 
 LINEAR = ("surge", "sway", "heave")
@@ -143,10 +144,8 @@ def plot_calibration(cal, dataset, out_dir, *, run_plots: str = "all") -> list[P
     meas = [ev["meas"][r.name] for r in runs]
     val = [i for i, r in enumerate(runs) if r.split == "validation"] or list(range(len(runs)))
     sel = {"all": list(range(len(runs))), "validation": val, "none": []}[run_plots]
-    j = ev.get("judged") or {}
-    what = f"{j['horizon_s']:g}-s windows" if j.get("prediction") == "windows" else "free simulation"
     paths = plot_runs([runs[i] for i in sel], [meas[i] for i in sel], ev["fitted"], ev["initial"], out_dir / "runs",
-                      what)
+                      judged_label(ev.get("judged"), "free simulation"))
     vr, vm = [runs[i] for i in val], [meas[i] for i in val]
     paths.append(plot_channel_errors(vr, vm, ev["fitted"], out_dir / "channel_errors.png"))
     if any(r.dof in LINEAR + ROTATIONAL for r in vr):

@@ -17,6 +17,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt  # the package __init__ selects the Agg backend
 import numpy as np
 
+from uvsim.fitting.evaluate import judged_label
 from uvsim.measurements import UNITS
 
 GROUP_ERR = {"position": "position error [m]", "depth": "depth error [m]", "attitude": "attitude error [rad]",
@@ -42,8 +43,7 @@ def _series(res, meas, group):
 
 def _judged(diag) -> str:
     """What the verdict compared (the report's ``judged``): the plots show the same predictions."""
-    j = diag.report.get("judged") or {}
-    return f"{j['horizon_s']:g}-s windows from the logged states" if j.get("prediction") == "windows" else "open loop"
+    return judged_label(diag.report.get("judged"), "open loop")
 
 
 def plot_validation_runs(diag, path, max_runs: int = 3) -> Path:
