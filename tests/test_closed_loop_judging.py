@@ -155,3 +155,14 @@ def test_the_supply_voltage_choice_is_judged_by_the_same_rule(dead):
     assert v["judged"]["prediction"] == "windows" and v["judged"]["split"] == "training"
     assert v["status"] in ("better", "trade-off", "worse")
     assert training_verdict(veh, veh, val, meas, judge_horizon="whole")["judged"]["horizon_s"] is None
+
+
+@pytest.mark.parametrize("command", ["calibrate", "diagnose"])
+@pytest.mark.parametrize("value", ["-1", "nan", "five"])
+def test_a_judge_horizon_option_it_cannot_use_is_an_error_naming_the_option(command, value, tmp_path, capsys):
+    from uvsim.cli import main
+
+    args = [command, "--data", str(SHIPPED_DATASET), f"--judge-horizon={value}", "--no-progress"]
+    rc = main(args + (["--out", str(tmp_path / "fit.yaml")] if command == "calibrate" else []))
+    err = capsys.readouterr().err
+    assert rc != 0 and "--judge-horizon" in err and value in err, err

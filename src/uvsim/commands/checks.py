@@ -41,15 +41,18 @@ def add_judge_horizon_argument(p, who: str) -> None:
 
 
 def judge_option(s: str):
-    """``--judge-horizon``: "auto", "whole" or a number of seconds."""
+    """``--judge-horizon``: "auto", "whole" or a number of seconds >= 0 (an error naming the option
+    otherwise)."""
     from uvsim.errors import CalibrationError
+    from uvsim.fitting.evaluate import check_judge_horizon
 
     if s in ("auto", "whole"):
         return s
     try:
-        return float(s)
+        value = float(s)
     except ValueError:
         raise CalibrationError(f"--judge-horizon {s!r}: expected auto, whole or a number of seconds") from None
+    return check_judge_horizon(value, "--judge-horizon")
 
 
 def judged_label(report: Mapping) -> str:
