@@ -36,6 +36,7 @@ from uvsim.estimation.savgol import is_uniform, savgol_on_stamps
 from uvsim.blas import single_thread
 from uvsim.errors import CalibrationError, UvsimError
 from uvsim.estimation.derivatives import body_acceleration, body_velocity
+from uvsim.fitting.dead_reckoning import dead_reckoned_xy
 from uvsim.kernels import compiled_accelerations
 from uvsim.kernels.plan import compiled_plan
 from uvsim.kinematics import euler_to_quat, unwrap_angles
@@ -162,6 +163,9 @@ def motion_or_why(run, *, window_s: float = WINDOW_S) -> tuple[Motion | None, st
         col = pos[:, j]
         if np.isfinite(col).all():
             y[:, j] = smooth(col)
+    track = dead_reckoned_xy(run)
+    if track is not None:  # no x/y logged: the track from the attitude and the DVL (a tether reads it)
+        y[:, :2] = track
     e = unwrap_angles(run.euler)
     e = np.where(np.isfinite(e), e, 0.0)
     y[:, 3:7] = euler_to_quat(smooth(e))

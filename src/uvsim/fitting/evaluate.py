@@ -188,16 +188,21 @@ def windowed(vehicle, runs, horizon: float, *, overrides=None, meas=None, gyro_b
     model's error over the whole run, not over a few seconds (docs/diagnose.md, "Closed-loop
     logs").  Each result has ``starts`` (the window start rows) and ``horizon_s``."""
     from uvsim.estimation.derivatives import body_velocity
+    from uvsim.fitting.dead_reckoning import dead_reckoned_xy
     from uvsim.fitting.windows import layout
 
     veh = load_vehicle(vehicle)
     runs = list(runs)
     if meas is None:
         meas = [measurements_for(r, veh, noise=noise, weights=weights) for r in runs]
+    # a window of a run without x/y starts where the run's dead-reckoned track is (not at the run's
+    # start) when some term reads the horizontal position (a tether: uvsim.fitting.dead_reckoning)
+    reads_xy = any(a in getattr(t, "position_axes", (0, 1, 2)) for t in veh.terms for a in (0, 1))
     pieces, owner = [], []          # sliced runs; (run index, start row, end row)
-    N0 = []
+    N0, P0 = [], []
     for i, run in enumerate(runs):
         bounds = layout([run], horizon).bounds[0]
+        track = dead_reckoned_xy(run) if reads_xy else None
         vel = run.velocity
         try:
             derived = body_velocity(run)
@@ -209,6 +214,7 @@ def windowed(vehicle, runs, horizon: float, *, overrides=None, meas=None, gyro_b
             nu = np.array([_local_value(run.t, vel[:, k], run.t[s]) for k in range(6)])
             nu = np.where(np.isfinite(nu), nu, derived[s])
             N0.append(np.where(np.isfinite(nu), nu, 0.0))
+            P0.append([np.nan] * 3 if track is None else [track[s, 0], track[s, 1], np.nan])
     states: list = [None] * len(runs)
     accs: list = [None] * len(runs)
     need_acc = any(m.needs_acceleration for m in meas)
@@ -218,7 +224,7 @@ def windowed(vehicle, runs, horizon: float, *, overrides=None, meas=None, gyro_b
         sens = [meas[owner[k][0]].sensors for k in idx]
         with single_thread():
             Y, acc, _ = whole_runs(veh, group, sens, space, np.zeros(0), nu0=np.array([N0[k] for k in idx]),
-                                   accel=need_acc)
+                                   accel=need_acc, pos0=np.array([P0[k] for k in idx]))
         for j, k in enumerate(idx):
             i, s, e = owner[k]
             n = runs[i].t.size

@@ -6,7 +6,9 @@ log determines it, else from a simulation of the whole run with the current mode
 
 * position: the logged axes by a local quadratic least-squares fit over
   ``+-NODE_HALF_WINDOW_S`` around the node time (one-sided at the ends); a run that
-  logs only the depth of a pressure sensor gets ``z = depth - (R r_p)_z``;
+  logs only the depth of a pressure sensor gets ``z = depth - (R r_p)_z``; a run without
+  x/y but with the attitude and a DVL their dead-reckoned track
+  (:mod:`uvsim.fitting.dead_reckoning`, with the loose "model" prior);
 * attitude: logged Euler angles (unwrapped) the same way; missing angles from the
   reference simulation;
 * velocities: logged (DVL, gyro) values smoothed the same way; else the slope of the
@@ -28,6 +30,7 @@ from __future__ import annotations
 import numpy as np
 
 from uvsim.estimation.derivatives import euler_rates_to_body
+from uvsim.fitting.dead_reckoning import dead_reckoned_xy
 from uvsim.kinematics import euler_to_quat, quat_to_euler, quat_to_rotation, unwrap_angles
 
 #: Half-width (s) of the local quadratic fits at node times.  0.3 s at 50 Hz is 31 samples
@@ -122,6 +125,12 @@ class NodeModel:
                 ref[ok, j] = v[ok]
                 kind[ok, j] = "measured"
                 vned[:, j] = s
+        if kind[0, 0] == "model" and kind[0, 1] == "model":
+            # no x/y logged: the track dead-reckoned from the attitude and the DVL, where the whole
+            # run's simulation of a closed-loop log has lost the heading (uvsim.fitting.dead_reckoning)
+            track = dead_reckoned_xy(run)
+            if track is not None:
+                ref[:, :2] = track[idx]
         if run.has_depth and kind[0, 2] != "measured":
             d, _ = local_fit(t, run.depth, t0, h)
             r_p = self.meas.sensors.get("pressure")

@@ -131,12 +131,14 @@ def padded_runs(runs):
     return T, U, V
 
 
-def whole_runs(vehicle, runs, sensors, space, z, *, initial_velocity: str = "zero", nu0=None, accel: bool = False):
+def whole_runs(vehicle, runs, sensors, space, z, *, initial_velocity: str = "zero", nu0=None, accel: bool = False,
+               pos0=None):
     """Whole-run simulations of ``runs`` (one input kind) with the parameters ``z`` of
     ``space``, from the runs' estimated initial states (``sensors``: per run, what its
     measurement model reads); all runs in one batch.  Returns (states (R, n_max, n_y),
     accelerations (R, n_max, 6) or None, the model).  The inputs act as late as the vehicle's
-    sensors read (``sensor_latency``, :mod:`uvsim.latency`)."""
+    sensors read (``sensor_latency``, :mod:`uvsim.latency`).  ``pos0`` (R, 3), where finite,
+    replaces the estimated initial positions (a window's dead-reckoned start, :func:`uvsim.fitting.evaluate.windowed`)."""
     runs = runs_for(vehicle, runs)
     R = len(runs)
     T, U, V = padded_runs(runs)
@@ -145,10 +147,14 @@ def whole_runs(vehicle, runs, sensors, space, z, *, initial_velocity: str = "zer
         p, q, v, _ = initial_state_from_run(run, initial_velocity=initial_velocity, window_s=INITIAL_WINDOW_S,
                                             sensors=sens)
         P0.append(p), Q0.append(q), N0.append(v)
+    P0 = np.array(P0)
+    if pos0 is not None:
+        pos0 = np.asarray(pos0, float)
+        P0 = np.where(np.isfinite(pos0), pos0, P0)
     model = Model(vehicle, space.overrides(np.atleast_2d(np.asarray(z, float)), R), n=R,
                   input_kind=runs[0].input_kind)
     model.check_inputs(U.shape[2], where=f"run {runs[0].name}")
-    y0 = model.initial_state(np.array(P0), np.array(Q0), np.array(N0) if nu0 is None else nu0, U[:, 0])
+    y0 = model.initial_state(P0, np.array(Q0), np.array(N0) if nu0 is None else nu0, U[:, 0])
     acc = np.empty((R, T.shape[1], 6)) if accel else None
     Y = _rk4_loop(model, T, U, y0, 1, "nan", accel=acc, V=V)
     return Y, acc, model
