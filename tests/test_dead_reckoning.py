@@ -76,3 +76,24 @@ def test_a_window_starts_where_the_track_is_when_a_term_reads_the_position(tethe
         assert len(r["starts"]) >= 8
         for s in r["starts"]:   # before: every window at x = y = 0
             assert np.allclose(r["states"][s, :2], xy[s], atol=1e-9)
+
+
+def test_with_a_track_the_horizontal_tethers_are_screened_and_not_reported_unobservable(tether):
+    """Before, a log without x/y left the horizontal pulls out ("not observable": the model's own
+    x/y); the field tethers pull mostly horizontally (a spool at the surface, 3-8 m away)."""
+    from uvsim.diagnosis.candidates import catalogue, observability
+    from uvsim.diagnosis.core import _split
+    from uvsim.diagnosis.selector import Selector
+
+    veh, ds, _, _ = tether
+    train, val, _ = _split(ds)
+    sel = Selector(veh, train, val, retune=[], noise=None, weights=None, horizon=3.0, max_iter=12, workers=1,
+                   say=lambda m: None)
+    has_pos, p_ref, z_max, has_depth = sel.signals()
+    assert sel.has_track and has_pos and has_depth
+    got = {c.variant for c in catalogue(input_kind=train[0].input_kind, n_thrusters=veh.n_thrusters, dt=0.2,
+                                        p_ref=p_ref, has_position=has_pos, z_max=z_max, has_depth=has_depth,
+                                        only=["tether"])}
+    assert {"horizontal", "horizontal_slack", "horizontal_full", "3d_attach"} <= got
+    assert not [o for o in observability(has_position=has_pos, has_depth=has_depth, has_velocity=True, z_max=z_max,
+                                         n_thrusters=veh.n_thrusters) if o["effect"] == "tether"]

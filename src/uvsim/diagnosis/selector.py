@@ -24,6 +24,7 @@ from uvsim.diagnosis.starts import SLACK_GN_ITERATIONS, candidate_starts, slack_
 from uvsim.errors import CalibrationError, UvsimError, VehicleError
 from uvsim.fitting import fit
 from uvsim.fitting.equation_error import EquationError, motion_or_why
+from uvsim.fitting.dead_reckoning import dead_reckoned_xy
 from uvsim.fitting.evaluate import open_loop, windowed
 from uvsim.fitting.parameters import GAIN_RANGE, FreeParameter, ParameterSpace, default_bounds
 from uvsim.fitting.verdict import score
@@ -84,6 +85,8 @@ class Selector:
         # the equation error of every training run it can use; the others are named, with why
         motions = [motion_or_why(r) for r in train]
         self.motions = [m for m, _ in motions]
+        #: every training run without x/y has a horizontal track from its attitude and DVL
+        self.has_track = bool(train) and all(dead_reckoned_xy(r) is not None for r in train)
         self.motion_why = {r.name: why for r, (m, why) in zip(train, motions) if m is None}
         self._say_unscreened()
         self.retune = list(retune or [])
@@ -323,6 +326,19 @@ class Selector:
         bounds = {**self.retune_bounds, **{n: a.bounds[n] for a in accepted for n in a.free}}
         return {"vehicle": self.vehicle_for(accepted), "values": dict(values), "free": free, "bounds": bounds}
 
+    def signals(self) -> tuple[bool, np.ndarray, float | None, bool]:
+        """What the training runs log for the catalogue: (x/y, logged or dead-reckoned from the
+        attitude and a DVL, :mod:`uvsim.fitting.dead_reckoning`; the reference position; the
+        deepest z or depth, None without; depth or z)."""
+        has_pos = any(r.has_position for r in self.train) or self.has_track
+        p_ref = np.nanmean(np.array([np.where(np.isfinite(r.position[0]), r.position[0], 0.0) for r in self.train]),
+                           axis=0)
+        depths = [r.position[:, 2] for r in self.train if r.has_position and np.isfinite(r.position[:, 2]).any()]
+        depths += [r.depth for r in self.train if r.has_depth]
+        z_max = float(max(np.nanmax(z) for z in depths)) if depths else None
+        has_depth = any(r.has_depth or (r.has_position and np.isfinite(r.position[:, 2]).any()) for r in self.train)
+        return has_pos, p_ref, z_max, has_depth
+
     def step(self, accepted, values_cur, val_cur, *, exclude, only, top, k_step, variants=None,
              floor: float | None = None) -> dict:
         """One forward step on the model of ``accepted`` (module docstring).  ``floor``: only effects
@@ -333,13 +349,7 @@ class Selector:
         vehicle_cur = cur["vehicle"]
         run0 = self.train[0]
         dt = float(np.median(np.concatenate([np.diff(r.t) for r in self.train])))
-        has_pos = any(r.has_position for r in self.train)
-        p_ref = np.nanmean(np.array([np.where(np.isfinite(r.position[0]), r.position[0], 0.0) for r in self.train]),
-                           axis=0)
-        depths = [r.position[:, 2] for r in self.train if r.has_position and np.isfinite(r.position[:, 2]).any()]
-        depths += [r.depth for r in self.train if r.has_depth]
-        z_max = float(max(np.nanmax(z) for z in depths)) if depths else None
-        has_depth = any(r.has_depth or (r.has_position and np.isfinite(r.position[:, 2]).any()) for r in self.train)
+        has_pos, p_ref, z_max, has_depth = self.signals()
         cands = catalogue(input_kind=run0.input_kind, n_thrusters=vehicle_cur.n_thrusters, dt=dt, p_ref=p_ref,
                           has_position=has_pos, z_max=z_max, only=only, exclude=exclude, has_depth=has_depth,
                           base=vehicle_cur.parameters())
