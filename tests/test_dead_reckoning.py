@@ -64,6 +64,9 @@ def test_the_screening_and_the_fit_nodes_read_the_track(tether):
     idx = np.array([0, run.t.size // 2, run.t.size - 1])
     ref, sigma = NodeModel(run, m).references(idx, np.zeros((run.t.size, 13)))
     assert np.allclose(ref[:, :2], xy[idx])                          # was the reference simulation's
+    # a model that reads no x/y keeps the reference simulation's (they only shift its windows)
+    ref0, _ = NodeModel(run, m).references(idx, np.zeros((run.t.size, 13)), xy_track=False)
+    assert np.all(ref0[:, :2] == 0.0)
 
 
 def test_a_window_starts_where_the_track_is_when_a_term_reads_the_position(tether):

@@ -89,11 +89,13 @@ class NodeModel:
         self.run, self.meas = run, meas
         self.free = np.ones(12, bool)
 
-    def references(self, idx: np.ndarray, ref_states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def references(self, idx: np.ndarray, ref_states: np.ndarray, *, xy_track: bool = True
+                   ) -> tuple[np.ndarray, np.ndarray]:
         """Reference states (W, 13) at sample rows ``idx`` (W,) and the prior standard
         deviation (W, 12) of each tangent component.  ``ref_states`` (n, 13+) is a
         simulation of the whole run with the current model (used where the log gives
-        nothing)."""
+        nothing).  ``xy_track``: x/y not logged are the dead-reckoned track's (when some term
+        reads them; else they only shift a window, and the reference simulation's are kept)."""
         run = self.run
         t = run.t
         t0 = t[idx]
@@ -125,7 +127,7 @@ class NodeModel:
                 ref[ok, j] = v[ok]
                 kind[ok, j] = "measured"
                 vned[:, j] = s
-        if kind[0, 0] == "model" and kind[0, 1] == "model":
+        if xy_track and kind[0, 0] == "model" and kind[0, 1] == "model":
             # no x/y logged: the track dead-reckoned from the attitude and the DVL, where the whole
             # run's simulation of a closed-loop log has lost the heading (uvsim.fitting.dead_reckoning)
             track = dead_reckoned_xy(run)

@@ -216,7 +216,8 @@ class WindowedProblem:
         self.prior_sigma = np.empty((W, 12))
         for r, nm in enumerate(self.nodes):
             starts = np.array([s for s, _ in self.lay.bounds[r]])
-            ref, sig = nm.references(starts, Yref[r, : self.runs[r].t.size])
+            ref, sig = nm.references(starts, Yref[r, : self.runs[r].t.size],
+                                     xy_track=not {0, 1} <= set(self.shift_axes))
             w0 = self.lay.first[r]
             self.x_ref[w0:w0 + starts.size] = ref
             self.prior_sigma[w0:w0 + starts.size] = sig
