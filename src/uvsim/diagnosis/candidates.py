@@ -54,7 +54,8 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from uvsim.errors import CalibrationError
-from uvsim.fitting.parameters import GAIN_RANGE, REVERSED_GAIN_RANGE
+# the thruster units' variants and answers (a module of their own, uvsim.diagnosis.units)
+from uvsim.diagnosis.units import DEAD_GAIN, _gain, plain_answer, reported_variant  # noqa: F401
 
 EFFECTS = ("current", "tether", "ballast", "thruster_lag", "thrust_asymmetry", "thruster_gain",
            "coupled_damping", "bottom_effect", "base_model")
@@ -304,62 +305,6 @@ def _asymmetry(kind, k):
         cands.append(Candidate("thrust_asymmetry", "per_dof", None, names, {n: (0.1, 1.5) for n in names},
                                {n: 1.0 for n in names}, "a reverse ratio per generalized-force component"))
     return cands
-
-
-def _gain(k):
-    out = []
-    for i in range(k):
-        n = f"thruster_gain_{i + 1}"
-        out.append(Candidate("thruster_gain", f"unit_{i + 1}", None, [n], {n: GAIN_RANGE}, {n: 1.0},
-                             f"thruster {i + 1} delivers a fraction of its curve (fouled, damaged; 0: dead)",
-                             {"unit": i + 1}))
-        out.append(Candidate("thruster_gain", f"reversed_{i + 1}", None, [n], {n: REVERSED_GAIN_RANGE}, {n: -1.0},
-                             f"thruster {i + 1} pushes the wrong way (mounted or wired reversed)",
-                             {"unit": i + 1, "reversed": True}))
-    names = [f"thruster_gain_{i + 1}" for i in range(k)]
-    out.append(Candidate("thruster_gain", "all", None, names, {n: GAIN_RANGE for n in names}, {n: 1.0 for n in names},
-                         "every thruster's gain"))
-    return out
-
-
-#: A fitted gain below this is "no thrust": the dead-unit answer (2 % of a T200's 51.5 N at full
-#: command, Blue Robotics' 16 V data, is about 1 N: no more than a tether's or a current's pull).
-DEAD_GAIN = 0.02
-
-
-def reported_variant(c: Candidate, values: Mapping[str, float]) -> str:
-    """The variant a report names: ``c.variant``, except a reversed unit whose fitted gain is within
-    :data:`DEAD_GAIN` of 0, which is the unit's own variant at 0 (``unit_i``: the same model, a dead
-    unit; field-log benchmark, dead case seed 0, fitted from the reversed side at -0.00)."""
-    if c.effect == "thruster_gain" and c.tags.get("reversed") and "unit" in c.tags:
-        i = c.tags["unit"]
-        if abs(float(values.get(f"thruster_gain_{i}", -1.0))) < DEAD_GAIN:
-            return f"unit_{i}"
-    return c.variant
-
-
-def plain_answer(c: Candidate, values: Mapping[str, float]) -> str | None:
-    """The answer in words when it is at a physical limit or names a fault: a dead or a
-    reversed thruster (issue 48: "thruster 1 gives no thrust"); None otherwise."""
-    if c.effect != "thruster_gain":
-        return None
-    if "unit" not in c.tags:  # every gain: name the dead units among them
-        gains = {int(n.rsplit("_", 1)[1]): float(values.get(n, 1.0)) for n in c.free}
-        dead = [i for i, g in gains.items() if g < DEAD_GAIN]
-        if not dead:
-            return None
-        rest = [g for i, g in gains.items() if i not in dead]
-        return (f"thruster{'s' if len(dead) > 1 else ''} {', '.join(map(str, dead))} give{'' if len(dead) > 1 else 's'} "
-                "no thrust (a dead unit)" + (f"; the other gains {min(rest):.2f}-{max(rest):.2f}" if rest else ""))
-    i = c.tags["unit"]
-    g = float(values.get(f"thruster_gain_{i}", 1.0))
-    if abs(g) < DEAD_GAIN:  # gain 0 is in both ranges: a reversed unit fitted at 0 is a dead one
-        return f"thruster {i} gives no thrust (gain {g:.3f}: a dead unit)"
-    if c.tags.get("reversed"):
-        return f"thruster {i} pushes the wrong way (mounted or wired reversed), at {abs(g):.2f} of its curve"
-    if g < DEAD_GAIN:
-        return f"thruster {i} gives no thrust (gain {g:.3f}: a dead unit)"
-    return None
 
 
 def _bottom(z_max):
