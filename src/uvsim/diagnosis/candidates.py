@@ -32,7 +32,9 @@ thrust_asymmetry      common (one reverse ratio); per_thruster (one per         
 thruster_gain         unit_i (thruster i's gain, 0-1.5: 0 is a dead unit,      thrusters
                       named as such); reversed_i (thruster i pushes the
                       wrong way, mounted or wired reversed: gain -1.5-0);
-                      all (every thruster's gain); with generalized-force
+                      all (every thruster's gain); fouled_i (thruster i's
+                      gain and reverse ratio, named as unit_i; module
+                      uvsim.diagnosis.units); with generalized-force
                       inputs through the pseudo-inverse allocation
 coupled_damping       drag_centre_z / _xz / _xyz (the translational damping     -
                       acts at a centre of pressure off the origin, seed 003
