@@ -26,7 +26,12 @@ effects):
 """
 from __future__ import annotations
 
+import numpy as np
+
+from uvsim.diagnosis.candidates import BASE_MODEL, _base_model
 from uvsim.diagnosis.decision import MIN_RELATIVE, clearly_better, judge
+from uvsim.diagnosis.units import _gain
+from uvsim.errors import UvsimError
 
 EFFECT = "thruster_gain"
 
@@ -90,13 +95,7 @@ def unit_forms(sel, best, st, val_cur):
         return None
     gain = next((r for r in rows if not r["candidate"].tags.get("fouled")), None)
     fouled = next((r for r in rows if r["candidate"].tags.get("fouled")), None)
-    answer = gain
-    if fouled is not None and (gain is None or fouled["val"]["cost"] < (1.0 - MIN_RELATIVE) * gain["val"]["cost"]):
-        answer = fouled
-    note = ""
-    if gain is not None and answer is fouled:
-        note = (f"; validation cost {100 * (1 - fouled['val']['cost'] / gain['val']['cost']):.0f} % below "
-                f"{gain['candidate'].variant}'s, which it nests")
+    answer, note = _pick(gain, fouled)
     if best is not None and "unit" in best["candidate"].tags:  # the winner is a form of the unit
         if answer is best:
             return None
@@ -117,3 +116,104 @@ def unit_forms(sel, best, st, val_cur):
     answer["accepted"] = True
     answer["why"] = answer["unit_form_why"] + note + f"; in place of {every['candidate'].label} ({how})"
     return answer
+
+
+def _pick(gain, fouled):
+    """The unit's answer among its accepted forms (rule 2 of the module docstring) and the note on why."""
+    if fouled is not None and (gain is None or fouled["val"]["cost"] < (1.0 - MIN_RELATIVE) * gain["val"]["cost"]):
+        note = "" if gain is None else (f"; validation cost {100 * (1 - fouled['val']['cost'] / gain['val']['cost']):.0f}"
+                                        f" % below {gain['candidate'].variant}'s, which it nests")
+        return fouled, note
+    return gain, ""
+
+
+def _with_scale(sel, bases):
+    """The final model's base-model variants with the thrust curve's scale free: unchanged when one of
+    them frees it, the re-tune's ``_thrust`` sibling (``damping`` -> ``damping_thrust``), the scale
+    alone without a base-model variant; None when the base model is something else (a supply voltage)."""
+    v = sel.base_vehicle
+    cands = {c.variant: c for c in _base_model(v.parameters(), v.n_thrusters, sel.train[0].input_kind)}
+    if any("thrust_scale_scale" in c.free for c in bases):
+        return list(bases)
+    if not bases:
+        return [cands["thrust_scale"]] if "thrust_scale" in cands else None
+    if len(bases) == 1 and bases[0].variant + "_thrust" in cands:
+        return [cands[bases[0].variant + "_thrust"]]
+    return None
+
+
+def unit_in_every_gain(sel, accepted: list, values: dict, val_cur: dict):
+    """When the final model names every unit's gain (``thruster_gain:all``), the nested model "the base
+    model with the thrust curve's scale free, plus the unit farthest from the median of the gains" is
+    fitted too (both of the unit's forms, after the model without them), and replaces it when that
+    unit is accepted (:func:`judge`, against the model without it) and the result is as good: within
+    :data:`MIN_RELATIVE` of the final model's validation cost for ``unit_K`` (nested in every gain:
+    :func:`uvsim.diagnosis.decision.simplest_sufficient`'s rule), or not clearly worse for ``fouled_K``
+    (not nested: :func:`clearly_better`).  Returns None when there is nothing to try, else a dict with
+    ``rows`` (the fits, for the report) and, when it replaces the model, ``accepted``, ``values``,
+    ``val``, ``fit``.
+
+    Why: a base-model variant accepted after every gain (a hydrodynamic re-tune) explains part of what
+    the seven other gains stood in for, and the unit beside a common scale was only tried against a
+    thrust scale accepted in step 0 (:func:`uvsim.diagnosis.decision.unit_beside_base`).  Field logs,
+    weak seed 13 (thruster 7 at 0.472): every gain (thruster 7 at 0.35, the others 0.67-0.77) then the
+    hydrodynamics re-tuned, validation cost 25.0; the re-tune with the scale free plus ``unit_7``: 24.1.
+    This is backward elimination's question (:func:`uvsim.diagnosis.decision.still_needed`) asked of
+    the every-gain variant once the base model is in."""
+    c_all = next((c for c in accepted if c.effect == EFFECT and "unit" not in c.tags and len(c.free) >= 3), None)
+    if c_all is None:
+        return None
+    g = {n: float(values[n]) for n in c_all.free}
+    med = float(np.median(list(g.values())))
+    name = max(g, key=lambda n: abs(g[n] - med))
+    k = int(name.rsplit("_", 1)[1])
+    common = float(np.median([v for n, v in g.items() if n != name]))
+    bases = _with_scale(sel, [c for c in accepted if c.effect == BASE_MODEL])
+    if bases is None or common <= 0.0:
+        return None
+    others = [c for c in accepted if c.effect not in (BASE_MODEL, EFFECT)]
+    reduced = bases + others
+    start = {n: v for n, v in values.items() if n not in c_all.free}
+    lo, hi = next(c for c in bases if "thrust_scale_scale" in c.free).bounds["thrust_scale_scale"]
+    start["thrust_scale_scale"] = float(np.clip(start.get("thrust_scale_scale", 1.0) * common, lo, hi))
+    cur = sel.current(reduced, start)
+    sp = sel.space(cur["vehicle"], cur["free"], cur["bounds"], start, cur["values"])
+    label = " + ".join(c.label for c in reduced)
+    try:
+        res = sel.fit_train(cur["vehicle"], sp, f"{label} (every gain's unit {k} beside the thrust scale)")
+    except (UvsimError, np.linalg.LinAlgError) as exc:  # the model stays as it is, and the report says why
+        return {"rows": [], "why": f"{label} could not be fitted ({exc})"}
+    vals = {**cur["values"], **res.values}
+    vc = sel.validation(cur["vehicle"], vals)
+    cur = sel.current(reduced, vals)
+    forms = {c.variant: c for c in _gain(sel.base_vehicle.n_thrusters)}
+    seed = {f"thruster_gain_{k}": float(np.clip(g[name] / common, 0.0, 1.5)),
+            "thrust_scale_scale": start["thrust_scale_scale"]}
+    rows = []
+    for variant in (f"unit_{k}", f"fouled_{k}"):
+        row = sel.fit_candidate(forms[variant], {"values": seed}, cur, vc)
+        if "compare" not in row:
+            continue
+        row["accepted"], row["why"] = judge(row, vc)
+        row["unit_form_ok"] = row["accepted"]
+        rows.append(row)
+    gain = next((r for r in rows if r["unit_form_ok"] and not r["candidate"].tags.get("fouled")), None)
+    fouled = next((r for r in rows if r["unit_form_ok"] and r["candidate"].tags.get("fouled")), None)
+    answer, note = _pick(gain, fouled)
+    out = {"rows": rows, "model": label, "nested_in": c_all.label}
+    for r in rows:
+        r["accepted"] = False
+    if answer is None:
+        return out
+    worse = answer["val"]["cost"] / val_cur["cost"] - 1.0
+    ok = (worse <= MIN_RELATIVE if answer is gain else not clearly_better(answer["val"]["windows"], val_cur["windows"]))
+    if not ok:
+        answer["why"] += (f"; beside {label}: validation cost {100 * worse:+.1f} % against the model with "
+                          f"{c_all.label}" + (" (needs <= 5 %)" if answer is gain else ", clearly worse"))
+        return out
+    answer["accepted"] = True
+    answer["why"] += note + (f"; beside {label}, as good as the model with {c_all.label} (validation cost "
+                             f"{100 * worse:+.1f} %), which {'nests it' if answer is gain else 'has more parameters'}")
+    out.update(accepted=reduced + [answer["candidate"]], values=dict(answer["all_values"]), val=answer["val"],
+               fit=answer["result"], chosen=answer)
+    return out
