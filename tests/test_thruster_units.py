@@ -16,13 +16,15 @@ def test_a_fouled_unit_is_a_catalogue_variant_named_as_the_unit_with_its_reverse
     f = cands["fouled_3"]
     assert f.free == ["thruster_gain_3", "thruster_reverse_3"] and f.complexity == 2
     assert f.null == {"thruster_gain_3": 1.0, "thruster_reverse_3": 1.0}
-    assert f.bounds["thruster_gain_3"] == (0.0, 1.5) and f.bounds["thruster_reverse_3"] == (0.1, 1.5)
+    assert f.bounds["thruster_gain_3"] == (0.0, 1.5) and f.bounds["thruster_reverse_3"] == (0.1, 1.0)
     vals = {"thruster_gain_3": 0.6, "thruster_reverse_3": 0.55}
     assert reported_variant(f, vals) == "unit_3"      # the report names the unit; fitted_as keeps the form
     assert plain_answer(f, vals).startswith("thruster 3 delivers 0.60 of its curve forward and 0.33 in reverse")
     assert "dead" in plain_answer(f, {"thruster_gain_3": 0.0, "thruster_reverse_3": 0.7})
     assert search_bound_hits(f, {"thruster_gain_3": 0.0}, ["thruster_gain_3"]) == []   # dead: physical floor
     assert search_bound_hits(f, {"thruster_reverse_3": 0.1}, ["thruster_reverse_3"]) == ["thruster_reverse_3"]
+    # stronger in reverse than the curve is no fouling: a fit at 1 is on the edge, not named (field seed 15)
+    assert search_bound_hits(f, {"thruster_reverse_3": 1.0}, ["thruster_reverse_3"]) == ["thruster_reverse_3"]
     # the order the existing variants keep (tests/test_thruster_faults.py indexes it)
     assert [c.variant for c in _gain(1)] == ["unit_1", "reversed_1", "all", "fouled_1"]
     variants = {c.variant for c in catalogue(input_kind="pwm", n_thrusters=8, dt=0.05, p_ref=np.zeros(3),
