@@ -56,8 +56,9 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from uvsim.errors import CalibrationError
-# the thruster units' variants and answers (a module of their own, uvsim.diagnosis.units)
-from uvsim.diagnosis.units import DEAD_GAIN, _gain, plain_answer, reported_variant  # noqa: F401
+from uvsim.fitting.parameters import GAIN_RANGE, REVERSED_GAIN_RANGE
+# the thruster units' answers (a module of their own, uvsim.diagnosis.units)
+from uvsim.diagnosis.units import DEAD_GAIN, FOULED_REVERSE_RANGE, plain_answer, reported_variant  # noqa: F401
 
 EFFECTS = ("current", "tether", "ballast", "thruster_lag", "thrust_asymmetry", "thruster_gain",
            "coupled_damping", "bottom_effect", "base_model")
@@ -307,6 +308,31 @@ def _asymmetry(kind, k):
         cands.append(Candidate("thrust_asymmetry", "per_dof", None, names, {n: (0.1, 1.5) for n in names},
                                {n: 1.0 for n in names}, "a reverse ratio per generalized-force component"))
     return cands
+
+
+def _gain(k):
+    """The ``thruster_gain`` variants of ``k`` thrusters (the table above; :mod:`uvsim.diagnosis.units`
+    describes them): per unit ``unit_i`` and ``reversed_i``, then ``all``, then per unit ``fouled_i``."""
+    out = []
+    for i in range(k):
+        n = f"thruster_gain_{i + 1}"
+        out.append(Candidate("thruster_gain", f"unit_{i + 1}", None, [n], {n: GAIN_RANGE}, {n: 1.0},
+                             f"thruster {i + 1} delivers a fraction of its curve (fouled, damaged; 0: dead)",
+                             {"unit": i + 1}))
+        out.append(Candidate("thruster_gain", f"reversed_{i + 1}", None, [n], {n: REVERSED_GAIN_RANGE}, {n: -1.0},
+                             f"thruster {i + 1} pushes the wrong way (mounted or wired reversed)",
+                             {"unit": i + 1, "reversed": True}))
+    names = [f"thruster_gain_{i + 1}" for i in range(k)]
+    out.append(Candidate("thruster_gain", "all", None, names, {n: GAIN_RANGE for n in names}, {n: 1.0 for n in names},
+                         "every thruster's gain"))
+    for i in range(k):
+        n, r = f"thruster_gain_{i + 1}", f"thruster_reverse_{i + 1}"
+        out.append(Candidate("thruster_gain", f"fouled_{i + 1}", None, [n, r], {n: GAIN_RANGE, r: FOULED_REVERSE_RANGE},
+                             {n: 1.0, r: 1.0},
+                             f"thruster {i + 1} delivers a fraction of its curve, a smaller one in reverse (fouled: "
+                             "a line or weed round the propeller, a damaged blade)",
+                             {"unit": i + 1, "fouled": True}))
+    return out
 
 
 def _bottom(z_max):

@@ -51,7 +51,7 @@ from uvsim.diagnosis.decision import (LEVEL, MIN_RELATIVE, VAL_LEVEL, WALD_P, al
                                       still_needed, unit_beside_base)
 from uvsim.diagnosis.residual import concentration, verdict
 from uvsim.diagnosis.selector import VARIANT_SHARE, Selector
-from uvsim.diagnosis.unit_choice import unit_forms, unit_in_every_gain
+from uvsim.diagnosis.unit_choice import every_gain_step, unit_forms, unit_in_every_gain
 from uvsim.estimation.lag import attitude_lag_setting
 from uvsim.errors import CalibrationError, UvsimError
 from uvsim.fitting.evaluate import check_judge_horizon, judged_prediction, pooled
@@ -361,16 +361,10 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     # scale free, as good with fewer parameters? (uvsim.diagnosis.unit_choice.unit_in_every_gain)
     again = unit_in_every_gain(sel, accepted, values, val_cur)
     if again is not None:
-        chosen = again.get("chosen")
-        st_rep = {"step": k_next, "model": " + ".join(c.label for c in accepted), "before_cost_per_entry":
-                  val_cur["per_entry"], "screening": None, "screened": [], "chosen": None,
-                  "candidates": [_row_report(r, chosen) for r in again["rows"]], "unit_in_every_gain": {
-                      "model": again.get("model"), "nested_in": again.get("nested_in"), "why": again.get("why")}}
-        if chosen is not None:
+        steps.append(every_gain_step(again, accepted, val_cur, k_next, _row_report))
+        if again.get("chosen") is not None:
             accepted, values, val_cur = again["accepted"], again["values"], again["val"]
             accepted_values.append(again["fit"])
-            st_rep.update(chosen=chosen["candidate"].label, after_cost_per_entry=val_cur["per_entry"])
-        steps.append(st_rep)
     # result ------------------------------------------------------------------------------
     veh_after = sel.vehicle_for(accepted)
     if values:

@@ -28,9 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from uvsim.diagnosis.candidates import BASE_MODEL, _base_model
+from uvsim.diagnosis.candidates import BASE_MODEL, _base_model, _gain
 from uvsim.diagnosis.decision import MIN_RELATIVE, clearly_better, judge
-from uvsim.diagnosis.units import _gain
 from uvsim.errors import UvsimError
 
 EFFECT = "thruster_gain"
@@ -217,3 +216,16 @@ def unit_in_every_gain(sel, accepted: list, values: dict, val_cur: dict):
     out.update(accepted=reduced + [answer["candidate"]], values=dict(answer["all_values"]), val=answer["val"],
                fit=answer["result"], chosen=answer)
     return out
+
+
+def every_gain_step(again: dict, accepted: list, val_cur: dict, k: int, row_report) -> dict:
+    """The report's step of :func:`unit_in_every_gain` (``again``) on the final model (``accepted``,
+    ``val_cur``), numbered ``k``; ``row_report(row, chosen)`` writes each fitted row."""
+    chosen = again.get("chosen")
+    rep = {"step": k, "model": " + ".join(c.label for c in accepted), "before_cost_per_entry": val_cur["per_entry"],
+           "screening": None, "screened": [], "chosen": None, "candidates": [row_report(r, chosen) for r in again["rows"]],
+           "unit_in_every_gain": {"model": again.get("model"), "nested_in": again.get("nested_in"),
+                                  "why": again.get("why")}}
+    if chosen is not None:
+        rep.update(chosen=chosen["candidate"].label, after_cost_per_entry=chosen["val"]["per_entry"])
+    return rep

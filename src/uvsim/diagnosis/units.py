@@ -1,4 +1,5 @@
-"""The catalogue's thruster-unit variants (effect ``thruster_gain``) and the answers a report gives for them.
+"""The catalogue's thruster-unit variants (effect ``thruster_gain``, built by
+:func:`uvsim.diagnosis.candidates._gain`) and the answers a report gives for them.
 
 Per thruster ``i`` of a vehicle with thruster inputs (generalized-force inputs: through the
 pseudo-inverse allocation):
@@ -27,40 +28,13 @@ from __future__ import annotations
 
 from typing import Mapping
 
-from uvsim.fitting.parameters import GAIN_RANGE, REVERSE_RANGE, REVERSED_GAIN_RANGE
+from uvsim.fitting.parameters import REVERSE_RANGE
 
 #: Search range of a fouled unit's reverse ratio (module docstring): REVERSE_RANGE's floor, at most 1.
 FOULED_REVERSE_RANGE = (REVERSE_RANGE[0], 1.0)
 #: A fitted gain below this is "no thrust": the dead-unit answer (2 % of a T200's 51.5 N at full
 #: command, Blue Robotics' 16 V data, is about 1 N: no more than a tether's or a current's pull).
 DEAD_GAIN = 0.02
-
-
-def _gain(k):
-    """The ``thruster_gain`` variants of ``k`` thrusters (module docstring): per unit ``unit_i`` and
-    ``reversed_i``, then ``all``, then per unit ``fouled_i``."""
-    from uvsim.diagnosis.candidates import Candidate  # (candidates imports this module)
-
-    out = []
-    for i in range(k):
-        n = f"thruster_gain_{i + 1}"
-        out.append(Candidate("thruster_gain", f"unit_{i + 1}", None, [n], {n: GAIN_RANGE}, {n: 1.0},
-                             f"thruster {i + 1} delivers a fraction of its curve (fouled, damaged; 0: dead)",
-                             {"unit": i + 1}))
-        out.append(Candidate("thruster_gain", f"reversed_{i + 1}", None, [n], {n: REVERSED_GAIN_RANGE}, {n: -1.0},
-                             f"thruster {i + 1} pushes the wrong way (mounted or wired reversed)",
-                             {"unit": i + 1, "reversed": True}))
-    names = [f"thruster_gain_{i + 1}" for i in range(k)]
-    out.append(Candidate("thruster_gain", "all", None, names, {n: GAIN_RANGE for n in names}, {n: 1.0 for n in names},
-                         "every thruster's gain"))
-    for i in range(k):
-        n, r = f"thruster_gain_{i + 1}", f"thruster_reverse_{i + 1}"
-        out.append(Candidate("thruster_gain", f"fouled_{i + 1}", None, [n, r], {n: GAIN_RANGE, r: FOULED_REVERSE_RANGE},
-                             {n: 1.0, r: 1.0},
-                             f"thruster {i + 1} delivers a fraction of its curve, a smaller one in reverse (fouled: "
-                             "a line or weed round the propeller, a damaged blade)",
-                             {"unit": i + 1, "fouled": True}))
-    return out
 
 
 def reported_variant(c, values: Mapping[str, float]) -> str:
