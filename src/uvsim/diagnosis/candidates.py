@@ -32,7 +32,9 @@ thrust_asymmetry      common (one reverse ratio); per_thruster (one per         
 thruster_gain         unit_i (thruster i's gain, 0-1.5: 0 is a dead unit,      thrusters
                       named as such); reversed_i (thruster i pushes the
                       wrong way, mounted or wired reversed: gain -1.5-0);
-                      all (every thruster's gain); with generalized-force
+                      all (every thruster's gain); fouled_i (thruster i's
+                      gain and reverse ratio, named as unit_i; module
+                      uvsim.diagnosis.units); with generalized-force
                       inputs through the pseudo-inverse allocation
 coupled_damping       drag_centre_z / _xz / _xyz (the translational damping     -
                       acts at a centre of pressure off the origin, seed 003
@@ -55,6 +57,8 @@ import numpy as np
 
 from uvsim.errors import CalibrationError
 from uvsim.fitting.parameters import GAIN_RANGE, REVERSED_GAIN_RANGE
+# the thruster units' answers (a module of their own, uvsim.diagnosis.units)
+from uvsim.diagnosis.units import DEAD_GAIN, FOULED_REVERSE_RANGE, plain_answer, reported_variant  # noqa: F401
 
 EFFECTS = ("current", "tether", "ballast", "thruster_lag", "thrust_asymmetry", "thruster_gain",
            "coupled_damping", "bottom_effect", "base_model")
@@ -307,6 +311,8 @@ def _asymmetry(kind, k):
 
 
 def _gain(k):
+    """The ``thruster_gain`` variants of ``k`` thrusters (the table above; :mod:`uvsim.diagnosis.units`
+    describes them): per unit ``unit_i`` and ``reversed_i``, then ``all``, then per unit ``fouled_i``."""
     out = []
     for i in range(k):
         n = f"thruster_gain_{i + 1}"
@@ -319,47 +325,14 @@ def _gain(k):
     names = [f"thruster_gain_{i + 1}" for i in range(k)]
     out.append(Candidate("thruster_gain", "all", None, names, {n: GAIN_RANGE for n in names}, {n: 1.0 for n in names},
                          "every thruster's gain"))
+    for i in range(k):
+        n, r = f"thruster_gain_{i + 1}", f"thruster_reverse_{i + 1}"
+        out.append(Candidate("thruster_gain", f"fouled_{i + 1}", None, [n, r], {n: GAIN_RANGE, r: FOULED_REVERSE_RANGE},
+                             {n: 1.0, r: 1.0},
+                             f"thruster {i + 1} delivers a fraction of its curve, a smaller one in reverse (fouled: "
+                             "a line or weed round the propeller, a damaged blade)",
+                             {"unit": i + 1, "fouled": True}))
     return out
-
-
-#: A fitted gain below this is "no thrust": the dead-unit answer (2 % of a T200's 51.5 N at full
-#: command, Blue Robotics' 16 V data, is about 1 N: no more than a tether's or a current's pull).
-DEAD_GAIN = 0.02
-
-
-def reported_variant(c: Candidate, values: Mapping[str, float]) -> str:
-    """The variant a report names: ``c.variant``, except a reversed unit whose fitted gain is within
-    :data:`DEAD_GAIN` of 0, which is the unit's own variant at 0 (``unit_i``: the same model, a dead
-    unit; field-log benchmark, dead case seed 0, fitted from the reversed side at -0.00)."""
-    if c.effect == "thruster_gain" and c.tags.get("reversed") and "unit" in c.tags:
-        i = c.tags["unit"]
-        if abs(float(values.get(f"thruster_gain_{i}", -1.0))) < DEAD_GAIN:
-            return f"unit_{i}"
-    return c.variant
-
-
-def plain_answer(c: Candidate, values: Mapping[str, float]) -> str | None:
-    """The answer in words when it is at a physical limit or names a fault: a dead or a
-    reversed thruster (issue 48: "thruster 1 gives no thrust"); None otherwise."""
-    if c.effect != "thruster_gain":
-        return None
-    if "unit" not in c.tags:  # every gain: name the dead units among them
-        gains = {int(n.rsplit("_", 1)[1]): float(values.get(n, 1.0)) for n in c.free}
-        dead = [i for i, g in gains.items() if g < DEAD_GAIN]
-        if not dead:
-            return None
-        rest = [g for i, g in gains.items() if i not in dead]
-        return (f"thruster{'s' if len(dead) > 1 else ''} {', '.join(map(str, dead))} give{'' if len(dead) > 1 else 's'} "
-                "no thrust (a dead unit)" + (f"; the other gains {min(rest):.2f}-{max(rest):.2f}" if rest else ""))
-    i = c.tags["unit"]
-    g = float(values.get(f"thruster_gain_{i}", 1.0))
-    if abs(g) < DEAD_GAIN:  # gain 0 is in both ranges: a reversed unit fitted at 0 is a dead one
-        return f"thruster {i} gives no thrust (gain {g:.3f}: a dead unit)"
-    if c.tags.get("reversed"):
-        return f"thruster {i} pushes the wrong way (mounted or wired reversed), at {abs(g):.2f} of its curve"
-    if g < DEAD_GAIN:
-        return f"thruster {i} gives no thrust (gain {g:.3f}: a dead unit)"
-    return None
 
 
 def _bottom(z_max):

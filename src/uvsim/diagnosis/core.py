@@ -51,6 +51,7 @@ from uvsim.diagnosis.decision import (LEVEL, MIN_RELATIVE, VAL_LEVEL, WALD_P, al
                                       still_needed, unit_beside_base)
 from uvsim.diagnosis.residual import concentration, verdict
 from uvsim.diagnosis.selector import VARIANT_SHARE, Selector
+from uvsim.diagnosis.unit_choice import every_gain_step, unit_forms, unit_in_every_gain
 from uvsim.estimation.lag import attitude_lag_setting
 from uvsim.errors import CalibrationError, UvsimError
 from uvsim.fitting.evaluate import check_judge_horizon, judged_prediction, pooled
@@ -240,7 +241,8 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
 
     def choose(st):
         """The step's winner: the simplest accepted candidate, or a fallback for one the verdict
-        alone refused, then its variants' challenges (uvsim.diagnosis.decision); None."""
+        alone refused, then its variants' challenges (uvsim.diagnosis.decision) and a faulty
+        thruster unit's forms (uvsim.diagnosis.unit_choice); None."""
         winners = [row for row in st["fitted"] if row.get("accepted")]
         best = parsimonious(winners)
         if best is None:
@@ -250,7 +252,8 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
             best = simplest_sufficient(sel, best, st, val_cur) or best
             best = alternative_challenger(sel, best, st, val_cur) or best
             best = inertia_challenger(sel, best, st, val_cur) or best
-        return best
+        # a faulty unit's two forms (its gain; its gain and reverse ratio) against each other and every gain
+        return unit_forms(sel, best, st, val_cur) or best
 
     def record(k, st, best) -> dict:
         step_rep = {"step": k, "model": " + ".join(c.label for c in accepted) or "the given model",
@@ -354,6 +357,14 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         if not forward(k_next):
             break
         k_next += 1
+    # every unit's gain in the final model: its outlying unit beside the base model with the thrust
+    # scale free, as good with fewer parameters? (uvsim.diagnosis.unit_choice.unit_in_every_gain)
+    again = unit_in_every_gain(sel, accepted, values, val_cur)
+    if again is not None:
+        steps.append(every_gain_step(again, accepted, val_cur, k_next, _row_report))
+        if again.get("chosen") is not None:
+            accepted, values, val_cur = again["accepted"], again["values"], again["val"]
+            accepted_values.append(again["fit"])
     # result ------------------------------------------------------------------------------
     veh_after = sel.vehicle_for(accepted)
     if values:
@@ -389,8 +400,8 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
                 base_rep = {"variant": f"{base_rep['variant']}+{c.variant}", "notes": f"{base_rep['notes']}; {c.notes}",
                             "parameters": {**base_rep["parameters"], **params}}
         else:
-            effects_rep.append({"effect": c.effect, "variant": reported_variant(c, values), "notes": c.notes,
-                                "parameters": params,
+            effects_rep.append({"effect": c.effect, "variant": reported_variant(c, values), "fitted_as": c.variant,
+                                "notes": c.notes, "parameters": params,
                                 "answer": plain_answer(c, values)})
     at_noise = val_cur["per_entry"] <= AT_NOISE
     names = [c.effect for c in accepted if c.effect != BASE_MODEL]
