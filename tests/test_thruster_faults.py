@@ -11,7 +11,8 @@ import yaml
 import uvsim
 from contract_data import shipped_vehicle_text
 from uvsim.diagnosis import diagnose, save_fixed_vehicle
-from uvsim.diagnosis.candidates import _gain, catalogue, plain_answer, reported_variant, search_bound_hits
+from uvsim.diagnosis.candidates import _gain, catalogue, search_bound_hits
+from uvsim.diagnosis.units import plain_answer, reported_variant
 from uvsim.scenarios import generate, load_truth, sample_scenario
 
 SMALL = dict(n_runs=10, duration=[8, 10], rate_hz=20.0)

@@ -7,7 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from uvsim.diagnosis.candidates import _gain, catalogue, plain_answer, reported_variant, search_bound_hits
+from uvsim.diagnosis.candidates import _gain, catalogue, search_bound_hits
+from uvsim.diagnosis.units import plain_answer, reported_variant
 from uvsim.diagnosis.decision import clearly_better
 
 

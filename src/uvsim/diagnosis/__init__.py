@@ -14,7 +14,7 @@ from uvsim.lazy_imports import lazy_getattr
 #: Imported when first used (PEP 562): the command line reads the catalogue's names
 #: (``uvsim.diagnosis.candidates``) without importing the diagnosis itself.
 _LAZY = {"Diagnosis": "uvsim.diagnosis.core", "diagnose": "uvsim.diagnosis.core",
-         "save_fixed_vehicle": "uvsim.diagnosis.core"}
+         "save_fixed_vehicle": "uvsim.diagnosis.summary"}
 __all__ = list(_LAZY)
 
 __getattr__ = lazy_getattr(__name__, _LAZY)

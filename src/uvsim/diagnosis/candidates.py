@@ -56,9 +56,8 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from uvsim.errors import CalibrationError
+from uvsim.diagnosis.units import FOULED_REVERSE_RANGE
 from uvsim.fitting.parameters import GAIN_RANGE, REVERSED_GAIN_RANGE
-# the thruster units' answers (a module of their own, uvsim.diagnosis.units)
-from uvsim.diagnosis.units import DEAD_GAIN, FOULED_REVERSE_RANGE, plain_answer, reported_variant  # noqa: F401
 
 EFFECTS = ("current", "tether", "ballast", "thruster_lag", "thrust_asymmetry", "thruster_gain",
            "coupled_damping", "bottom_effect", "base_model")

@@ -43,20 +43,19 @@ import numpy as np
 from uvsim.fit_settings import DEFAULT_HORIZON  # noqa: F401 (its home: uvsim.fit_settings)
 from uvsim.blas import single_thread
 from uvsim.checkpoint import Checkpoint, fingerprint
-from uvsim.diagnosis.candidates import (BASE_MODEL, DEAD_GAIN, EFFECTS, Candidate, plain_answer, reported_variant,
-                                        search_bound_hits)
+from uvsim.diagnosis.candidates import BASE_MODEL, EFFECTS
 from uvsim.diagnosis.decision import (LEVEL, MIN_RELATIVE, VAL_LEVEL, WALD_P, alternative_challenger,
                                       base_effect_challenge, base_effect_kept, blocked_fallback, inertia_challenger,
                                       open_loop_verdict, parsimonious, richer_challenger, simplest_sufficient,
                                       still_needed, unit_beside_base)
 from uvsim.diagnosis.residual import concentration, verdict
 from uvsim.diagnosis.selector import VARIANT_SHARE, Selector
+from uvsim.diagnosis.summary import parameter_reports, row_report, summary_message
 from uvsim.diagnosis.unit_choice import every_gain_step, unit_forms, unit_in_every_gain
 from uvsim.estimation.lag import attitude_lag_setting
-from uvsim.errors import CalibrationError, UvsimError
+from uvsim.errors import CalibrationError
 from uvsim.fitting.evaluate import check_judge_horizon, judged_prediction, pooled
 from uvsim.fitting.verdict import compare as compare_models
-from uvsim.forces import make_term
 from uvsim.latency import runs_for
 from uvsim.logs import Dataset, read_dataset
 from uvsim.measurements import check_signal_settings
@@ -258,7 +257,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     def record(k, st, best) -> dict:
         step_rep = {"step": k, "model": " + ".join(c.label for c in accepted) or "the given model",
                     "before_cost_per_entry": val_cur["per_entry"], "screening": st["screening"],
-                    "screened": st["screened"], "candidates": [_row_report(row, best) for row in st["fitted"]],
+                    "screened": st["screened"], "candidates": [row_report(row, best) for row in st["fitted"]],
                     "chosen": None}
         steps.append(step_rep)
         return step_rep
@@ -296,12 +295,12 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
             best1 = choose(st1)
             why = base_effect_challenge(best, best1)
             challenge = {"base_model": best["candidate"].label, "screening_floor": floor,
-                         "fitted": [_row_report(row, best1) for row in st1["fitted"]],
+                         "fitted": [row_report(row, best1) for row in st1["fitted"]],
                          "best_effect": None if best1 is None else best1["candidate"].label,
                          "kept": why is None}
             nested = None if why is None else unit_beside_base(sel, best, best1, st1["all_screened"])
             if nested is not None:
-                challenge["nested"] = _row_report(nested, nested if nested["accepted"] else None)
+                challenge["nested"] = row_report(nested, nested if nested["accepted"] else None)
             if nested is not None and nested["accepted"]:
                 # every gain won, but all except one unit's are the base model's common curve: the
                 # nested model (the curve + that unit) is as good, so the base model stays and the
@@ -361,7 +360,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     # scale free, as good with fewer parameters? (uvsim.diagnosis.unit_choice.unit_in_every_gain)
     again = unit_in_every_gain(sel, accepted, values, val_cur)
     if again is not None:
-        steps.append(every_gain_step(again, accepted, val_cur, k_next, _row_report))
+        steps.append(every_gain_step(again, accepted, val_cur, k_next, row_report))
         if again.get("chosen") is not None:
             accepted, values, val_cur = again["accepted"], again["values"], again["val"]
             accepted_values.append(again["fit"])
@@ -379,59 +378,12 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         model_verdict = compare_models(sel.meas_va, [o["pred"] for o in ol_before], [o["pred"] for o in ol_after],
                                        names=("the given model", "the corrected model"))
     final = accepted_values[-1] if accepted_values else None
-    effects_rep, base_rep = [], None
-    for c in accepted:
-        # on the edge of its search range in the final fit (a base-model coefficient at its bound is;
-        # a physical floor is not, candidates.search_bound_hits, nor a unit's gain within DEAD_GAIN of 0
-        # from either side: a dead unit, which a reversed unit's range reaches at its upper end)
-        hits = [n for n in c.free if final is not None and n in final.at_bounds]
-        edge = set(hits if c.effect == BASE_MODEL else search_bound_hits(c, values, hits))
-        if c.effect == "thruster_gain":
-            edge = {n for n in edge if not abs(values[n]) < DEAD_GAIN}
-        params = {n: {"value": values[n], "std": (final.std.get(n) if final else None), "unit": _unit(c, n),
-                      "at_bound": n in edge}
-                  for n in c.free}
-        if c.effect == BASE_MODEL:
-            for n in c.free:
-                params[n]["before"] = veh.parameters().get(n, 1.0)
-            if base_rep is None:
-                base_rep = {"variant": c.variant, "notes": c.notes, "parameters": params}
-            else:  # a thrust scale kept beside a unit, then a hydrodynamic variant (decision.unit_beside_base)
-                base_rep = {"variant": f"{base_rep['variant']}+{c.variant}", "notes": f"{base_rep['notes']}; {c.notes}",
-                            "parameters": {**base_rep["parameters"], **params}}
-        else:
-            effects_rep.append({"effect": c.effect, "variant": reported_variant(c, values), "fitted_as": c.variant,
-                                "notes": c.notes, "parameters": params,
-                                "answer": plain_answer(c, values)})
-    at_noise = val_cur["per_entry"] <= AT_NOISE
+    effects_rep, base_rep = parameter_reports(accepted, values, final, veh)
     names = [c.effect for c in accepted if c.effect != BASE_MODEL]
-    base_msg = ""
-    if base_rep is not None:
-        base_msg = (f"The base model is off: {base_rep['notes']} (base_model:{base_rep['variant']}, "
-                    + ", ".join(f"{n} {d['before']:.4g} -> {d['value']:.4g}" for n, d in base_rep["parameters"].items())
-                    + "); calibrate it (uvsim calibrate) rather than add an effect. ")
-    if names:
-        confidence = "high" if at_noise else "partial"
-        msg = base_msg + (
-            f"{' + '.join(plain_answer(c, values) or c.label for c in accepted if c.effect != BASE_MODEL)}: validation cost "
-            f"{val_given['per_entry']:.2f} -> {val_cur['per_entry']:.2f} squared noise sigmas per residual. "
-            + ("The residual is now at the noise level." if at_noise else
-               "Something the catalogue does not explain remains (the cost is above the noise level)."))
-    else:
-        confidence = "none"
-        msg = base_msg + (
-            "none: no catalogue effect removes a significant part of the validation cost "
-            f"({val_cur['per_entry']:.2f} squared noise sigmas per residual). "
-            + ("The model is at the noise level." if at_noise else
-               "The cost is above the noise level: an effect outside the catalogue, or base coefficients to "
-               "calibrate (uvsim calibrate, or --retune)."))
-    if retune_verdict is not None and not retune_verdict["ok"]:
-        msg += (f" The re-tune of {', '.join(asked_retune)} alone was not kept (its verdict against the given model: "
-                f"{retune_verdict['message']})" + (", only beside the effects named." if names else "."))
-    for r in backward:
-        if not r["kept"]:
-            msg += (f" {r['effect']}:{r['variant']}, chosen first, was dropped: beside the later effect it is "
-                    f"not needed ({r['why']}).")
+    at_noise = val_cur["per_entry"] <= AT_NOISE
+    confidence = ("high" if at_noise else "partial") if names else "none"
+    msg = summary_message(accepted, values, base_rep, val_given, val_cur, AT_NOISE, retune_verdict, asked_retune,
+                          backward)
     verd = verdict(val_cur["per_entry"], names, concentration(sel.meas_va, ol_after, val), AT_NOISE,
                    base_model_off=base_rep is not None)
     if verd["status"] in ("partly explained", "not explained"):
@@ -490,44 +442,3 @@ def _checkpoint_store(checkpoint, resume, key: str, say):
         ck.save(st, progress=f"{len(st)} finished fit(s)")
 
     return store, on_fit
-
-
-def _unit(c: Candidate, name: str) -> str:
-    if c.spec is None:
-        return "m" if name.startswith("thruster_") and name.split("_")[1] in "xyz" else "-"
-    try:
-        term = make_term(dict(c.spec))
-        return term.units().get(name, "") if hasattr(term, "units") else ""
-    except UvsimError:
-        return ""
-
-
-def _row_report(row, best) -> dict:
-    out = {"effect": row["effect"], "variant": row["variant"], "free": list(row["free"]),
-           "accepted": bool(row.get("accepted")), "chosen": row is best, "why": row.get("why", "")}
-    if "compare" in row:
-        out.update(values=row["values"], std=row["std"], train_cost=row["train_cost"],
-                   validation_cost_per_entry=row["val"]["per_entry"], compare=row["compare"],
-                   at_bounds=row["at_bounds"])
-    if "open_loop_cost" in row:
-        out["open_loop_cost"] = row["open_loop_cost"]
-    if "replaces" in row:  # fitted because that variant ran to a search bound (Selector.fit_judged)
-        out["replaces"] = row["replaces"]
-    return out
-
-
-def save_fixed_vehicle(diag: Diagnosis, path):
-    """Write the corrected vehicle with provenance comments."""
-    from uvsim.vehicle import save_vehicle
-
-    rep = diag.report
-    ann = {}
-    for e in rep["effects"]:
-        for k, d in e["parameters"].items():
-            std = d.get("std")
-            key = k.split("_", 1)[1] if k.startswith(e["effect"] + "_") else k
-            ann[key] = f"diagnosed: {d['value']:.6g}" + (f" +- {std:.2g}" if std is not None else "") + f" {d['unit']}"
-    header = (f"{diag.vehicle_after.name}: corrected by `uvsim diagnose` on {rep['data']}\n"
-              f"effects: {rep['effect']} ({rep['confidence']}); {rep['message']}\n"
-              f"validation RMSE before {rep['rmse_before']} after {rep['rmse_after']}")
-    return save_vehicle(diag.vehicle_after, path, header=header, annotations=ann)
