@@ -115,6 +115,7 @@ def check_runs_at_door(command: str, runs, vehicle, allow_text: str | None) -> l
     """Plausibility of ``runs`` for ``vehicle`` and the readers' notes: raises for a
     finding not allowed, prints allowed findings and notes; returns the printed lines
     (for the report)."""
+    from uvsim.input_sampling import chattering_input_notes
     from uvsim.plausibility import check_runs, parse_allow
 
     allow = parse_allow(allow_text)
@@ -122,6 +123,7 @@ def check_runs_at_door(command: str, runs, vehicle, allow_text: str | None) -> l
     # the segments of a run cut at a gap share its notes (uvsim.gaps): each is said once
     lines += [f"note: {n}" for n in dict.fromkeys(n for r in runs for n in r.notes)]
     lines += unused_voltage_notes(runs, vehicle)
+    lines += [f"note: {n}" for n in chattering_input_notes(runs)]
     for line in lines:
         say(command, line)
     return lines
