@@ -346,3 +346,36 @@ def test_linearizing_the_trial_point_at_once_changes_no_result(surge_yaw_runs, m
         np.testing.assert_allclose(y.A, x.A, rtol=1e-9)
         np.testing.assert_allclose(y.gz, x.gz, rtol=1e-9, atol=1e-9 * np.max(np.abs(x.gz)))
 
+
+
+def test_normalized_vector_is_the_whole_residuals_scaled_and_selected():
+    # normalized() takes the used entries before subtracting (the same element-wise operations):
+    # bit for bit the residuals of every entry, scaled, channel-major, time inside
+    t = np.linspace(0, 1, 11)
+    wiggle = 1e-4 * np.sin(7 * t)
+    run = _run({"roll": np.pi - 0.01 + wiggle, "pitch": wiggle, "depth": 1.0 + 0.01 * np.cos(3 * t)}, t)
+    m = measurements_for(run, None, noise={"attitude": 0.01, "depth": 0.02}, weights={"pitch": 2.0})
+    rng = np.random.default_rng(3)
+    y = np.zeros((4, t.size, 13))
+    y[..., 2] = 1.0 + rng.normal(0, 0.05, (4, t.size))
+    y[..., 3:7] = euler_to_quat(np.stack([-np.pi + rng.normal(0, 0.02, (4, t.size)), rng.normal(0, 0.1, (4, t.size)),
+                                          np.ones((4, t.size))], -1))
+    pred = m.predict(y)
+
+    def whole(pred):
+        parts = []
+        for g, e in m.residuals(pred).items():
+            grp = m.groups[g]
+            scale = np.sqrt(m.channel_weights(g) * m.run_weight) / np.where(grp.logged, grp.sigma, 1.0)
+            parts.append(np.moveaxis(e * scale, -1, -2)[..., m.used(g).T])
+        return np.concatenate(parts, axis=-1)
+
+    v = m.normalized(pred)
+    assert v.shape == (4, 3 * t.size) and np.array_equal(v, whole(pred))
+    pred["depth"] = pred["depth"].copy()
+    pred["depth"][1, 3, 0] = np.nan  # a diverged simulation: filled, or refused
+    with pytest.raises(CalibrationError):
+        m.normalized(pred)
+    w = whole(pred)
+    assert np.array_equal(m.normalized(pred, fill=1e3), np.where(np.isfinite(w), w, 1e3))
+

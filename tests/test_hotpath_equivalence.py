@@ -246,3 +246,27 @@ def test_normal_pieces_with_a_window_without_rows():
     out = _normal_pieces(r, Jz, Jn, cluster, nw, True)
     _assert_pieces_match(out, _ref_normal_pieces(r, Jz, Jn, cluster, nw, True))
     assert out.window_sse[2] == 0.0 and not out.scores[2].any()
+
+
+def test_wrap_equals_the_remainder_formula_bit_for_bit():
+    # wrap() takes the remainder only outside [0, 2 pi) after the shift: the same values, signs,
+    # dtypes and scalar types as (a + pi) % 2 pi - pi everywhere, the input untouched
+    from uvsim.kinematics import wrap
+
+    def ref(a):
+        return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
+
+    rng = np.random.default_rng(5)
+    edges = np.array([-np.pi, np.pi, 0.0, -0.0, np.nan, 2 * np.pi, -2 * np.pi, np.nextafter(np.pi, 0),
+                      np.nextafter(np.pi, 4), np.nextafter(-np.pi, 0), np.nextafter(-np.pi, -4), 1e300, -1e-320])
+    with np.errstate(invalid="ignore"):
+        for a in [rng.normal(0, 1, (3, 50, 3)), rng.normal(0, 30, 1000), edges, np.append(edges, [np.inf, -np.inf]),
+                  rng.normal(0, 5, (4, 5)).astype(np.float32), np.arange(-9, 9), [1.0, 5.0, -7.0]]:
+            keep = np.array(a, copy=True)
+            got, want = wrap(a), ref(a)
+            assert got.dtype == want.dtype and got.shape == want.shape
+            assert np.array_equal(got, want, equal_nan=True) and np.array_equal(np.signbit(got), np.signbit(want))
+            assert np.array_equal(np.asarray(a), keep, equal_nan=True)
+        for a in [3.5, -7.0, np.float64(2.0), np.pi, -np.pi, np.nan]:
+            got, want = wrap(a), ref(a)
+            assert type(got) is type(want) and (got == want or (np.isnan(got) and np.isnan(want)))

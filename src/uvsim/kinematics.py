@@ -160,8 +160,20 @@ def unwrap_angles(angles: np.ndarray, axis: int = 0) -> np.ndarray:
 
 
 def wrap(a):
-    """Angles wrapped to (-pi, pi]."""
-    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
+    """Angles wrapped to (-pi, pi].
+
+    ``(a + pi) % 2 pi - pi``, with the remainder (numpy's slowest element-wise step here)
+    taken only where ``a + pi`` is outside [0, 2 pi): inside, the remainder of a value by
+    a larger positive one is the value itself, exactly, so the result is the same to the
+    last bit (NaN stays NaN)."""
+    t = np.asarray(a) + np.pi
+    if t.ndim == 0:
+        return t % (2 * np.pi) - np.pi
+    far = ~((t >= 0) & (t < 2 * np.pi))
+    if far.any():
+        t[far] = t[far] % (2 * np.pi)
+    t -= np.pi
+    return t
 
 
 def rotation_vector_error(q_meas: np.ndarray, q_pred: np.ndarray) -> np.ndarray:

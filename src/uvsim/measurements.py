@@ -375,13 +375,20 @@ class RunMeasurements:
         (group, then channel, then time), so the length does not depend on the
         parameters.  Non-finite predictions become ``fill`` (default: raise)."""
         parts = []
-        for g, e in self.residuals(pred).items():
-            grp = self.groups[g]
+        for g, grp in self.groups.items():
             used = self.used(g)
             scale = np.sqrt(self.channel_weights(g) * self.run_weight) / np.where(grp.logged, grp.sigma, 1.0)
-            r = e * scale
-            r = np.moveaxis(r, -1, -2)[..., used.T]  # (..., m_g): channel-major, time inside
-            parts.append(r)
+            p = np.asarray(pred[g])
+            if p.shape[-2:] != grp.values.shape:  # a prediction that broadcasts: the whole (n, k) way
+                e = np.where(grp.valid, wrap(grp.values - p) if g == "attitude" else grp.values - p, np.nan)
+                parts.append(np.moveaxis(e * scale, -1, -2)[..., used.T])
+                continue
+            # the used entries only (used implies valid), channel-major, time inside: the same
+            # element-wise operations as residuals() on the whole (n, k), so the same values
+            ch, row = np.nonzero(used.T)
+            flat = row * grp.values.shape[1] + ch
+            d = grp.values.reshape(-1)[flat] - p.reshape(p.shape[:-2] + (-1,))[..., flat]
+            parts.append((wrap(d) if g == "attitude" else d) * scale[ch])
         if not parts:
             return np.zeros(np.shape(next(iter(pred.values())))[:-2] + (0,))
         v = np.concatenate(parts, axis=-1)
