@@ -49,8 +49,9 @@ def chattering_inputs(run) -> dict[str, float]:
     """{input column: lag-1 autocorrelation of its changes} of ``run``'s inputs that change like
     noise from row to row (below :data:`CHATTER_AUTOCORR`)."""
     out = {}
+    u = run.inputs  # (n, k), read from the table once
     for j, col in enumerate(run.input_columns):
-        r = change_autocorrelation(run.inputs[:, j])
+        r = change_autocorrelation(u[:, j])
         if r is not None and r < CHATTER_AUTOCORR:
             out[col] = r
     return out

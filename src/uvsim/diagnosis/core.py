@@ -360,7 +360,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     # scale free, as good with fewer parameters? (uvsim.diagnosis.unit_choice.unit_in_every_gain)
     again = unit_in_every_gain(sel, accepted, values, val_cur)
     if again is not None:
-        steps.append(every_gain_step(again, accepted, val_cur, k_next, row_report))
+        steps.append(every_gain_step(again, accepted, val_cur, k_next))
         if again.get("chosen") is not None:
             accepted, values, val_cur = again["accepted"], again["values"], again["val"]
             accepted_values.append(again["fit"])

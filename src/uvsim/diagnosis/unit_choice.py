@@ -30,7 +30,9 @@ import numpy as np
 
 from uvsim.diagnosis.candidates import BASE_MODEL, _base_model, _gain
 from uvsim.diagnosis.decision import MIN_RELATIVE, clearly_better, judge
+from uvsim.diagnosis.summary import row_report
 from uvsim.errors import UvsimError
+from uvsim.fitting.parameters import GAIN_RANGE
 
 EFFECT = "thruster_gain"
 
@@ -92,8 +94,7 @@ def unit_forms(sel, best, st, val_cur):
             if r is not None and r["unit_form_ok"]]
     if not rows:
         return None
-    gain = next((r for r in rows if not r["candidate"].tags.get("fouled")), None)
-    fouled = next((r for r in rows if r["candidate"].tags.get("fouled")), None)
+    gain, fouled = _split_forms(rows)
     answer, note = _pick(gain, fouled)
     if best is not None and "unit" in best["candidate"].tags:  # the winner is a form of the unit
         if answer is best:
@@ -115,6 +116,13 @@ def unit_forms(sel, best, st, val_cur):
     answer["accepted"] = True
     answer["why"] = answer["unit_form_why"] + note + f"; in place of {every['candidate'].label} ({how})"
     return answer
+
+
+def _split_forms(rows):
+    """The ``unit_K`` row and the ``fouled_K`` row among ``rows`` (None for a form not there)."""
+    gain = next((r for r in rows if not r["candidate"].tags.get("fouled")), None)
+    fouled = next((r for r in rows if r["candidate"].tags.get("fouled")), None)
+    return gain, fouled
 
 
 def _pick(gain, fouled):
@@ -156,7 +164,8 @@ def unit_in_every_gain(sel, accepted: list, values: dict, val_cur: dict):
     the seven other gains stood in for, and the unit beside a common scale was only tried against a
     thrust scale accepted in step 0 (:func:`uvsim.diagnosis.decision.unit_beside_base`).  Field logs,
     weak seed 13 (thruster 7 at 0.472): every gain (thruster 7 at 0.35, the others 0.67-0.77) then the
-    hydrodynamics re-tuned, validation cost 25.0; the re-tune with the scale free plus ``unit_7``: 24.1.
+    hydrodynamics re-tuned, validation cost 25.0; the re-tune with the scale free plus ``unit_7``: 25.5 in
+    the diagnosis (24.1 fitted on the given model alone: docs/records/diagnose.md).
     This is backward elimination's question (:func:`uvsim.diagnosis.decision.still_needed`) asked of
     the every-gain variant once the base model is in."""
     c_all = next((c for c in accepted if c.effect == EFFECT and "unit" not in c.tags and len(c.free) >= 3), None)
@@ -186,7 +195,7 @@ def unit_in_every_gain(sel, accepted: list, values: dict, val_cur: dict):
     vc = sel.validation(cur["vehicle"], vals)
     cur = sel.current(reduced, vals)
     forms = {c.variant: c for c in _gain(sel.base_vehicle.n_thrusters)}
-    seed = {f"thruster_gain_{k}": float(np.clip(g[name] / common, 0.0, 1.5)),
+    seed = {f"thruster_gain_{k}": float(np.clip(g[name] / common, *GAIN_RANGE)),
             "thrust_scale_scale": start["thrust_scale_scale"]}
     rows = []
     for variant in (f"unit_{k}", f"fouled_{k}"):
@@ -196,8 +205,7 @@ def unit_in_every_gain(sel, accepted: list, values: dict, val_cur: dict):
         row["accepted"], row["why"] = judge(row, vc)
         row["unit_form_ok"] = row["accepted"]
         rows.append(row)
-    gain = next((r for r in rows if r["unit_form_ok"] and not r["candidate"].tags.get("fouled")), None)
-    fouled = next((r for r in rows if r["unit_form_ok"] and r["candidate"].tags.get("fouled")), None)
+    gain, fouled = _split_forms([r for r in rows if r["unit_form_ok"]])
     answer, note = _pick(gain, fouled)
     out = {"rows": rows, "model": label, "nested_in": c_all.label}
     for r in rows:
@@ -218,9 +226,9 @@ def unit_in_every_gain(sel, accepted: list, values: dict, val_cur: dict):
     return out
 
 
-def every_gain_step(again: dict, accepted: list, val_cur: dict, k: int, row_report) -> dict:
+def every_gain_step(again: dict, accepted: list, val_cur: dict, k: int) -> dict:
     """The report's step of :func:`unit_in_every_gain` (``again``) on the final model (``accepted``,
-    ``val_cur``), numbered ``k``; ``row_report(row, chosen)`` writes each fitted row."""
+    ``val_cur``), numbered ``k``; each fitted row as :func:`uvsim.diagnosis.summary.row_report` writes it."""
     chosen = again.get("chosen")
     rep = {"step": k, "model": " + ".join(c.label for c in accepted), "before_cost_per_entry": val_cur["per_entry"],
            "screening": None, "screened": [], "chosen": None, "candidates": [row_report(r, chosen) for r in again["rows"]],

@@ -190,6 +190,7 @@ def windowed(vehicle, runs, horizon: float, *, overrides=None, meas=None, gyro_b
     from uvsim.estimation.derivatives import body_velocity
     from uvsim.fitting.dead_reckoning import dead_reckoned_xy
     from uvsim.fitting.windows import layout
+    from uvsim.forces.base import position_axes_read
 
     veh = load_vehicle(vehicle)
     runs = list(runs)
@@ -197,7 +198,7 @@ def windowed(vehicle, runs, horizon: float, *, overrides=None, meas=None, gyro_b
         meas = [measurements_for(r, veh, noise=noise, weights=weights) for r in runs]
     # a window of a run without x/y starts where the run's dead-reckoned track is (not at the run's
     # start) when some term reads the horizontal position (a tether: uvsim.fitting.dead_reckoning)
-    reads_xy = any(a in getattr(t, "position_axes", (0, 1, 2)) for t in veh.terms for a in (0, 1))
+    reads_xy = bool(position_axes_read(veh.terms) & {0, 1})
     pieces, owner = [], []          # sliced runs; (run index, start row, end row)
     N0, P0 = [], []
     for i, run in enumerate(runs):
@@ -309,7 +310,6 @@ def judged_prediction(vehicle, val, meas, setting="auto", *, initial_velocity: s
                     f"{EXPLODE_FACTOR:g} times the measured spread), as a model flown open loop does where an "
                     "autopilot held the vehicle, so whole runs cannot tell models apart"),
             "free_rmse_given": free}
-
 
 
 def judged_label(judged: dict | None, whole: str = "free simulations") -> str:

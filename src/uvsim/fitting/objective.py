@@ -46,6 +46,7 @@ from uvsim.errors import CalibrationError
 from uvsim.fit_settings import LOSSES  # noqa: F401 (its home: uvsim.fit_settings)
 from uvsim.fitting.nodes import NodeModel
 from uvsim.fitting.windows import apply_tangent, layout, padded_runs, tangent_difference, whole_runs
+from uvsim.forces.base import position_axes_read
 from uvsim.latency import runs_for
 from uvsim.model import Model
 from uvsim.simulate import _rk4_loop
@@ -187,7 +188,7 @@ class WindowedProblem:
         self.accel = any(m.needs_acceleration for m in self.meas)
         #: NED position axes no term reads (ForceTerm.position_axes): a node moved along one
         #: moves its window's trajectory by as much and changes nothing else
-        read = {a for t in vehicle.terms for a in getattr(t, "position_axes", (0, 1, 2))}
+        read = position_axes_read(vehicle.terms)
         self.shift_axes = tuple(a for a in range(3) if a not in read)
         self.initial_velocity = initial_velocity
         z_ref = space.z0 if z_ref is None else np.asarray(z_ref, float)

@@ -167,6 +167,12 @@ class ForceTerm:
         return build_term(d, context=self.kind)
 
 
+def position_axes_read(terms) -> set[int]:
+    """The NED position axes (0 north, 1 east, 2 down) some of ``terms`` read from ``ctx.pos``
+    (``ForceTerm.position_axes``; a term that does not say is taken to read all three)."""
+    return {a for t in terms for a in getattr(t, "position_axes", (0, 1, 2))}
+
+
 def _replace_in(d: dict, values: Mapping[str, float]) -> None:
     for key, val in list(d.items()):
         if isinstance(val, dict):
