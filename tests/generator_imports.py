@@ -12,7 +12,8 @@ from pathlib import Path
 #: and the progress lines (uvsim.progress imports nothing of uvsim).
 ALLOWED = {"uvsim.errors", "uvsim.files", "uvsim.logs", "uvsim.progress"}
 #: Modules that generating a dataset must not load.
-FITTING = ("uvsim.fitting", "uvsim.calibration", "uvsim.measurements", "uvsim.diagnosis", "uvsim.thrusters")
+FITTING = ("uvsim.fitting", "uvsim.calibration", "uvsim.measurements", "uvsim.signals", "uvsim.diagnosis",
+           "uvsim.thrusters")
 
 
 def uvsim_imports_outside_scenarios(path: Path) -> set:

@@ -11,7 +11,8 @@ import pytest
 from uvsim.fitting.objective import WindowedProblem
 from uvsim.fitting.linearization import _normal_pieces
 from uvsim.kinematics import quat_to_euler, cross_components, down_axis_components, quat_down_axis, quat_to_rotation
-from uvsim.measurements import GROUPS, Group, RunMeasurements, specific_force
+from uvsim.measurements import Group, RunMeasurements, specific_force
+from uvsim.signals import GROUPS
 
 SHAPES = [(1,), (7,), (3, 50), (2, 4, 25)]  # one sample, a run, a batch of runs, batches of batches
 

@@ -12,7 +12,8 @@ from uvsim.calibration.calibrator import DEFAULT_SAMPLE_WEIGHTING
 from uvsim.calibration.inputs import combine_weights
 from uvsim.errors import CalibrationError
 from uvsim.logs import Run
-from uvsim.measurements import RunMeasurements, channel_weight, measurements_for, per_second_factors
+from uvsim.measurements import RunMeasurements, measurements_for
+from uvsim.signals import channel_weight, per_second_factors
 
 
 def _imu_depth_run(depth_every: int = 10) -> Run:

@@ -298,7 +298,7 @@ def test_declared_noise_is_read_saved_and_loaded_again(tmp_path):
 
 
 def test_noise_signals_are_the_measurement_groups():
-    from uvsim.measurements import GROUPS
+    from uvsim.signals import GROUPS
 
     assert vehicle_rules.NOISE_SIGNALS == {g: tuple(c) for g, c in GROUPS.items()}
 

@@ -35,22 +35,12 @@ plots all read it, so "roll got worse" means the same thing everywhere.  (Near p
 the split of an attitude into roll and yaw is ill-conditioned; an ROV does not go there, and
 for a hydrobatic vehicle that does, the roll and yaw errors there are large but bounded by pi.)
 
-Every logged channel has a noise level (``sigma``) and a weight; residuals are divided by
-``sigma`` and multiplied by ``sqrt(weight)``, so metres, radians, rad/s and m/s^2 add up and a
-correct model leaves about 1 per entry.  The level of a channel (:func:`noise_level`, kept with
-where it comes from as :class:`uvsim.estimation.noise.NoiseLevel`) is, first found first:
-
-1. given: the ``noise`` option (``--noise``), by channel then by group;
-2. declared: the vehicle file's ``sensors.noise`` (:attr:`uvsim.vehicle.Vehicle.sensor_noise`),
-   by channel then by group;
-3. estimated on the channel's native samples (:func:`uvsim.estimation.noise.noise_sigma`), at
-   least the rounding of a channel logged to a resolution (``q / sqrt(12)``) and, for an attitude
-   angle that is an estimator's output (:func:`uvsim.estimation.noise.filter_output`: no more
-   visible noise than the integrated gyro's), at least
-   :data:`uvsim.estimation.noise.FILTER_FLOOR` (a *floor*).
-
-The fits, the diagnosis' costs and shares, report.json and the plots all divide by this one
-level; :attr:`RunMeasurements.notes` names the floors and declarations used.
+Every logged channel has a noise level (``sigma``: given, declared in the vehicle file or
+estimated from the log, with floors) and a weight (:mod:`uvsim.signals`); residuals are divided
+by ``sigma`` and multiplied by ``sqrt(weight)``, so metres, radians, rad/s and m/s^2 add up and
+a correct model leaves about 1 per entry.  The fits, the diagnosis' costs and shares,
+report.json and the plots all divide by this one level; :attr:`RunMeasurements.notes` names the
+floors and declarations used.
 
 A slow sensor logged on a faster grid by holding or interpolating its value counts only at its
 native samples (:func:`uvsim.estimation.noise.sample_kind`); :attr:`RunMeasurements.notes` says so.
@@ -73,40 +63,20 @@ import numpy as np
 from uvsim.fit_settings import SAMPLE_WEIGHTINGS  # noqa: F401 (its home: uvsim.fit_settings)
 from uvsim.errors import CalibrationError
 from uvsim.estimation.lag import first_order_lag, lag_time_constant, uniform_steps
-from uvsim.estimation.noise import (FILTER_FLOOR, FILTER_GATE, NoiseLevel, SampleKind, filter_output, noise_sigma,
-                                    quantisation_sigma, quantum, sample_kind)
+from uvsim.estimation.noise import SampleKind, sample_kind
 from uvsim.accelerometer import _components, _specific_force, specific_force  # noqa: F401  (specific_force: re-exported)
 from uvsim.kinematics import (cross_components, down_axis_components, quat_to_euler,  # noqa: F401
                               rotation_vector_error, unwrap_angles, wrap)  # (rotation_vector_error: re-exported)
-from uvsim.logs import ACCEL_COLUMNS, DEPTH_COLUMN, EULER_COLUMNS, POSITION_COLUMNS, RATE_COLUMNS, VELOCITY_COLUMNS
-from uvsim.schema import did_you_mean
+from uvsim.logs import POSITION_COLUMNS, RATE_COLUMNS, VELOCITY_COLUMNS
+from uvsim.signals import (CHANNEL_GROUP, GROUPS, UNITS, _filter_floor, channel_weight,  # noqa: F401
+                           check_sample_weighting, check_signal_settings, noise_level,
+                           per_second_factors)  # (CHANNEL_GROUP: re-exported, its home uvsim.signals)
 
-#: Signal groups and their channels, in a fixed order.
-GROUPS = {
-    "position": POSITION_COLUMNS,
-    "depth": (DEPTH_COLUMN,),
-    "attitude": EULER_COLUMNS,
-    "velocity": VELOCITY_COLUMNS,
-    "rates": RATE_COLUMNS,
-    "acceleration": ACCEL_COLUMNS,
-}
-UNITS = {"position": "m", "depth": "m", "attitude": "rad", "velocity": "m/s", "rates": "rad/s",
-         "acceleration": "m/s^2"}
-CHANNEL_GROUP = {c: g for g, cs in GROUPS.items() for c in cs}
 #: Default standard gravity if the vehicle gives none, m/s^2 (Fossen 2021).
 G_DEFAULT = 9.81
 #: Half-width (s) of the straight-line fit that gives the logged attitude where the
 #: attitude lag restarts (a few filter-output samples; the lagged signal is smooth).
 LAG_RESTART_HALF_S = 0.1
-
-
-def channel_weight(weights: Mapping[str, float] | None, group: str, channel: str) -> float:
-    """The weight of ``channel`` of ``group``: ``weights[group]`` x ``weights[channel]``
-    (each default 1).  A channel named like its group (``depth``) is weighted once:
-    ``{"depth": 10}`` weighs depth 10, not 100."""
-    weights = weights or {}
-    w = float(weights.get(group, 1.0))
-    return w if channel == group else w * float(weights.get(channel, 1.0))
 
 
 @dataclass
@@ -164,7 +134,7 @@ class RunMeasurements:
     #: windowed fit, :meth:`for_windows`); None: once, at the first row
     restart_rows: np.ndarray | None = None
     #: channel -> factor on its weight that makes it count per second of log rather than per
-    #: sample (:func:`per_second_factors`; empty: per sample)
+    #: sample (:func:`uvsim.signals.per_second_factors`; empty: per sample)
     rate_factors: dict = field(default_factory=dict)
     _restart_cache: tuple | None = field(default=None, repr=False, compare=False)
     _uniform: bool | None = field(default=None, repr=False, compare=False)
@@ -194,7 +164,7 @@ class RunMeasurements:
         return self.has_gyro and grp is not None and grp.mode == "euler" and bool(grp.logged[0] and grp.logged[1])
 
     def channel_weights(self, group: str) -> np.ndarray:
-        """(k,) weights: ``weights[group]`` x ``weights[channel]`` (default 1; :func:`channel_weight`)."""
+        """(k,) weights: ``weights[group]`` x ``weights[channel]`` (default 1; :func:`uvsim.signals.channel_weight`)."""
         return np.array([channel_weight(self.weights, group, c) * float(self.rate_factors.get(c, 1.0))
                          for c in GROUPS[group]])
 
@@ -427,114 +397,6 @@ class RunMeasurements:
         return out
 
 
-def _lookup(levels: Mapping[str, float], group: str, channel: str) -> float | None:
-    """``levels`` of ``channel``, else of its ``group``, else None."""
-    v = levels.get(channel, levels.get(group))
-    return None if v is None else float(v)
-
-
-def noise_level(group: str, channel: str, values: np.ndarray, native: np.ndarray, *,
-                given: Mapping[str, float] | None = None, declared: Mapping[str, float] | None = None) -> NoiseLevel:
-    """The noise level of ``channel`` of ``group`` (values (n,), native (n,) bool), without the
-    attitude filter's floor (:func:`measurements_for` adds it, it needs the gyro): ``given`` (the
-    ``noise`` option), else ``declared`` (the vehicle file's ``sensors.noise``), else the
-    fourth-difference estimate, at least the rounding of its resolution (module docstring).
-    ``sigma`` is NaN with neither a level given nor 8 native samples."""
-    if group == "attitude":
-        values = unwrap_angles(values)
-    est = noise_sigma(values, native)
-    q = quantum(values, native)
-    g, d = _lookup(given or {}, group, channel), _lookup(declared or {}, group, channel)
-    if g is not None:
-        key = channel if channel in (given or {}) else group
-        return NoiseLevel(g, "declared", f"the noise option ({key})", est, q)
-    unit = UNITS[group]
-    if d is not None:
-        key = channel if channel in (declared or {}) else group
-        return NoiseLevel(d, "declared", f"the vehicle file (sensors.noise.{key})", est, q,
-                          f"{channel}: noise {d:.3g} {unit}, declared in the vehicle file (sensors.noise.{key})")
-    fq = quantisation_sigma(q)
-    if q > 0 and fq > est:
-        basis = f"the rounding of values logged to {q:.4g} {unit} (q / sqrt(12))"
-        return NoiseLevel(fq, "floor", basis, est, q, f"{channel}: noise {fq:.3g} {unit}, {basis}, more than the "
-                                                      "samples show")
-    return NoiseLevel(est, "estimated", "fourth differences of the native samples", est, q)
-
-
-def _filter_floor(groups: Mapping[str, "Group"]) -> None:
-    """Raise the attitude angles that are an estimator's output to :data:`FILTER_FLOOR`
-    (:func:`uvsim.estimation.noise.filter_output`; module docstring), in place."""
-    att, rates = groups.get("attitude"), groups.get("rates")
-    if att is None or rates is None or not rates.logged.any():
-        return
-    s_gyro = float(np.median(rates.sigma[rates.logged]))
-    for j, c in enumerate(att.channels):
-        lv = att.noise[j]
-        if lv is None or lv.source == "declared" or not FILTER_FLOOR[c] > lv.sigma:
-            continue
-        k = att.kinds[j]
-        if k is None or not filter_output(lv.estimate, s_gyro, k.native_interval_s):
-            continue
-        att.noise[j] = replace(
-            lv, sigma=FILTER_FLOOR[c], source="floor",
-            basis=(f"an attitude filter's output (estimate {lv.estimate:.2g} rad, within {FILTER_GATE:g} x the gyro's "
-                   f"noise over a sample, {s_gyro * k.native_interval_s:.2g} rad): the floor of an estimator's {c}"),
-            note=(f"{c}: noise {FILTER_FLOOR[c]:.3g} rad, the floor of an attitude filter's output (its samples change "
-                  f"only as the integrated gyro does and its error is not in them: declare sensors.noise.{c} in the "
-                  "vehicle file to set it)"))
-        att.sigma[j] = FILTER_FLOOR[c]
-
-
-def check_sample_weighting(value) -> str:
-    """``value`` if it is one of :data:`SAMPLE_WEIGHTINGS`, else a CalibrationError."""
-    if value not in SAMPLE_WEIGHTINGS:
-        raise CalibrationError(f"sample_weighting {value!r}: expected one of {list(SAMPLE_WEIGHTINGS)}")
-    return value
-
-
-def per_second_factors(groups: Mapping[str, "Group"]) -> dict:
-    """Channel -> ``f_max / f_c``: the run's fastest native sample rate over the channel's own.
-    A channel's rate is one over the median interval between its native samples
-    (``SampleKind.native_interval_s``, :class:`uvsim.estimation.noise.SampleKind`), so dropouts
-    do not lower it: seconds without a sample carry no information, and the samples around
-    them are not weighted up for them.
-
-    Multiplied into a channel's weight, it makes every logged channel count per second of log
-    rather than per sample: a 10 Hz depth beside a 100 Hz IMU gets 10.  When the model lacks
-    something in the data (real logs always do), the residuals of every channel are correlated
-    over seconds, far longer than a sample, so a 100 Hz channel does not carry ten times the
-    information of a 10 Hz one although per-sample weighting counts it so (the sum of
-    squared prediction errors weighs samples by their number, which is the maximum-likelihood
-    weighting only for white residuals: Ljung 1999, ch. 7)."""
-    rate = {c: 1.0 / grp.kinds[j].native_interval_s for grp in groups.values() for j, c in enumerate(grp.channels)
-            if grp.kinds[j] is not None and grp.kinds[j].native_interval_s > 0}  # NaN (< 2 samples): left out
-    top = max(rate.values(), default=0.0)
-    return {c: top / r for c, r in rate.items()}
-
-
-def check_signal_settings(noise=None, weights=None) -> None:
-    """Refuse unknown signal names (with the nearest known one) and values that are not a
-    positive noise level or a non-negative weight, in ``noise`` and ``weights`` ({name: value},
-    groups or channels); the fits call it before any work."""
-    known = list(GROUPS) + list(CHANNEL_GROUP)
-    from uvsim.schema import require_mapping
-
-    for what, d in (("noise", require_mapping(noise, "noise", error=CalibrationError, example="{'depth': 0.01}")),
-                    ("weights", require_mapping(weights, "weights", error=CalibrationError,
-                                                example="{'position': 1.0, 'depth': 0.0}"))):
-        for k in sorted(set(d) - set(known)):
-            raise CalibrationError(f"{what}: unknown signal {k!r}{did_you_mean(k, known)}; "
-                                   f"expected groups {list(GROUPS)} or channels {list(CHANNEL_GROUP)}")
-        for k, v in d.items():
-            try:
-                ok = np.isfinite(float(v)) and (float(v) > 0 if what == "noise" else float(v) >= 0)
-            except (TypeError, ValueError):
-                ok = False
-            if not ok:
-                raise CalibrationError(f"{what}.{k}: expected a {'positive' if what == 'noise' else 'non-negative'} "
-                                       f"number, got {v!r}")
-
-
 def measurements_for(run, vehicle=None, *, noise: Mapping[str, float] | None = None,
                      weights: Mapping[str, float] | None = None, run_weight: float | None = None,
                      sensors: Mapping[str, np.ndarray] | None = None, attitude_lag: float = 0.0,
@@ -548,14 +410,14 @@ def measurements_for(run, vehicle=None, *, noise: Mapping[str, float] | None = N
     noise : 1-sigma noise levels by group or channel name (e.g. ``{"depth": 0.01,
         "attitude": 0.005, "yaw": 0.02}``), in the channel units; where not given, the
         vehicle's declared ``sensors.noise``, else estimated from the log with its floors
-        (module docstring).
+        (:mod:`uvsim.signals`).
     weights : weights by group or channel (default 1; 0 leaves a channel out of fits).
     run_weight : the run's weight (default: ``run.weight`` from the manifest).
     sensors : sensor positions overriding the vehicle's.
     attitude_lag : time constant (s) of the attitude filter's first-order lag
         (module docstring; 0: none).
     sample_weighting : "per_sample" (every sample of every channel alike) or "per_second"
-        (channels logged at a lower rate weighted up by :func:`per_second_factors`).
+        (channels logged at a lower rate weighted up by :func:`uvsim.signals.per_second_factors`).
     """
     attitude_lag = lag_time_constant(attitude_lag)
     check_sample_weighting(sample_weighting)

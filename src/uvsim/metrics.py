@@ -30,7 +30,7 @@ from typing import Iterable, Mapping
 import numpy as np
 
 from uvsim.kinematics import unwrap_angles
-from uvsim.measurements import UNITS
+from uvsim.signals import UNITS
 
 #: Report-key unit suffix of each measurement group (``position_m``, ``acceleration_mps2``, ...).
 UNIT_SUFFIX = {"position": "m", "depth": "m", "attitude": "rad", "velocity": "mps", "rates": "radps",

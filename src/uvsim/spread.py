@@ -22,7 +22,7 @@ def signal_spread(runs) -> dict[str, float]:
     """{group_unit key: spread of the measured signal} over ``runs``: the RMS, over runs and
     logged channels, of each channel's deviation from its run mean (angles unwrapped)."""
     from uvsim.kinematics import quat_to_euler, unwrap_angles
-    from uvsim.measurements import GROUPS
+    from uvsim.signals import GROUPS
     from uvsim.metrics import UNIT_SUFFIX
 
     ss: dict[str, float] = {}

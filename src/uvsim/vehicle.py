@@ -97,7 +97,7 @@ class Vehicle:
     sensor_latency: float = 0.0
     #: declared 1-sigma noise levels, channel or group -> level in the channel's unit
     #: (``sensors.noise``; docs/model.md, "Sensor noise"): used instead of the level estimated from
-    #: a log (:func:`uvsim.measurements.noise_level`)
+    #: a log (:func:`uvsim.signals.noise_level`)
     sensor_noise: dict = field(default_factory=dict)
     description: str = ""
     source: str = "<memory>"

@@ -33,7 +33,7 @@ MAX_LATENCY = 0.5
 IMU_BIAS_SPECS = {"gyro_bias_sd": ("rad/s", 1.0, "a MEMS gyro's in-run bias (0.001-0.05 rad/s)"),
                   "acc_bias_sd": ("m/s^2", 2.0, "a MEMS accelerometer's offset (0.01-0.8 m/s^2)")}
 #: The log's measured channels by group, the keys ``sensors.noise`` accepts (its levels are in the
-#: channel's unit: m, rad, m/s, rad/s, m/s^2); :data:`uvsim.measurements.GROUPS` with the column
+#: channel's unit: m, rad, m/s, rad/s, m/s^2); :data:`uvsim.signals.GROUPS` with the column
 #: names of docs/log_format.md (tests/test_vehicle_schema.py holds them equal; this module imports
 #: nothing that reads logs).
 NOISE_SIGNALS = {"position": ("x", "y", "z"), "depth": ("depth",), "attitude": ("roll", "pitch", "yaw"),

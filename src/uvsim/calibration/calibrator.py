@@ -47,11 +47,12 @@ from uvsim.fitting.evaluate import check_judge_horizon, judged_scales
 from uvsim.fitting.objective import check_loss, continuity_factors
 from uvsim.fitting.parameters import cb_not_below_cg, default_bounds, physical_bounds
 from uvsim.latency import runs_for
-from uvsim.measurements import check_sample_weighting, check_signal_settings, measurements_for
+from uvsim.measurements import measurements_for
 from uvsim.plausibility import check_runs, parse_allow
 from uvsim.progress import Progress, as_progress
 from uvsim.fit_settings import DEFAULT_CONTINUITY, DEFAULT_HORIZONS, DEFAULT_SAMPLE_WEIGHTING  # noqa: F401
 from uvsim.schema import check_workers, real_number, whole_number
+from uvsim.signals import check_sample_weighting, check_signal_settings
 
 log = logging.getLogger("uvsim")
 #: The joint stage's progress label by checkpoint tag (the first fit, the refits).
@@ -94,7 +95,7 @@ class Calibrator:
     sample_weighting : "per_second" (default, :data:`DEFAULT_SAMPLE_WEIGHTING`): a channel
         logged at a lower rate than the run's fastest is weighted up by the ratio of the
         rates (a 10 Hz depth beside a 100 Hz IMU by 10), so every channel counts per second
-        of log (:func:`uvsim.measurements.per_second_factors`); "per_sample": every sample
+        of log (:func:`uvsim.signals.per_second_factors`); "per_sample": every sample
         alike. Joint stage only (the GA's fitness already averages each channel over its own
         samples); channels logged at one rate (motion capture) are unaffected.
     low_speed_exponent : GA run weight = manifest weight x (amplitude / median

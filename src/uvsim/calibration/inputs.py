@@ -12,7 +12,7 @@ import numpy as np
 
 from uvsim.errors import CalibrationError, VehicleError
 from uvsim.logs import MANIFEST, Dataset, read_dataset
-from uvsim.measurements import CHANNEL_GROUP, channel_weight
+from uvsim.signals import CHANNEL_GROUP, channel_weight
 from uvsim.vehicle import check_latency, load_vehicle
 
 
@@ -49,7 +49,7 @@ def resolve_vehicle(vehicle, ds: Dataset):
 
 
 def combine_weights(default: Mapping, user: Mapping | None) -> dict:
-    """Channel weights default[c] x user[group(c)] x user[c] (:func:`uvsim.measurements.channel_weight`)."""
+    """Channel weights default[c] x user[group(c)] x user[c] (:func:`uvsim.signals.channel_weight`)."""
     return {c: float(default.get(c, 1.0)) * channel_weight(user, g, c) for c, g in CHANNEL_GROUP.items()}
 
 

@@ -51,8 +51,8 @@ SIGNED_NEGATIVE = tuple(LINEAR_DAMPING.values()) + tuple(QUADRATIC_DAMPING.value
 
 def default_channel_weights(dof: str) -> dict:
     """Weights selecting :data:`DOF_CHANNELS` [dof] (1) and nothing else (0), by channel
-    (:data:`uvsim.measurements.CHANNEL_GROUP`)."""
-    from uvsim.measurements import CHANNEL_GROUP
+    (:data:`uvsim.signals.CHANNEL_GROUP`)."""
+    from uvsim.signals import CHANNEL_GROUP
 
     return {c: (1.0 if c in DOF_CHANNELS[dof] else 0.0) for c in CHANNEL_GROUP}
 

@@ -194,7 +194,7 @@ def print_summary(cal, out=None) -> None:
 
 def _rmse_text(rmse) -> str:
     """``{group_unit: RMSE}`` as ``depth 0.0075 m, rates 0.00389 rad/s`` (4 significant digits)."""
-    from uvsim.measurements import UNITS
+    from uvsim.signals import UNITS
 
     if not rmse:
         return "(none)"

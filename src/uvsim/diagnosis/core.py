@@ -58,7 +58,7 @@ from uvsim.fitting.evaluate import check_judge_horizon, judged_prediction, poole
 from uvsim.fitting.verdict import compare as compare_models
 from uvsim.latency import runs_for
 from uvsim.logs import Dataset, read_dataset
-from uvsim.measurements import check_signal_settings
+from uvsim.signals import check_signal_settings
 from uvsim.plausibility import check_runs, parse_allow
 from uvsim.progress import as_progress
 from uvsim.schema import check_workers, is_whole_number

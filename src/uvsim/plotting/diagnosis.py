@@ -18,7 +18,7 @@ import matplotlib.pyplot as plt  # the package __init__ selects the Agg backend
 import numpy as np
 
 from uvsim.fitting.evaluate import judged_label
-from uvsim.measurements import UNITS
+from uvsim.signals import UNITS
 
 GROUP_ERR = {"position": "position error [m]", "depth": "depth error [m]", "attitude": "attitude error [rad]",
              "velocity": "velocity error [m/s]", "rates": "rate error [rad/s]", "acceleration": "accel. error [m/s^2]"}
