@@ -99,6 +99,7 @@ def test_an_effect_on_its_bounds_is_judged_by_the_final_fit_and_a_dead_units_gai
     assert diagnosis_problems(rep(False, False), val) == []
     (p,) = diagnosis_problems(rep(True, False), val)
     assert "base_model:thrust_scale" in p and "ended on a bound" in p
+    assert "thrust_scale_scale 0.5" in p and "not an answer" in p  # the value, and how to read it
     (p,) = diagnosis_problems(rep(False, True), val)
     assert "thruster_gain:unit_7" in p
     old = rep(False, False)
@@ -107,3 +108,21 @@ def test_an_effect_on_its_bounds_is_judged_by_the_final_fit_and_a_dead_units_gai
             del d["at_bound"]
     (p,) = diagnosis_problems(old, val)
     assert "base_model:thrust_scale" in p
+
+
+def test_a_base_model_on_its_search_edge_is_not_told_to_be_calibrated():
+    """Field tether seeds: the thrust scale stops on its 0.5 floor because the autopilot pushes against
+    a tether the model lacks; the message must not send the user to calibrate a scale of 0.5."""
+    from uvsim.diagnosis.summary import summary_message
+
+    def msg(at_bound):
+        base = {"variant": "thrust_scale", "notes": "every thruster's curve scaled",
+                "parameters": {"thrust_scale_scale": {"value": 0.5 if at_bound else 0.8, "before": 1.0,
+                                                      "at_bound": at_bound}}}
+        cost = {"per_entry": 100.0}
+        return summary_message([], {}, base, cost, cost, 1.5, None, [], [])
+
+    assert "calibrate it (uvsim calibrate)" in msg(False) and "stands in for" not in msg(False)
+    on_edge = msg(True)
+    assert "calibrate it (uvsim calibrate)" not in on_edge and "on the edge of its search range" in on_edge
+    assert "thrust_scale_scale 1 -> 0.5" in on_edge

@@ -267,6 +267,16 @@ def bound_hits(rep: Mapping) -> dict[str, str]:
     return out
 
 
+def _all_on_bounds(name: str, values: str) -> str:
+    """The problem of an accepted effect ``name`` whose every fitted parameter (``values``) is on a
+    search bound: the bound is where the fit stopped, not what the data say (issue 48: a thrust scale
+    on its 0.5 floor under an autopilot that pushes against a tether the model lacks)."""
+    return (f"every fitted parameter of the accepted effect {name} ({values}) ended on a bound of its search "
+            "range: the data push it beyond what the catalogue considers physical, so the value is the bound, "
+            "not an answer (an effect outside the catalogue, or a force the model lacks that an autopilot "
+            "pushes against, is the likelier cause)")
+
+
 def diagnosis_problems(rep: Mapping, val_runs) -> list[str]:
     """Sanity problems of a diagnosis report: the corrected model's simulation leaving the data
     where the given model's does not, an accepted effect all on its search bounds. The given
@@ -281,14 +291,12 @@ def diagnosis_problems(rep: Mapping, val_runs) -> list[str]:
         # the dead unit); a dead unit's gain 0 is a physical floor, not a bound (uvsim.diagnosis.core)
         for f in final:
             if f["parameters"] and all(d["at_bound"] for d in f["parameters"].values()):
-                probs.append(f"every fitted parameter of the accepted effect {f['effect']}:{f['variant']} "
-                             f"({', '.join(f['parameters'])}) ended on a bound of its search range, so the data do "
-                             "not determine them")
+                vals = ", ".join(f"{k} {d['value']:.4g}" if isinstance(d.get("value"), (int, float)) else k
+                                 for k, d in f["parameters"].items())
+                probs.append(_all_on_bounds(f"{f['effect']}:{f['variant']}", vals))
         return probs
     for step in rep.get("steps", []):  # a report without the final fit's bounds
         chosen = next((c for c in step["candidates"] if c.get("chosen")), None)
         if chosen is not None and chosen.get("free") and set(chosen["free"]) <= set(chosen.get("at_bounds", ())):
-            probs.append(f"every fitted parameter of the accepted effect {chosen['effect']}:{chosen['variant']} "
-                         f"({', '.join(chosen['free'])}) ended on a bound of its search range, so the data do not "
-                         "determine them")
+            probs.append(_all_on_bounds(f"{chosen['effect']}:{chosen['variant']}", ", ".join(chosen["free"])))
     return probs

@@ -53,9 +53,12 @@ def summary_message(accepted, values, base_rep, val_given, val_cur, at_noise_lev
     names = [c.effect for c in accepted if c.effect != BASE_MODEL]
     base_msg = ""
     if base_rep is not None:
+        edge = bool(base_rep["parameters"]) and all(d.get("at_bound") for d in base_rep["parameters"].values())
         base_msg = (f"The base model is off: {base_rep['notes']} (base_model:{base_rep['variant']}, "
                     + ", ".join(f"{n} {d['before']:.4g} -> {d['value']:.4g}" for n, d in base_rep["parameters"].items())
-                    + "); calibrate it (uvsim calibrate) rather than add an effect. ")
+                    + ("; on the edge of its search range, so it stands in for something the model lacks rather "
+                       "than a value to calibrate). " if edge else
+                       "); calibrate it (uvsim calibrate) rather than add an effect. "))
     if names:
         msg = base_msg + (
             f"{' + '.join(plain_answer(c, values) or c.label for c in accepted if c.effect != BASE_MODEL)}: validation cost "
