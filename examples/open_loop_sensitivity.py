@@ -14,7 +14,7 @@ model follows the log to about the noise (4.8 mm), the massless load turns the o
 (133 mm), and 1 mrad of initial roll adds about 7 mm.  The windowed cost, which restarts every few seconds
 from the measured state, cannot see the mass; the diagnosis therefore fits the
 ``ballast:xyz_mass`` variant after a ballast wins and keeps it on a lower open-loop
-validation cost (``uvsim.diagnosis.decision.inertia_challenger``).
+validation cost (``uvsim.diagnosis.step_choice.inertia_challenger``).
 
     python examples/open_loop_sensitivity.py [--seed 38] [--out DIR]
 """

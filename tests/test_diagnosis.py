@@ -428,7 +428,7 @@ class _StubSelector:
 def test_lag_start_alternative_is_fitted_and_the_lower_open_loop_cost_wins():
     """Benchmark seed 6: the two lag starts have the same windowed validation cost (each
     window's initial velocities absorb the start), so the free simulation decides."""
-    from uvsim.diagnosis.decision import alternative_challenger
+    from uvsim.diagnosis.step_choice import alternative_challenger
 
     steady, rest = catalogue(input_kind="thrust", n_thrusters=8, dt=0.02, p_ref=np.zeros(3), has_position=True,
                              z_max=None, only=["thruster_lag"])
@@ -460,7 +460,7 @@ def test_an_alternative_of_a_variant_the_guard_refused_can_win_but_never_the_ref
     validation cost and makes the free simulation worse (the runs' start is wrong), so the
     guard refuses it; the alternative start is fitted and wins only when it is accepted
     itself, and an alternative fitted before in the step is not fitted again."""
-    from uvsim.diagnosis.decision import alternative_challenger
+    from uvsim.diagnosis.step_choice import alternative_challenger
 
     steady, rest = catalogue(input_kind="thrust", n_thrusters=8, dt=0.02, p_ref=np.zeros(3), has_position=True,
                              z_max=None, only=["thruster_lag"])
@@ -494,7 +494,7 @@ def test_an_alternative_of_a_variant_the_guard_refused_can_win_but_never_the_ref
 def test_a_simpler_variant_must_be_within_five_percent_of_the_winner(simple_cost, keeps_rich):
     """Benchmark seed 91: the pull-only tether, 26 % worse on validation than the cable-drag
     tether, must not replace it even when the bootstrap over a few windows is inconclusive."""
-    from uvsim.diagnosis.decision import simplest_sufficient
+    from uvsim.diagnosis.step_choice import simplest_sufficient
 
     tethers = {c.variant: c for c in catalogue(input_kind="pwm", n_thrusters=8, dt=0.02, p_ref=np.zeros(3),
                                                has_position=True, z_max=None, only=["tether"])}
@@ -560,7 +560,7 @@ def test_a_ballast_piece_mass_is_fitted_from_the_winner_and_kept_on_a_lower_open
     least 5 % lower."""
     from types import SimpleNamespace
 
-    from uvsim.diagnosis.decision import inertia_challenger
+    from uvsim.diagnosis.step_choice import inertia_challenger
 
     cands = {c.variant: c for c in catalogue(input_kind="force", n_thrusters=8, dt=0.04, p_ref=np.zeros(3),
                                              has_position=True, z_max=None, only=["ballast"])}
@@ -602,7 +602,7 @@ def test_a_variant_the_verdict_refused_gets_a_simpler_one_tried():
     refused by the open-loop verdict (a trade-off: position bought with depth), nothing else is
     accepted, and the horizontal variant (simpler, half the screening reduction or more) is fitted
     and accepted: the fallback tries simpler variants as it tries richer ones and alternatives."""
-    from uvsim.diagnosis.decision import blocked_fallback
+    from uvsim.diagnosis.step_choice import blocked_fallback
 
     cands = {c.variant: c for c in catalogue(input_kind="force", n_thrusters=8, dt=0.02, p_ref=np.zeros(3),
                                              has_position=True, z_max=None, only=["tether"])}
@@ -628,7 +628,7 @@ def test_a_richer_variant_accepted_after_a_refusal_is_chosen_though_not_signific
     is a trade-off, its richer variant (full) is fitted by the fallback and accepted, but is not
     significantly better on validation than the refused row; it is still the step's choice (it
     was chosen nowhere before this fix, and the diagnosis named nothing)."""
-    from uvsim.diagnosis.decision import blocked_fallback
+    from uvsim.diagnosis.step_choice import blocked_fallback
 
     cands = {c.variant: c for c in catalogue(input_kind="force", n_thrusters=8, dt=0.02, p_ref=np.zeros(3),
                                              has_position=True, z_max=None, only=["tether"])}
@@ -651,7 +651,7 @@ def test_an_effect_clearly_better_than_the_base_models_thrust_scale_takes_its_pl
     the dead unit, which on the given model gives 489; the effect now wins.  A curve mismatch, where
     the units' gains explain no more than the one scale, keeps the base model, and so does a step
     without an accepted effect."""
-    from uvsim.diagnosis.decision import base_effect_challenge, base_effect_kept
+    from uvsim.diagnosis.step_choice import base_effect_challenge, base_effect_kept
 
     (scale,) = [c for c in catalogue(input_kind="pwm", n_thrusters=8, dt=0.2, p_ref=np.zeros(3), has_position=False,
                                      z_max=None, only=["base_model"], base={}) if c.variant == "thrust_scale"]
@@ -679,7 +679,7 @@ def test_a_dead_vertical_thruster_is_not_pre_empted_by_the_base_models_thrust_sc
     validation runs clearly better (before the base model's challenge, the scale stayed and the unit
     was named reversed, "at 0.10 of its curve").  Every gain on the given model wins the challenge
     (thruster 8 at 0, the others 0.85-0.95 for the perturbed hydrodynamics), and the scale with thruster
-    8 alone is as good (decision.unit_beside_base; before, ``thruster_gain:all`` was named); the
+    8 alone is as good (step_choice.unit_beside_base; before, ``thruster_gain:all`` was named); the
     hydrodynamics are re-tuned in step 2, after which the scale is 1 again.  Since the unit's forms are
     fitted beside every gain in the challenge step (unit_choice.unit_forms), thruster 8 alone on the
     given model wins that step (validation cost 5.0 against every gain's 7.7), the scale is set aside
@@ -703,7 +703,7 @@ def test_a_dead_unit_beside_a_thrust_curve_off_is_named_as_the_unit_not_as_every
     0.67) wins the base model's challenge, but the curve scaled plus thruster 8 alone, two
     parameters, is as good on validation, so the scale stays and the unit is named (field-log
     benchmark, dead case seed 21: ``thruster_gain:all`` with thruster 7 at 0 and the others
-    0.55-0.67; decision.unit_beside_base).  Before, ``thruster_gain:all`` was named."""
+    0.55-0.67; step_choice.unit_beside_base).  Before, ``thruster_gain:all`` was named."""
     import pandas as pd
 
     from uvsim.thrust_curves import DATA_DIR

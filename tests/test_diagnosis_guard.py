@@ -114,7 +114,7 @@ def test_a_ballast_seed_from_the_rotations_alone_is_tried_mirrored_too():
 
 
 class _FakeSelector:
-    """What :func:`uvsim.diagnosis.decision.still_needed` asks of a selector, with the
+    """What :func:`uvsim.diagnosis.step_choice.still_needed` asks of a selector, with the
     windowed validation costs and open-loop blocks of the model without an effect given."""
 
     def __init__(self, without_windows, without_blocks):
@@ -158,7 +158,7 @@ def test_an_effect_chosen_first_is_dropped_when_the_later_one_explains_it():
     model with the later ballast alone; refused there (not significant, validation no
     better), it is dropped and the model without it is the answer.  A tether that the
     later effect does not explain (validation far worse without it) stays."""
-    from uvsim.diagnosis.decision import still_needed
+    from uvsim.diagnosis.step_choice import still_needed
 
     cands = {c.label: c for c in catalogue(input_kind="pwm", n_thrusters=6, dt=0.01, p_ref=np.zeros(3),
                                            has_position=True, z_max=None)}

@@ -74,7 +74,7 @@ def test_a_fouled_unit_not_clearly_worse_than_every_gain_is_named_in_its_place()
     """Every gain (8 parameters) won the step; the screening's best unit form is thruster 3's.  Its
     fouled form (2 parameters, not nested in every gain) is 15 % above every gain on validation but
     not clearly (block bootstrap at 99 %): the alternative with fewer parameters is named
-    (decision.parsimonious's rule).  Before, every gain was named (field-log fouled seeds 14, 44)."""
+    (step_choice.parsimonious's rule).  Before, every gain was named (field-log fouled seeds 14, 44)."""
     from uvsim.diagnosis.unit_choice import unit_forms
 
     w_all = _windows(1)
@@ -97,7 +97,7 @@ def test_a_fouled_unit_not_clearly_worse_than_every_gain_is_named_in_its_place()
 
 def test_the_fouled_form_replaces_the_units_gain_only_when_clearly_lower_on_validation():
     """``fouled_K`` nests ``unit_K``: it is the answer only with a validation cost more than 5 % below
-    (decision.simplest_sufficient's rule)."""
+    (step_choice.simplest_sufficient's rule)."""
     from uvsim.diagnosis.unit_choice import unit_forms
 
     w = _windows(2)

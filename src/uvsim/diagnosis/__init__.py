@@ -6,6 +6,17 @@ catalogue a model lacks, by forward selection: screen every candidate variant
 simulator (:mod:`uvsim.fitting`), keep one only if it improves the validation runs
 significantly (block bootstrap), refit everything chosen, repeat; then report the
 error before and after.  ``uvsim diagnose`` is its command line.
+
+Its modules: the catalogue (:mod:`~uvsim.diagnosis.candidates`, the thruster units'
+variants in :mod:`~uvsim.diagnosis.units`) and the fits' starts
+(:mod:`~uvsim.diagnosis.starts`); the acceptance of one fitted effect
+(:mod:`~uvsim.diagnosis.decision`); the runs and the fits through the simulator
+(:mod:`~uvsim.diagnosis.simulator_fits`); the equation-error screening (its least squares in
+:mod:`~uvsim.diagnosis.regression`) and the forward step (:mod:`~uvsim.diagnosis.selector`);
+which candidate a step keeps and whether earlier ones stay (:mod:`~uvsim.diagnosis.step_choice`),
+and which form of a faulty thruster unit (:mod:`~uvsim.diagnosis.unit_choice`); the "not
+explained" verdict (:mod:`~uvsim.diagnosis.residual`) and the report
+(:mod:`~uvsim.diagnosis.summary`).
 """
 from __future__ import annotations
 

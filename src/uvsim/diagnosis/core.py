@@ -15,13 +15,14 @@ Procedure (issue 10; docs/diagnose.md gives the method with its references):
    jointly with the re-tuned coefficients and the effects accepted before.
 4. **Judge** (:mod:`uvsim.diagnosis.decision`): physical values, an in-sample robust Wald
    test, and a validation improvement confirmed by a block bootstrap over windows; the
-   simplest sufficient variant and the most parsimonious effect win.
+   simplest sufficient variant and the most parsimonious effect win
+   (:mod:`uvsim.diagnosis.step_choice`).
 5. **Forward selection.**  The accepted effect joins the model and steps 2-4 repeat with
    the remaining effects until nothing significant is left or ``max_effects`` are in.  Step 0
    tries the base model's thrust curve alone (:data:`STEP0_VARIANTS`); when it is accepted, the
    effects that screen at least as well are fitted on the given model too, and one that explains
    the validation runs clearly better takes step 1 in its place
-   (:func:`uvsim.diagnosis.decision.base_effect_challenge`).
+   (:func:`uvsim.diagnosis.step_choice.base_effect_challenge`).
 6. **Report** every step (before/after costs, each candidate's numbers and why it was
    or was not accepted), the validation RMSE of the given and the corrected model (of free
    simulations, or on closed-loop logs of windowed predictions: :func:`judged_prediction`),
@@ -44,12 +45,12 @@ from uvsim.fit_settings import DEFAULT_HORIZON  # noqa: F401 (its home: uvsim.fi
 from uvsim.blas import single_thread
 from uvsim.checkpoint import Checkpoint, fingerprint
 from uvsim.diagnosis.candidates import BASE_MODEL, EFFECTS
-from uvsim.diagnosis.decision import (LEVEL, MIN_RELATIVE, VAL_LEVEL, WALD_P, alternative_challenger,
-                                      base_effect_challenge, base_effect_kept, blocked_fallback, inertia_challenger,
-                                      open_loop_verdict, parsimonious, richer_challenger, simplest_sufficient,
-                                      still_needed, unit_beside_base)
+from uvsim.diagnosis.decision import LEVEL, MIN_RELATIVE, VAL_LEVEL, WALD_P, open_loop_verdict
 from uvsim.diagnosis.residual import concentration, verdict
 from uvsim.diagnosis.selector import VARIANT_SHARE, Selector
+from uvsim.diagnosis.step_choice import (alternative_challenger, base_effect_challenge, base_effect_kept,
+                                         blocked_fallback, inertia_challenger, parsimonious, richer_challenger,
+                                         simplest_sufficient, still_needed, unit_beside_base)
 from uvsim.diagnosis.summary import parameter_reports, row_report, summary_message
 from uvsim.diagnosis.unit_choice import every_gain_step, unit_forms, unit_in_every_gain
 from uvsim.estimation.lag import attitude_lag_setting
@@ -240,7 +241,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
 
     def choose(st):
         """The step's winner: the simplest accepted candidate, or a fallback for one the verdict
-        alone refused, then its variants' challenges (uvsim.diagnosis.decision) and a faulty
+        alone refused, then its variants' challenges (uvsim.diagnosis.step_choice) and a faulty
         thruster unit's forms (uvsim.diagnosis.unit_choice); None."""
         winners = [row for row in st["fitted"] if row.get("accepted")]
         best = parsimonious(winners)
@@ -304,7 +305,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
             if nested is not None and nested["accepted"]:
                 # every gain won, but all except one unit's are the base model's common curve: the
                 # nested model (the curve + that unit) is as good, so the base model stays and the
-                # unit is the effect (decision.unit_beside_base)
+                # unit is the effect (step_choice.unit_beside_base)
                 kept = (f"{best1['candidate'].label} on the given model is clearly better ({why}), but "
                         f"{nested['candidate'].label} beside it is as good")
                 best["why"] += f"; kept against the effects on the given model ({kept})"

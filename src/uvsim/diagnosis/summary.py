@@ -35,7 +35,7 @@ def parameter_reports(accepted, values: Mapping[str, float], final, vehicle) -> 
                 params[n]["before"] = vehicle.parameters().get(n, 1.0)
             if base_rep is None:
                 base_rep = {"variant": c.variant, "notes": c.notes, "parameters": params}
-            else:  # a thrust scale kept beside a unit, then a hydrodynamic variant (decision.unit_beside_base)
+            else:  # a thrust scale kept beside a unit, then a hydrodynamic variant (step_choice.unit_beside_base)
                 base_rep = {"variant": f"{base_rep['variant']}+{c.variant}", "notes": f"{base_rep['notes']}; {c.notes}",
                             "parameters": {**base_rep["parameters"], **params}}
         else:

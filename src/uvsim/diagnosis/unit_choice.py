@@ -3,21 +3,21 @@
 The catalogue has two forms of one faulty unit ``K`` (:mod:`uvsim.diagnosis.units`): ``unit_K`` (its
 gain) and ``fouled_K`` (its gain and its reverse ratio), beside ``all`` (every unit's gain).  The
 screening picks one variant per effect (the simplest within ``VARIANT_SHARE`` of the best), and the
-challengers of :mod:`uvsim.diagnosis.decision` fit one richer and one simpler variant, so the unit's
+challengers of :mod:`uvsim.diagnosis.step_choice` fit one richer and one simpler variant, so the unit's
 other form may never be fitted: on a fouled unit the screening ranks ``all`` first, ``unit_K`` is
 fitted as its simpler variant and ``fouled_K``, which neither nests nor is nested in ``all``, is not
 (field-log benchmark, issue 48, fouled seed 34: ``all`` refused as a trade-off in depth, ``unit_1``
 62.9 % above it, nothing named, where ``fouled_1`` alone passes every test including the verdict).
 
 The rule, applied to a step's winner (or to a step without one whose every-gain row the open-loop
-verdict alone refused, as :func:`uvsim.diagnosis.decision.blocked_fallback` does for the other
+verdict alone refused, as :func:`uvsim.diagnosis.step_choice.blocked_fallback` does for the other
 effects):
 
 1. the unit is the one whose form removed most of the equation error in the screening;
 2. both forms are fitted (unless fitted already in the step) and judged (:func:`judge`); of the
    accepted ones, ``fouled_K`` is the unit's answer only when its validation cost is more than
    :data:`MIN_RELATIVE` below ``unit_K``'s (it nests ``unit_K``: the rule of
-   :func:`uvsim.diagnosis.decision.simplest_sufficient`);
+   :func:`uvsim.diagnosis.step_choice.simplest_sufficient`);
 3. against ``all``: ``unit_K`` is nested in it, and keeps :func:`simplest_sufficient`'s rule (within
    :data:`MIN_RELATIVE`); ``fouled_K`` is not (its reverse ratio is no gain), so the two are
    alternatives, compared as the step's alternatives are (:func:`parsimonious`): the one with fewer
@@ -82,7 +82,7 @@ def unit_forms(sel, best, st, val_cur):
         if c.effect != EFFECT or c.tags.get("reversed"):
             return None
         blocked = None
-    else:  # the every-gain row the verdict alone refused (decision.blocked_fallback's rows)
+    else:  # the every-gain row the verdict alone refused (step_choice.blocked_fallback's rows)
         blocked = next((r for r in st["fitted"] if r.get("guard_blocked") and r.get("candidate") is not None
                         and r["candidate"].effect == EFFECT and "unit" not in r["candidate"].tags), None)
         if blocked is None:
@@ -155,18 +155,18 @@ def unit_in_every_gain(sel, accepted: list, values: dict, val_cur: dict):
     fitted too (both of the unit's forms, after the model without them), and replaces it when that
     unit is accepted (:func:`judge`, against the model without it) and the result is as good: within
     :data:`MIN_RELATIVE` of the final model's validation cost for ``unit_K`` (nested in every gain:
-    :func:`uvsim.diagnosis.decision.simplest_sufficient`'s rule), or not clearly worse for ``fouled_K``
+    :func:`uvsim.diagnosis.step_choice.simplest_sufficient`'s rule), or not clearly worse for ``fouled_K``
     (not nested: :func:`clearly_better`).  Returns None when there is nothing to try, else a dict with
     ``rows`` (the fits, for the report) and, when it replaces the model, ``accepted``, ``values``,
     ``val``, ``fit``.
 
     Why: a base-model variant accepted after every gain (a hydrodynamic re-tune) explains part of what
     the seven other gains stood in for, and the unit beside a common scale was only tried against a
-    thrust scale accepted in step 0 (:func:`uvsim.diagnosis.decision.unit_beside_base`).  Field logs,
+    thrust scale accepted in step 0 (:func:`uvsim.diagnosis.step_choice.unit_beside_base`).  Field logs,
     weak seed 13 (thruster 7 at 0.472): every gain (thruster 7 at 0.35, the others 0.67-0.77) then the
     hydrodynamics re-tuned, validation cost 25.0; the re-tune with the scale free plus ``unit_7``: 25.5 in
     the diagnosis (24.1 fitted on the given model alone: docs/records/diagnose.md).
-    This is backward elimination's question (:func:`uvsim.diagnosis.decision.still_needed`) asked of
+    This is backward elimination's question (:func:`uvsim.diagnosis.step_choice.still_needed`) asked of
     the every-gain variant once the base model is in."""
     c_all = next((c for c in accepted if c.effect == EFFECT and "unit" not in c.tags and len(c.free) >= 3), None)
     if c_all is None:
