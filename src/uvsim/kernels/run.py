@@ -31,7 +31,20 @@ def blowup_message(row: int, t: float, speed_max: float) -> str:
 
 
 def rk4_compiled(advance, plan, model, T, U, y0, substeps, on_blowup, progress, V, accel, speed_max):
-    """States (n, n_t, 13) as :func:`uvsim.simulate._rk4_steps` returns them."""
+    """States (n, n_t, 13) as :func:`uvsim.simulate._rk4_steps` returns them.
+
+    With one BLAS thread (:func:`uvsim.blas.single_thread`) for the numpy around the kernel (the
+    input histories' fingerprint, the held forces' small products): the kernel is one thread,
+    and a second BLAS thread only spins or waits for a core, which made the batched benchmark
+    slower on two processes (four threads on two cores) than on one."""
+    from uvsim.blas import single_thread
+
+    with single_thread():
+        return _rk4_chunks(advance, plan, model, T, U, y0, substeps, on_blowup, progress, V, accel, speed_max)
+
+
+def _rk4_chunks(advance, plan, model, T, U, y0, substeps, on_blowup, progress, V, accel, speed_max):
+    """:func:`rk4_compiled`'s work, chunk by chunk."""
     n, n_t = T.shape
     Y = np.empty((n, n_t, 13))
     Y[:, 0] = y0
