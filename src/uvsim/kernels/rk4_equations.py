@@ -56,10 +56,10 @@ O_TE = 249     # tether: attachment r_a (3, body, m), anchor p_0 (3, NED, m), ho
 N_TH = 261
 
 #: The functions numba compiles (:mod:`uvsim.kernels.numba_rk4`), callees first.
-KERNEL_FUNCTIONS = ("_dof_force", "_tether_add", "_coriolis_sub", "rhs", "rk4_block", "advance", "accelerations")
-#: Those compiled into their callers (numba's ``inline="always"``), so that a loop over the lanes
-#: of a block is one loop body that LLVM vectorises.
-INLINED = ("_dof_force", "_tether_add", "_coriolis_sub", "rhs")
+KERNEL_FUNCTIONS = ("_dof_force", "_tether_add", "_coriolis_sub", "rhs", "_rk4_block", "rk4_block", "advance", "accelerations")
+#: Those compiled into their callers (LLVM's ``alwaysinline``), so that a loop over the lanes of a
+#: block is one loop body that LLVM vectorises.
+INLINED = ("_dof_force", "_tether_add", "_coriolis_sub", "rhs", "_rk4_block")
 
 #: Trajectories per block of :func:`advance`: one lane of a vector register each (8 doubles in
 #: AVX-512's 512 bits).
@@ -263,6 +263,15 @@ def rk4_block(w, parts, substeps):
     instruction per operation."""
     if w.shape[0] != W_ROWS or w.shape[1] != BLOCK or w.strides[0] != 8 * BLOCK or w.strides[1] != 8:
         raise ValueError("rk4_block: w must be a C-contiguous (W_ROWS, BLOCK) float64 array")
+    if parts == 0:  # the common model (no current, coupled damping or tether): a body with no branches
+        _rk4_block(w, 0, substeps)
+    else:
+        _rk4_block(w, parts, substeps)
+
+
+def _rk4_block(w, parts, substeps):
+    """:func:`rk4_block`'s steps (compiled into it twice: with ``parts`` 0, where the compiler drops the
+    optional parts' branches from the lanes' loops, and with ``parts`` as given)."""
     yc = w[W_Y:W_Y + 13]
     ys = w[W_S:W_S + 13]
     k1 = w[W_K1:W_K1 + 13]
