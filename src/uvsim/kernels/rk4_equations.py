@@ -313,22 +313,25 @@ def _rk4_block(w, parts, substeps):
                 yc[c, l] = yc[c, l] / s
 
 
-def advance(y, T, TAU, TH, substeps, parts, Y, ACC, want_acc, i0, n_t, speed_max, first_bad):
-    """RK4 over ``m`` sample intervals for every row, in place.
+def advance(y, T, TAU, TH, substeps, parts, Y, ACC, want_acc, i0, speed_max, first_bad):
+    """RK4 over the ``m`` sample intervals from ``i0`` for every row, in place.
 
-    ``y`` (n, 13) the states at ``T[:, 0]`` (updated to ``T[:, m]``); ``T`` (n, m + 1) sample
-    times (s); ``TAU`` (n, m, 6) actuator forces held over each interval (N, N m); ``TH`` (n, N_TH);
-    ``Y`` (n, m, 13) receives the states at ``T[:, 1:]``; ``ACC`` (n, m, 6) the acceleration at
-    each interval's start (first RK4 stage) when ``want_acc``.  ``i0`` is the global index of
-    the first interval and ``n_t`` the run's number of samples: as in ``_rk4_steps``, a row is
-    checked at every 16th interval and the last, and a row whose state is not finite or whose
-    speed reaches ``speed_max`` becomes NaN from then on (its non-finite earlier states NaN
-    too), with the interval recorded in ``first_bad`` (n,) (-1: never).
+    ``y`` (n, 13) the states at ``T[:, i0]`` (updated to ``T[:, i0 + m]``); ``T`` (n, n_t)
+    the run's sample times (s); ``TAU`` (n, m, 6) actuator forces held over each interval
+    (N, N m); ``TH`` (n, N_TH); ``Y`` (n, n_t, 13) receives the states at
+    ``T[:, i0 + 1:i0 + m + 1]``; ``ACC`` (n, n_t, 6) the acceleration at each interval's start
+    (first RK4 stage) when ``want_acc``.  The whole run's arrays with the offset ``i0`` rather
+    than a chunk's views: their layout, and so the compiled signature, is the same for every
+    call.  As in ``_rk4_steps``, a row is checked at every 16th interval and the last, and a row
+    whose state is not finite or whose speed reaches ``speed_max`` becomes NaN from then on (its
+    non-finite earlier states NaN too), with the interval recorded in ``first_bad`` (n,) (-1:
+    never).
 
     The rows run in blocks of :data:`BLOCK` (:func:`rk4_block`), one lane each; the lanes past
     the last row of the last block repeat its last row and are not written."""
     n = y.shape[0]
     m = TAU.shape[1]
+    n_t = T.shape[1]
     w = np.empty((W_ROWS, BLOCK))
     dead = np.empty(BLOCK, np.bool_)
     last_check = np.empty(BLOCK, np.int64)
@@ -345,7 +348,7 @@ def advance(y, T, TAU, TH, substeps, parts, Y, ACC, want_acc, i0, n_t, speed_max
         for i in range(m):
             for l in range(BLOCK):
                 row = r0 + min(l, nl - 1)
-                w[W_H, l] = (T[row, i + 1] - T[row, i]) / substeps
+                w[W_H, l] = (T[row, i0 + i + 1] - T[row, i0 + i]) / substeps
                 for c in range(6):
                     w[W_TAU + c, l] = TAU[row, i, c]
             rk4_block(w, parts, substeps)
@@ -355,16 +358,16 @@ def advance(y, T, TAU, TH, substeps, parts, Y, ACC, want_acc, i0, n_t, speed_max
                 row = r0 + l
                 if dead[l]:
                     for c in range(13):
-                        Y[row, i, c] = np.nan
+                        Y[row, g + 1, c] = np.nan
                     if want_acc:
                         for c in range(6):
-                            ACC[row, i, c] = np.nan
+                            ACC[row, g, c] = np.nan
                     continue
                 for c in range(13):
-                    Y[row, i, c] = w[W_Y + c, l]
+                    Y[row, g + 1, c] = w[W_Y + c, l]
                 if want_acc:
                     for c in range(6):
-                        ACC[row, i, c] = w[W_ACC + c, l]
+                        ACC[row, g, c] = w[W_ACC + c, l]
                 if check:
                     ok = True
                     for c in range(13):
@@ -376,7 +379,7 @@ def advance(y, T, TAU, TH, substeps, parts, Y, ACC, want_acc, i0, n_t, speed_max
                     if not ok:
                         dead[l] = True
                         first_bad[row] = g
-                        for j in range(last_check[l] + 1, i + 1):
+                        for j in range(i0 + last_check[l] + 2, g + 2):
                             for c in range(13):
                                 if not math.isfinite(Y[row, j, c]):
                                     Y[row, j, c] = np.nan

@@ -59,8 +59,7 @@ def _rk4_chunks(advance, plan, model, T, U, y0, substeps, on_blowup, progress, V
     for c0 in range(0, n_t - 1, chunk):
         c1 = min(c0 + chunk, n_t - 1)
         tau = plan.held_forces(U[:, c0:c1], model.input_kind, None if V is None else V[:, c0:c1], rows)
-        advance(y, T[:, c0:c1 + 1], tau, plan.TH, substeps, plan.parts,
-                Y[:, c0 + 1:c1 + 1], accel[:, c0:c1] if want_acc else no_acc, want_acc, c0, n_t, speed_max,
+        advance(y, T, tau, plan.TH, substeps, plan.parts, Y, accel if want_acc else no_acc, want_acc, c0, speed_max,
                 first_bad)
         if on_blowup == "raise" and (first_bad >= 0).any():
             g = first_bad[first_bad >= 0].min()
