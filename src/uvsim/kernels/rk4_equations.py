@@ -31,7 +31,7 @@ with ``[a; b] = M nu`` (eq. 3.46).
 :func:`rhs` is written for one lane of a block of trajectories (one column of ``(13, B)``
 states): :func:`advance` runs the rows in blocks of :data:`BLOCK`, whose loops over the lanes
 the compiler turns into vector instructions (the same operations in the same order, so the
-same numbers as one row at a time); :func:`accelerations` uses blocks of one.
+same numbers as one row at a time); :func:`accelerations` runs the states in such blocks.
 """
 from __future__ import annotations
 
@@ -56,10 +56,11 @@ O_TE = 249     # tether: attachment r_a (3, body, m), anchor p_0 (3, NED, m), ho
 N_TH = 261
 
 #: The functions numba compiles (:mod:`uvsim.kernels.numba_rk4`), callees first.
-KERNEL_FUNCTIONS = ("_dof_force", "_tether_add", "_coriolis_sub", "rhs", "_rk4_block", "rk4_block", "advance", "accelerations")
+KERNEL_FUNCTIONS = ("_dof_force", "_tether_add", "_coriolis_sub", "rhs", "_check_block", "_rk4_block", "rk4_block",
+                    "_rhs_lanes", "rhs_block", "advance", "accelerations")
 #: Those compiled into their callers (LLVM's ``alwaysinline``), so that a loop over the lanes of a
 #: block is one loop body that LLVM vectorises.
-INLINED = ("_dof_force", "_tether_add", "_coriolis_sub", "rhs", "_rk4_block")
+INLINED = ("_dof_force", "_tether_add", "_coriolis_sub", "rhs", "_check_block", "_rk4_block", "_rhs_lanes")
 
 #: Trajectories per block of :func:`advance`: one lane of a vector register each (8 doubles in
 #: AVX-512's 512 bits).
@@ -251,6 +252,13 @@ def _coriolis_sub(tau, u, v, w, p, q, r, th, o, l):
             tau[5] - ((u * a1 - v * a0) + (p * b1 - q * b0)))
 
 
+def _check_block(w):
+    """Raise unless ``w`` is a C-contiguous (W_ROWS, BLOCK) float64 array.  Also what tells the
+    compiler the shape and strides of ``w`` in the code after it (:func:`rk4_block`)."""
+    if w.shape[0] != W_ROWS or w.shape[1] != BLOCK or w.strides[0] != 8 * BLOCK or w.strides[1] != 8:
+        raise ValueError("a block's work array must be a C-contiguous (W_ROWS, BLOCK) float64 array")
+
+
 def rk4_block(w, parts, substeps):
     """One sample interval of RK4 (``substeps`` steps) for every lane of a block, in place.
 
@@ -261,8 +269,7 @@ def rk4_block(w, parts, substeps):
     which tells the compiler that every part is a fixed offset from one address, so that no
     lane's reads overlap another part's writes: each loop over the lanes becomes one vector
     instruction per operation."""
-    if w.shape[0] != W_ROWS or w.shape[1] != BLOCK or w.strides[0] != 8 * BLOCK or w.strides[1] != 8:
-        raise ValueError("rk4_block: w must be a C-contiguous (W_ROWS, BLOCK) float64 array")
+    _check_block(w)
     if parts == 0:  # the common model (no current, coupled damping or tether): a body with no branches
         _rk4_block(w, 0, substeps)
     else:
@@ -283,8 +290,7 @@ def _rk4_block(w, parts, substeps):
     th = w[W_TH:W_TH + N_TH]
     h = w[W_H]
     for sub in range(substeps):
-        for l in range(BLOCK):
-            rhs(yc, tau_act, th, parts, k1, l)
+        _rhs_lanes(w, parts)  # k1
         if sub == 0:
             for c in range(6):
                 for l in range(BLOCK):
@@ -311,6 +317,27 @@ def _rk4_block(w, parts, substeps):
             s = math.sqrt(yc[3, l] * yc[3, l] + yc[4, l] * yc[4, l] + yc[5, l] * yc[5, l] + yc[6, l] * yc[6, l])
             for c in range(3, 7):
                 yc[c, l] = yc[c, l] / s
+
+
+def rhs_block(w, parts):
+    """:func:`rhs` for every lane of a block: the derivative of the states ``w[W_Y:W_Y + 13]`` into
+    ``w[W_K1:W_K1 + 13]``; ``w`` as in :func:`rk4_block` (and checked the same way, which is what
+    lets the compiler vectorise the loop over the lanes)."""
+    _check_block(w)
+    if parts == 0:
+        _rhs_lanes(w, 0)
+    else:
+        _rhs_lanes(w, parts)
+
+
+def _rhs_lanes(w, parts):
+    """:func:`rhs_block`'s loop (compiled into it twice, as :func:`_rk4_block`)."""
+    y = w[W_Y:W_Y + 13]
+    tau_act = w[W_TAU:W_TAU + 6]
+    th = w[W_TH:W_TH + N_TH]
+    out = w[W_K1:W_K1 + 13]
+    for l in range(BLOCK):
+        rhs(y, tau_act, th, parts, out, l)
 
 
 def advance(y, T, TAU, TH, substeps, parts, Y, ACC, want_acc, i0, speed_max, first_bad):
@@ -397,21 +424,25 @@ def accelerations(Y, TAU, TH, parts, ACC):
     ``Y`` (N, 13) states (shared by the rows), ``TAU`` (P, N, 6) the held actuator forces
     (N, N m), ``TH`` (P, N_TH) the parameter rows; ``ACC`` (P, N, 6) receives :func:`rhs`'s
     ``out[7:13]`` (m/s^2, rad/s^2).  What the equation error (:mod:`uvsim.fitting.equation_error`)
-    evaluates along a measured motion for a batch of parameter sets (no integration)."""
+    evaluates along a measured motion for a batch of parameter sets (no integration).  The states
+    run in blocks of :data:`BLOCK` lanes (:func:`rhs_block`), the last block's spare lanes
+    repeating its last state."""
     P = TH.shape[0]
     N = Y.shape[0]
-    out = np.empty((13, 1))
-    yc = np.empty((13, 1))
-    tau = np.empty((6, 1))
-    th = np.empty((N_TH, 1))
+    w = np.empty((W_ROWS, BLOCK))
     for p in range(P):
         for c in range(N_TH):
-            th[c, 0] = TH[p, c]
-        for s in range(N):
-            for c in range(13):
-                yc[c, 0] = Y[s, c]
-            for c in range(6):
-                tau[c, 0] = TAU[p, s, c]
-            rhs(yc, tau, th, parts, out, 0)
-            for c in range(6):
-                ACC[p, s, c] = out[7 + c, 0]
+            for l in range(BLOCK):
+                w[W_TH + c, l] = TH[p, c]
+        for s0 in range(0, N, BLOCK):
+            nl = min(BLOCK, N - s0)
+            for l in range(BLOCK):
+                s = s0 + min(l, nl - 1)
+                for c in range(13):
+                    w[W_Y + c, l] = Y[s, c]
+                for c in range(6):
+                    w[W_TAU + c, l] = TAU[p, s, c]
+            rhs_block(w, parts)
+            for l in range(nl):
+                for c in range(6):
+                    ACC[p, s0 + l, c] = w[W_K1 + 7 + c, l]
