@@ -255,11 +255,16 @@ class Actuators(ForceTerm):
                 raise SimulationError("inputs are PWM but the vehicle's thrusters have no thrust curves")
             f = np.empty_like(u)
             for curve, idx in groups:
+                # one curve for every thruster, in order (the usual vehicle): no column copies
+                every = len(groups) == 1 and idx.size == u.shape[1] and bool(np.all(idx == np.arange(idx.size)))
                 try:
                     if voltage is not None and getattr(curve, "voltage_dependent", False):
-                        f[:, idx] = curve.thrust(u[:, idx], voltage=np.asarray(voltage, float)[:, None])
+                        t = curve.thrust(u if every else u[:, idx], voltage=np.asarray(voltage, float)[:, None])
                     else:
-                        f[:, idx] = curve.thrust(u[:, idx])
+                        t = curve.thrust(u if every else u[:, idx])
+                    if every:
+                        return t
+                    f[:, idx] = t
                 except SimulationError as exc:
                     raise SimulationError(self._pwm_error(u, curve, idx, exc)) from None
             return f

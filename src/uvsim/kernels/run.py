@@ -31,7 +31,20 @@ def blowup_message(row: int, t: float, speed_max: float) -> str:
 
 
 def rk4_compiled(advance, plan, model, T, U, y0, substeps, on_blowup, progress, V, accel, speed_max):
-    """States (n, n_t, 13) as :func:`uvsim.simulate._rk4_steps` returns them."""
+    """States (n, n_t, 13) as :func:`uvsim.simulate._rk4_steps` returns them.
+
+    With one BLAS thread (:func:`uvsim.blas.single_thread`) for the numpy around the kernel (the
+    input histories' fingerprint, the held forces' small products): the kernel is one thread,
+    and a second BLAS thread only spins or waits for a core, which made the batched benchmark
+    slower on two processes (four threads on two cores) than on one."""
+    from uvsim.blas import single_thread
+
+    with single_thread():
+        return _rk4_chunks(advance, plan, model, T, U, y0, substeps, on_blowup, progress, V, accel, speed_max)
+
+
+def _rk4_chunks(advance, plan, model, T, U, y0, substeps, on_blowup, progress, V, accel, speed_max):
+    """:func:`rk4_compiled`'s work, chunk by chunk."""
     n, n_t = T.shape
     Y = np.empty((n, n_t, 13))
     Y[:, 0] = y0
@@ -46,8 +59,7 @@ def rk4_compiled(advance, plan, model, T, U, y0, substeps, on_blowup, progress, 
     for c0 in range(0, n_t - 1, chunk):
         c1 = min(c0 + chunk, n_t - 1)
         tau = plan.held_forces(U[:, c0:c1], model.input_kind, None if V is None else V[:, c0:c1], rows)
-        advance(y, T[:, c0:c1 + 1], tau, plan.TH, substeps, plan.parts,
-                Y[:, c0 + 1:c1 + 1], accel[:, c0:c1] if want_acc else no_acc, want_acc, c0, n_t, speed_max,
+        advance(y, T, tau, plan.TH, substeps, plan.parts, Y, accel if want_acc else no_acc, want_acc, c0, speed_max,
                 first_bad)
         if on_blowup == "raise" and (first_bad >= 0).any():
             g = first_bad[first_bad >= 0].min()
