@@ -109,7 +109,7 @@ def vehicle_file_edit(old, new):
 
 # the work a refusal must come before: replaced by a function that fails the test if called
 BEFORE = {
-    "ga": ("uvsim.calibration.calibrator", "run_ga"),
+    "ga": ("uvsim.calibration.stages", "run_ga"),
     "rk4": ("uvsim.simulate", "_rk4_steps"),
     "replay": ("uvsim.export.replay._Target", "step"),
     "diagnosis": ("uvsim.diagnosis.core", "Selector"),

@@ -152,12 +152,12 @@ def test_a_surface_pressure_in_hpa_is_refused_with_the_pa_value(tmp_path, capsys
 
 # ----------------------------------------------------------------------------- fits
 def test_a_misspelt_signal_is_refused_before_the_ga_with_the_name_meant(tmp_path, capsys, monkeypatch):
-    import uvsim.calibration.calibrator as calibrator
+    import uvsim.calibration.stages as stages
 
     def no_ga(*a, **k):
         raise AssertionError("the GA ran before the settings were checked")
 
-    monkeypatch.setattr(calibrator, "run_ga", no_ga)
+    monkeypatch.setattr(stages, "run_ga", no_ga)
     ds = write_tiny_dataset(tmp_path / "ds")
     assert main(["calibrate", "--data", str(ds), "--weights", "positon=1", "--out", str(tmp_path / "f.yaml")]) == 2
     _one_line_error(capsys, "weights: unknown signal 'positon' (did you mean 'position'?)")

@@ -4,7 +4,8 @@
   groups, Table 4 settings; batched, optionally distributed, checkpointed) for runs
   marked with one DOF, then one joint windowed prediction-error fit of every training
   run (marked and mixed, :mod:`uvsim.fitting`) with uncertainty, identifiability and
-  free-parameter control (:mod:`uvsim.calibration.selection`).
+  free-parameter control (:mod:`uvsim.calibration.selection`); each stage set up from its
+  settings in :mod:`uvsim.calibration.stages`.
 * :func:`simulate_dataset`, :func:`prepare_runs`, :func:`simulate_rows` - batched
   simulation of logged runs (shared with diagnosis).
 * :mod:`uvsim.calibration.estimators` - seed 002's least-squares, recursive

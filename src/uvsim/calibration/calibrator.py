@@ -10,14 +10,14 @@ Fit (docs/calibration.md):
 
 1. **GA** (global stage, seed 000 sec. 4.4, Tables 3-4): for every DOF with training runs
    marked with it (``dof: surge`` ... in the manifest), its Table 3 parameters on its
-   own runs (:func:`uvsim.calibration.ga.run_ga`, fitness
-   :mod:`uvsim.calibration.fitness`).  Skipped when no run is marked (``dof: mixed``).
+   own runs (:func:`uvsim.calibration.stages.ga_stage`, :func:`uvsim.calibration.ga.run_ga`,
+   fitness :mod:`uvsim.calibration.fitness`).  Skipped when no run is marked (``dof: mixed``).
 2. **Joint stage**: one windowed prediction-error fit (:func:`uvsim.fitting.fit`) of
    every training run (marked and mixed), from the GA's values (or the vehicle's),
    freeing the Table 3 parameters (rigid-body inertias fixed unless freed) of the GA's
    DOFs and, for mixed runs, every DOF's that the data excite
    (:mod:`uvsim.calibration.selection`), plus ``free`` minus ``fix``
-   (:mod:`uvsim.calibration.joint`).
+   (:func:`uvsim.calibration.stages.joint_stage`, :mod:`uvsim.calibration.joint`).
 3. **Report**: open-loop metrics of every run for the initial and the fitted vehicle
    (:mod:`uvsim.calibration.report`), uncertainties, identifiability.
 """
@@ -30,20 +30,19 @@ from typing import Mapping
 
 import numpy as np
 
-from uvsim.calibration.batching import prepare_runs
-from uvsim.calibration.evaluation import DEFAULT_BATCH_ROWS, BatchEvaluator, DaskMap, DofProblem, ProcessMap, SerialMap
-from uvsim.calibration.fitness import used_channels
-from uvsim.calibration.ga import GASettings, fingerprint, run_ga
-from uvsim.calibration.inputs import as_dataset, combine_weights, latency_setting, resolve_vehicle, run_amplitude
-from uvsim.calibration.joint import JointCheckpoint, joint_checkpoint_path, run_joint
+from uvsim.calibration.evaluation import DEFAULT_BATCH_ROWS, DaskMap, ProcessMap, SerialMap
+from uvsim.calibration.ga import GASettings
+from uvsim.calibration.inputs import as_dataset, latency_setting, resolve_vehicle
+from uvsim.calibration.joint import joint_checkpoint_path
 from uvsim.calibration.latency_estimate import refit_with_latency
-from uvsim.calibration.params import DOF_PARAMETERS, default_channel_weights, parse_dofs
+from uvsim.calibration.params import DOF_PARAMETERS, parse_dofs
 from uvsim.calibration.report import build_report, evaluate_runs, identifiability_report
-from uvsim.calibration.selection import check_bounds, effective_inertia_start, expand_names, joint_candidates
+from uvsim.calibration.selection import check_bounds, effective_inertia_start, expand_names
+from uvsim.calibration.stages import ga_stage, joint_stage
 from uvsim.calibration import supply_voltage as supply
 from uvsim.errors import CalibrationError
 from uvsim.estimation.lag import attitude_lag_setting
-from uvsim.fitting.evaluate import check_judge_horizon, judged_scales
+from uvsim.fitting.evaluate import check_judge_horizon
 from uvsim.fitting.objective import check_loss, continuity_factors
 from uvsim.fitting.parameters import cb_not_below_cg, default_bounds, physical_bounds
 from uvsim.latency import runs_for
@@ -55,16 +54,6 @@ from uvsim.schema import check_workers, real_number, whole_number
 from uvsim.signals import check_sample_weighting, check_signal_settings
 
 log = logging.getLogger("uvsim")
-#: The joint stage's progress label by checkpoint tag (the first fit, the refits).
-JOINT_LABELS = {"": "joint fit", ".latency": "joint fit again with the estimated sensor latency",
-                ".supply": "joint fit on the T200 voltage family (--supply-voltage auto)"}
-#: The joint stage stops when an iteration lowers the cost by less than this fraction of it
-#: (:func:`uvsim.fitting.fit`'s ``ftol``). 1e-5 of a cost of N noise-normalized residuals is far
-#: below the cost's own sampling spread (sqrt(2N)); with the tight continuity above, ``fit``'s
-#: 1e-6 spent 16 more iterations on the shipped tank dataset for changes in the 4th digit
-#: (25 iterations, 30.5 s, against 9 and 13.3 s; docs/records/calibration.md, "Speed of the paper-size calibration").
-JOINT_FTOL = 1e-5
-
 
 class Calibrator:
     """Calibrate a vehicle to logged runs (module docstring).
@@ -375,7 +364,7 @@ class Calibrator:
                                    f"({', '.join(DOF_PARAMETERS)}) for the GA, and refine=False (--no-refine) skips "
                                    "the joint fit that calibrates mixed runs")
         if ga_dofs:
-            ga, ga_values, problems = self._run_ga(veh, train, ga_dofs, fixed, bounds_of, base)
+            ga, ga_values, problems = ga_stage(self, veh, train, ga_dofs, fixed, bounds_of, base)
         t_ga = time.perf_counter()
         # ---------------------------------------------------------------- joint stage
         fit_res, screen = None, {"relative_sigma": {}, "not_excited": [], "threshold": None}
@@ -386,7 +375,7 @@ class Calibrator:
             params.update(start)
             start_veh = veh.with_parameters(params) if params else veh
             def joint(start_vehicle, bounds, names=None, tag="", prior_mean=None):  # this fit's joint stage
-                return self._run_joint(ds, start_vehicle, runs, meas, dofs, ga_dofs, fixed, extra, bounds, horizons,
+                return joint_stage(self, ds, start_vehicle, runs, meas, dofs, ga_dofs, fixed, extra, bounds, horizons,
                                        tag=tag, names=names, prior_mean=prior_mean)
 
             fit_res, screen = joint(start_veh, joint_bounds)
@@ -434,110 +423,9 @@ class Calibrator:
         self.wall_seconds_ = self.report_["wall_seconds"]
         return self
 
-    def _run_ga(self, veh, train, ga_dofs, fixed, bounds_of, base):
-        uw = self.signal_weights
-        runs = [r for d in ga_dofs for r in train if r.dof == d]
-        batch = prepare_runs(runs, initial_velocity=self.initial_velocity, sensors=veh.sensors)
-        meas, problems = [], {}
-        for d in ga_dofs:
-            w = combine_weights(default_channel_weights(d) if self.ga_channels == "own" else {}, uw)
-            idx = np.array([i for i, r in enumerate(runs) if r.dof == d])
-            # per sample: the GA's fitness already averages each channel over its own samples
-            ms = self._meas([runs[i] for i in idx], w, run_weight=1.0, sample_weighting="per_sample")
-            meas += ms
-            if not any(used_channels(m) for m in ms):
-                raise CalibrationError(
-                    f"dof {d}: its training runs log none of the signals its GA fitness uses "
-                    f"({sorted(c for c, v in w.items() if v > 0)}); logged: "
-                    f"{sorted({c for m in ms for g in m.groups.values() for c, ok in zip(g.channels, g.logged) if ok})}"
-                    f"; set signal_weights (--weights) or ga_channels='all'")
-            rw = np.array([runs[i].weight for i in idx], float)
-            if self.low_speed_exponent:
-                amp = np.array([run_amplitude(m) for m in ms])
-                rw = rw * (amp / np.median(amp)) ** (-float(self.low_speed_exponent))
-            names = tuple(k for k in DOF_PARAMETERS[d] if k not in fixed)
-            b = np.array([bounds_of(k) for k in names], float)
-            init = np.array([base[k] for k in names])
-            bad = [f"{k}: ({lo:g}, {hi:g}) do not contain the start value {v:g}"
-                   for k, (lo, hi), v in zip(names, b, init) if not lo <= v <= hi]
-            if bad:
-                raise CalibrationError("bounds for " + "; ".join(bad))
-            problems[d] = DofProblem(d, names, b[:, 0], b[:, 1], init, idx, rw, w)
-        self._ga_run_weights = {runs[i].name: float(w) for p in problems.values()
-                                for i, w in zip(p.run_index, p.run_weights)}
-        evaluator = BatchEvaluator(veh, batch, problems, meas, self.batch_rows, gyro_bias=self.gyro_bias)
-        key = fingerprint({
-            "vehicle": veh.to_dict(), "runs": [(r.name, r.dof, r.weight, float(np.nansum(r.data.to_numpy())))
-                                               for r in runs],
-            "bounds": {d: p.lower.tolist() + p.upper.tolist() for d, p in problems.items()},
-            "weights": {d: p.run_weights.tolist() for d, p in problems.items()},
-            "signal_weights": {d: p.signal_weights for d, p in problems.items()}, "noise": self.noise,
-            "gyro_bias": self.gyro_bias, "initial_velocity": self.initial_velocity, "lag": self.lag_["tau"]})
-        hook = self._hook(evaluator)
-        try:
-            ga = run_ga(problems, evaluator, hook, self._settings(), checkpoint=self.checkpoint,
-                        resume=self.resume if self.resume is not None and Path(self.resume).is_file() else None,
-                        progress=self._progress, problem_key=key)
-        finally:
-            hook.close()
-        values = {}
-        for d, p in problems.items():
-            values.update(dict(zip(p.names, map(float, p.decode(ga["best"][d])))))
-        return ga, values, problems
-
     def _latency_record(self, veh, scan) -> dict:
         how = "auto" if self.latency == "auto" else ("file" if self.latency is None else "given")
         return {"value": float(veh.sensor_latency), "how": how, "scan": scan}
-
-    def _run_joint(self, ds, start_veh, runs, meas, dofs, ga_dofs, fixed, extra, bounds_of, horizons, tag="",
-                   names=None, prior_mean=None):
-        """The joint stage (:func:`uvsim.calibration.joint.run_joint`); ``names``: free exactly these
-        (no screen); ``tag``: suffix of its checkpoint file; ``prior_mean``: the prior's means when
-        not the start vehicle's values (the supply-voltage refit's vehicle has one more parameter)."""
-        params = start_veh.parameters()
-        keep = list(dict.fromkeys([k for k in joint_candidates(ga_dofs) if k not in fixed] + list(extra)))
-        mixed = any(r.dof not in ga_dofs for r in runs)
-        screen = [k for k in joint_candidates(dofs) if k not in fixed and k not in keep] if mixed else []
-        if not self.screen:
-            keep, screen = keep + screen, []
-        if names is not None:
-            keep, screen = list(names), []
-        names = keep + screen
-        continuity = self._continuity()
-        key = fingerprint({
-            "vehicle": start_veh.to_dict(), "runs": [(r.name, float(np.nansum(r.data.to_numpy()))) for r in runs],
-            "keep": keep, "screen": screen, "bounds": {k: list(bounds_of(k)) for k in names},
-            "horizons": horizons, "continuity": continuity, "ftol": JOINT_FTOL, "max_iter": self.max_iter,
-            "gyro_bias": self.gyro_bias, "lag": self.lag_["tau"],
-            "weights": self.signal_weights, "sample_weighting": self.sample_weighting, "noise": self.noise,
-            "initial_velocity": self.initial_velocity,
-            "prior": bool(self.prior), "uncertainty": self.initial_vehicle_.uncertainty,
-            # (the default loss leaves the key, and so earlier checkpoints, as they were)
-            **({} if self.loss == "linear" else {"loss": self.loss}),
-            "attitude_bias": bool(self.attitude_bias),
-            # (without the accelerometer bias the key, and so earlier checkpoints, as they were)
-            **({"acc_bias": True} if self.acc_bias else {})})
-        ck_path = self.checkpoint if self.checkpoint is not None else self.resume
-        ck = None
-        if ck_path is not None or self.resume is not None:  # (tag: the refit with an estimated latency)
-            ck = JointCheckpoint(None if ck_path is None else joint_checkpoint_path(f"{ck_path}{tag}"), key,
-                                 resume=None if self.resume is None else joint_checkpoint_path(f"{self.resume}{tag}"))
-        iv = self.initial_velocity
-
-        def judged(H, values):  # the whole-run stage: each channel scaled by its own RMS error
-            if H is not None:
-                return None
-            sc = judged_scales(start_veh, runs, meas, overrides=values, initial_velocity=iv)
-            return [m.with_sigma(sc) for m in meas]
-
-        return run_joint(start_veh, runs, meas, params, keep=keep, screen=screen,
-                         bounds={k: bounds_of(k) for k in names}, horizons=horizons,
-                         continuity=continuity, ftol=JOINT_FTOL, max_iter=int(self.max_iter),
-                         gyro_bias=bool(self.gyro_bias), attitude_bias=bool(self.attitude_bias),
-                         acc_bias=bool(self.acc_bias), initial_velocity=self.initial_velocity,
-                         workers=self._workers(), checkpoint=ck, progress=self._progress, label=JOINT_LABELS[tag],
-                         prior_mean=(prior_mean or self.initial_vehicle_.parameters()) if self.prior else None,
-                         prior_sd=self.initial_vehicle_.uncertainty, loss=self.loss, stage_meas=judged)
 
     # ------------------------------------------------------------------ results
     def predict(self, runs) -> dict:

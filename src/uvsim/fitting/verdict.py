@@ -18,7 +18,7 @@ no channel dominates because its noise was estimated too small.  The change from
 is ``S_B - S_A = sum_c w_c log(MSE_B,c / MSE_A,c) / sum_c w_c``; it is reported as the
 geometric-mean change of the channels' RMSE, ``exp((S_B - S_A) / 2) - 1`` (-40 %: the errors
 are 40 % smaller, in the geometric mean over channels).  The fits end on the same measure
-(:mod:`uvsim.calibration.calibrator`: the joint stage's last stage simulates whole runs with
+(:mod:`uvsim.calibration.stages`: the joint stage's last stage simulates whole runs with
 each channel scaled by its own RMS error, which is the least-squares form of ``S``).
 
 **The noise of the comparison.**  Errors of a free simulation are correlated over seconds,
