@@ -16,6 +16,10 @@ vectoriser); ``error_model="numpy"``: a division by zero gives inf or NaN, which
 check catches, instead of a check and a branch at every division (which also stops the
 vectoriser).  No ``fastmath``: the operations and their order are the
 text's, so the numbers are the same bit for bit as one trajectory at a time.
+
+numba's cache is keyed on ``rk4_equations.py`` (the functions' source file) and the machine, not on
+the options above: after changing only an option here, delete ``kernels/__pycache__/*.nbi`` and
+``*.nbc`` (or edit ``rk4_equations.py``), or the old machine code is loaded.
 """
 from __future__ import annotations
 
