@@ -267,11 +267,13 @@ def bound_hits(rep: Mapping) -> dict[str, str]:
     return out
 
 
-def _all_on_bounds(name: str, values: str) -> str:
-    """The problem of an accepted effect ``name`` whose every fitted parameter (``values``) is on a
-    search bound: the bound is where the fit stopped, not what the data say (issue 48: a thrust scale
-    on its 0.5 floor under an autopilot that pushes against a tether the model lacks)."""
-    return (f"every fitted parameter of the accepted effect {name} ({values}) ended on a bound of its search "
+def _all_on_bounds(name: str, values: Mapping[str, float | None]) -> str:
+    """The problem of an accepted effect ``name`` whose every fitted parameter (``values``: name ->
+    fitted value, None where the report has none) is on a search bound: the bound is where the fit
+    stopped, not what the data say (issue 48: a thrust scale on its 0.5 floor under an autopilot that
+    pushes against a tether the model lacks)."""
+    listed = ", ".join(k if v is None else f"{k} {v:.4g}" for k, v in values.items())
+    return (f"every fitted parameter of the accepted effect {name} ({listed}) ended on a bound of its search "
             "range: the data push it beyond what the catalogue considers physical, so the value is the bound, "
             "not an answer (an effect outside the catalogue, or a force the model lacks that an autopilot "
             "pushes against, is the likelier cause)")
@@ -282,6 +284,8 @@ def diagnosis_problems(rep: Mapping, val_runs) -> list[str]:
     where the given model's does not, an accepted effect all on its search bounds. The given
     model's own simulation leaving the data is not one (an open-loop model of a vehicle flown
     under an autopilot drifts; issue 48): :func:`diagnosis_caveats` says so."""
+    from uvsim.diagnosis.summary import every_parameter_on_bound
+
     probs = rmse_problems(rep["rmse_after"], val_runs, "validation RMSE after the fit", rep["rmse_before"])
     final = (([{**rep["base_model"], "effect": "base_model"}] if rep.get("base_model") else [])
              + list(rep.get("effects") or []))
@@ -290,13 +294,13 @@ def diagnosis_problems(rep: Mapping, val_runs) -> list[str]:
         # later step's leaves (field logs, dead case seed 21: the thrust scale 0.5 in step 0, 0.61 beside
         # the dead unit); a dead unit's gain 0 is a physical floor, not a bound (uvsim.diagnosis.core)
         for f in final:
-            if f["parameters"] and all(d["at_bound"] for d in f["parameters"].values()):
-                vals = ", ".join(f"{k} {d['value']:.4g}" if isinstance(d.get("value"), (int, float)) else k
-                                 for k, d in f["parameters"].items())
-                probs.append(_all_on_bounds(f"{f['effect']}:{f['variant']}", vals))
+            if every_parameter_on_bound(f["parameters"]):
+                probs.append(_all_on_bounds(f"{f['effect']}:{f['variant']}",
+                                            {k: d.get("value") for k, d in f["parameters"].items()}))
         return probs
     for step in rep.get("steps", []):  # a report without the final fit's bounds
         chosen = next((c for c in step["candidates"] if c.get("chosen")), None)
         if chosen is not None and chosen.get("free") and set(chosen["free"]) <= set(chosen.get("at_bounds", ())):
-            probs.append(_all_on_bounds(f"{chosen['effect']}:{chosen['variant']}", ", ".join(chosen["free"])))
+            vals = chosen.get("values") or {}
+            probs.append(_all_on_bounds(f"{chosen['effect']}:{chosen['variant']}", {k: vals.get(k) for k in chosen["free"]}))
     return probs

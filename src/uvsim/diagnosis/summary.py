@@ -45,6 +45,12 @@ def parameter_reports(accepted, values: Mapping[str, float], final, vehicle) -> 
     return effects_rep, base_rep
 
 
+def every_parameter_on_bound(params: Mapping[str, Mapping]) -> bool:
+    """Whether a reported effect's (or base model's) ``parameters`` (``{name: {"at_bound", ...}}``,
+    :func:`parameter_reports`) are all on the edge of their search ranges (none: False)."""
+    return bool(params) and all(d.get("at_bound") for d in params.values())
+
+
 def summary_message(accepted, values, base_rep, val_given, val_cur, at_noise_level: float, retune_verdict,
                     asked_retune, backward) -> str:
     """The report's ``message``: what was named (or none) and the validation cost before and after,
@@ -53,7 +59,7 @@ def summary_message(accepted, values, base_rep, val_given, val_cur, at_noise_lev
     names = [c.effect for c in accepted if c.effect != BASE_MODEL]
     base_msg = ""
     if base_rep is not None:
-        edge = bool(base_rep["parameters"]) and all(d.get("at_bound") for d in base_rep["parameters"].values())
+        edge = every_parameter_on_bound(base_rep["parameters"])
         base_msg = (f"The base model is off: {base_rep['notes']} (base_model:{base_rep['variant']}, "
                     + ", ".join(f"{n} {d['before']:.4g} -> {d['value']:.4g}" for n, d in base_rep["parameters"].items())
                     + ("; on the edge of its search range, so it stands in for something the model lacks rather "
