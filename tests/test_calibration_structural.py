@@ -84,10 +84,10 @@ def test_records_of_another_free_set_are_not_resumed_as_this_one(tmp_path, monke
     import uvsim.benchmarks.calibration_structural as cs
     from uvsim.benchmarks.records import append_record
 
-    def fake(seed, *, prior, loss, supply, free, latency, workers):
+    def fake(seed, *, prior, loss, supply, free, latency, workers, trade_off=None):
         calls.append((seed, free, latency, supply))
         return {"seed": seed, "prior": prior, "loss": loss, "supply": supply, "free": free, "latency": latency,
-                "status": "better", "pooled_rmse_change": -0.3, "worse": [], "worse_points": [],
+                "trade_off": trade_off, "status": "better", "pooled_rmse_change": -0.3, "worse": [], "worse_points": [],
                 "gain": {"depth": 1.0}, "check_ok": True, "farther_from_truth": [], "at_bounds": [],
                 "horizon": {}, "error": None, "seconds": 1.0, "effects": [], "curve": None,
                 "perturbation": 0.3}
@@ -96,17 +96,19 @@ def test_records_of_another_free_set_are_not_resumed_as_this_one(tmp_path, monke
     monkeypatch.setattr(cs, "run_one", fake)
     p = tmp_path / "r.jsonl"
     old = fake(0, prior=True, loss="linear", supply=False, free="z_b", latency=None, workers=1)
-    del old["free"], old["latency"]
+    del old["free"], old["latency"], old["trade_off"]
     append_record(p, old)
     calls.clear()
     out = cs.run_benchmark(1, 0, results=p)
     assert calls == [(0, cs.REAL_LOG_FREE, cs.REAL_LOG_LATENCY, cs.REAL_LOG_SUPPLY)]
     assert list(out["summary"]) == [f"prior+supply_voltage_auto (--free {cs.REAL_LOG_FREE} --latency "
-                                    f"{cs.REAL_LOG_LATENCY})"]
+                                    f"{cs.REAL_LOG_LATENCY} --trade-off {cs.REAL_LOG_TRADE_OFF})"]
     calls.clear()
-    out = cs.run_benchmark(1, 0, results=p, free="z_b", latency=None, supply=False)  # the old record resumes
+    out = cs.run_benchmark(1, 0, results=p, free="z_b", latency=None, supply=False,
+                           trade_off=None)  # the old record resumes
     assert calls == [] and list(out["summary"]) == ["prior (--free z_b)"]
-    out = cs.run_benchmark(1, 0, results=p, free=cs.REAL_LOG_FREE, latency=None, supply=False)  # another mode
+    out = cs.run_benchmark(1, 0, results=p, free=cs.REAL_LOG_FREE, latency=None, supply=False,
+                           trade_off=None)  # another mode
     assert calls == [(0, cs.REAL_LOG_FREE, None, False)]
     assert list(out["summary"]) == [f"prior (--free {cs.REAL_LOG_FREE})"]
     # the benchmark calibrates with the command docs/calibration.md gives for real logs

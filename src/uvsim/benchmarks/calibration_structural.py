@@ -90,6 +90,9 @@ REAL_LOG_LATENCY = "auto"
 #: joint fit with the thrusters on the T200 voltage family, kept when the verdict on the training
 #: runs calls it better than the first fit in every channel.  ``supply`` of :func:`run_one`: False none, True freed from the start, "auto".
 REAL_LOG_SUPPLY = "auto"
+#: The real-log command's ``--trade-off`` (docs/calibration_method.md, "After a trade-off"): after a
+#: trade-off, fit again with the structure the worse channels point to and keep a *better* refit.
+REAL_LOG_TRADE_OFF = "explore"
 #: Scenario size: a few runs of 15-25 s at 100 Hz (a real session's order) and two validation runs.
 SIZE = dict(n_runs=3, n_validation=2, duration=[15, 25], rate_hz=100.0)
 
@@ -250,12 +253,13 @@ def dataset_vehicle_on_family(dataset_dir):
 
 
 def run_one(seed: int, *, prior: bool = True, loss: str = "linear", supply=REAL_LOG_SUPPLY, workers: int = 1,
-            free: str = REAL_LOG_FREE, latency=REAL_LOG_LATENCY, tmp: Path | None = None) -> dict:
+            free: str = REAL_LOG_FREE, latency=REAL_LOG_LATENCY, trade_off=REAL_LOG_TRADE_OFF,
+            tmp: Path | None = None) -> dict:
     """Generate and calibrate one scenario; returns its record.  ``free``: the calibration's
     ``--free``; ``latency``: its ``--latency`` (None: the vehicle file's, i.e. none);
     ``supply``: "auto" the calibration's ``supply_voltage="auto"``; True the start model's
     thrusters on the T200 voltage family and ``supply_voltage`` freed beside ``free``
-    (:func:`on_voltage_family`); False neither."""
+    (:func:`on_voltage_family`); False neither; ``trade_off``: the calibration's (None: none)."""
     from uvsim.calibration import Calibrator
     from uvsim.errors import CalibrationError
     from uvsim.scenarios import generate, load_truth, sample_scenario
@@ -271,12 +275,13 @@ def run_one(seed: int, *, prior: bool = True, loss: str = "linear", supply=REAL_
             start = dataset_vehicle_on_family(out) if freed else None
             names = f"{free},supply_voltage" if freed else free
             cal = Calibrator(free=names, workers=workers, prior=prior, loss=loss, latency=latency,
-                             supply_voltage="auto" if supply == "auto" else None).fit(out, start)
+                             supply_voltage="auto" if supply == "auto" else None, trade_off=trade_off).fit(out, start)
             seconds = time.perf_counter() - t0  # the calibration's, not the verdicts' and references' below
             rec = judge(cal.report_)
             rec["latency_fitted"] = cal.latency_["value"]  # s, what the fitted vehicle states
             rec["supply_voltage"] = cal.params_.get("supply_voltage")  # fitted (V), None when not freed
             rec["supply_voltage_auto"] = cal.supply_voltage_  # the "auto" refit and its choice, None otherwise
+            rec["trade_off_explored"] = cal.trade_off_  # what was tried after a trade-off, None otherwise
             refs = reference_models(out, cal.initial_vehicle_, over)
             err = truth_errors(spec, {"start": cal.initial_vehicle_, "fitted": cal.vehicle_, **refs})
             rec["truth_rmse_start"], rec["truth_rmse_fitted"] = err["start"], err["fitted"]
@@ -294,14 +299,15 @@ def run_one(seed: int, *, prior: bool = True, loss: str = "linear", supply=REAL_
                           "data_weight": None, "farther_from_truth": []}, str(exc)
         if error is not None:
             seconds = time.perf_counter() - t0
-    return {"seed": seed, "prior": prior, "loss": loss, "supply": supply, "free": free, "latency": latency, **over,
+    return {"seed": seed, "prior": prior, "loss": loss, "supply": supply, "free": free, "latency": latency,
+            "trade_off": trade_off, **over,
             "effects": [e["type"] for e in truth["effects"]],
             "curve": spec.vehicle.get("truth_curve"), **rec, "error": error, "seconds": seconds}
 
 
 def summarize(records: list[dict]) -> dict:
     out = {}
-    modes = sorted({_mode(r) for r in records}, key=lambda m: (not m[0], m[1], str(m[2]), m[3], str(m[4])))
+    modes = sorted({_mode(r) for r in records}, key=lambda m: (not m[0], m[1], str(m[2]), m[3], str(m[4]), str(m[5])))
     for mode in modes:
         mine = [r for r in records if _mode(r) == mode]
         rs = [r for r in mine if r["error"] is None and "status" in r]  # records of the verdict's releases
@@ -345,23 +351,25 @@ def _reference_summary(rs: list[dict]) -> dict:
 
 
 def _mode(rec: dict) -> tuple:
-    """How a record was calibrated: (prior, loss, supply voltage freed, ``--free``, ``--latency``;
-    records of the releases before :data:`REAL_LOG_FREE` freed ``z_b``, before
-    :data:`REAL_LOG_LATENCY` had no latency setting: None)."""
+    """How a record was calibrated: (prior, loss, supply voltage freed, ``--free``, ``--latency``,
+    ``--trade-off``; records of the releases before :data:`REAL_LOG_FREE` freed ``z_b``, before
+    :data:`REAL_LOG_LATENCY` had no latency setting, before :data:`REAL_LOG_TRADE_OFF` no
+    trade-off setting: None)."""
     return (rec["prior"], rec.get("loss", "linear"), rec.get("supply", False), rec.get("free", "z_b"),
-            rec.get("latency"))
+            rec.get("latency"), rec.get("trade_off"))
 
 
 def _label(mode: tuple) -> str:
     """The summary's key and the progress line's name of a mode (:func:`_mode`)."""
-    prior, loss, supply, free, latency = mode
+    prior, loss, supply, free, latency, trade_off = mode
     return (("prior" if prior else "no_prior") + ("" if loss == "linear" else f"+{loss}")
             + {True: "+supply_voltage", "auto": "+supply_voltage_auto"}.get(supply, "") + f" (--free {free}"
-            + ("" if latency is None else f" --latency {latency}") + ")")
+            + ("" if latency is None else f" --latency {latency}")
+            + ("" if trade_off is None else f" --trade-off {trade_off}") + ")")
 
 
 def run_benchmark(n: int, seed: int, *, compare_no_prior: bool = False, loss: str = "linear", supply=REAL_LOG_SUPPLY,
-                  free: str = REAL_LOG_FREE, latency=REAL_LOG_LATENCY, workers: int = 1,
+                  free: str = REAL_LOG_FREE, latency=REAL_LOG_LATENCY, trade_off=REAL_LOG_TRADE_OFF, workers: int = 1,
                   results: str | Path | None = None, progress=None, stages=None) -> dict:
     """``n`` seeds from ``seed`` (resumed from ``results``, JSON lines), calibrated with
     ``--free free --latency latency`` and ``supply`` (:func:`run_one`; latency None: no ``--latency``);
@@ -384,12 +392,13 @@ def run_benchmark(n: int, seed: int, *, compare_no_prior: bool = False, loss: st
     todo = [(s, p) for s in range(seed, seed + n) for p in ((True, False) if compare_no_prior else (True,))]
     records = []
     for i, (s, p) in enumerate(todo, 1):
-        key = (s, p, loss, supply, free, latency)
+        key = (s, p, loss, supply, free, latency, trade_off)
         if key in done:
             records.append(done[key])
             continue
         with as_progress(stages).stage(f"[{i}/{len(todo)}] seed {s} {_label(key[1:])}"):
-            rec = run_one(s, prior=p, loss=loss, supply=supply, free=free, latency=latency, workers=workers)
+            rec = run_one(s, prior=p, loss=loss, supply=supply, free=free, latency=latency, trade_off=trade_off,
+                          workers=workers)
         records.append(rec)
         append_record(path, rec)
         say(f"[{i}/{len(todo)}] seed {s} {_label(key[1:])}: effects {rec['effects'] or 'none'}, "

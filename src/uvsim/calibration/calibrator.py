@@ -40,6 +40,7 @@ from uvsim.calibration.report import build_report, evaluate_runs, identifiabilit
 from uvsim.calibration.selection import check_bounds, effective_inertia_start, expand_names
 from uvsim.calibration.stages import ga_stage, joint_stage
 from uvsim.calibration import supply_voltage as supply
+from uvsim.calibration import trade_off as trade
 from uvsim.errors import CalibrationError
 from uvsim.estimation.lag import attitude_lag_setting
 from uvsim.fitting.evaluate import check_judge_horizon
@@ -125,6 +126,10 @@ class Calibrator:
         beside the first fit's parameters) and keep that fit when its open-loop Fit % on the
         *training* runs is higher in every channel (:mod:`uvsim.calibration.supply_voltage`);
         needs the vehicle's thrusters on the shipped ``t200_16v`` curve.
+    trade_off : None (default) or "explore": when the verdict is a trade-off, fit again with the
+        structure the worse channels point to freed (thruster positions, centre of buoyancy) and
+        keep a refit whose verdict is *better* (:mod:`uvsim.calibration.trade_off`; the report's
+        ``trade_off`` lists what was tried).
     initial_velocity : "zero" | "differentiate" for the GA's and the open-loop
         evaluation's unknown initial velocities (the joint stage estimates them).
     judge_horizon : what the verdict, the report's RMSEs and Fit % and the plots compare
@@ -174,7 +179,7 @@ class Calibrator:
                  continuity=DEFAULT_CONTINUITY,
                  max_iter: int = 80, gyro_bias: bool = True, attitude_bias: bool = True, acc_bias: bool = True,
                  screen: bool = True,
-                 attitude_lag="auto", latency=None, supply_voltage=None,
+                 attitude_lag="auto", latency=None, supply_voltage=None, trade_off=None,
                  initial_velocity: str = "zero", judge_horizon="auto", prior: bool = True, loss: str = "linear",
                  workers: int = 1, dask: str | None = None, batch_rows: int = DEFAULT_BATCH_ROWS, checkpoint=None,
                  resume=None, progress=False, effects=None, allow=()):
@@ -192,6 +197,7 @@ class Calibrator:
         self.attitude_lag = attitude_lag
         self.latency = latency
         self.supply_voltage = supply_voltage
+        self.trade_off = trade_off
         self.attitude_bias = attitude_bias
         self.acc_bias = acc_bias
         self.initial_velocity = initial_velocity
@@ -329,6 +335,9 @@ class Calibrator:
             if why:
                 raise CalibrationError(why)
         self.supply_voltage_ = None
+        if trade.check_setting(self.trade_off) == "explore" and not self.refine:
+            raise CalibrationError("trade_off='explore' (--trade-off explore) refits after the joint fit; it needs "
+                                   "refine=True (no --no-refine)")
         bounds = check_bounds(self.bounds, base)
         fixed = expand_names(self.fix, list(base), "fix")
         extra = expand_names(self.free, list(base), "free")
@@ -400,26 +409,50 @@ class Calibrator:
                              self.supply_voltage_["value"])
                     fit_res, start_veh, veh, joint_bounds = kept
         t_ref = time.perf_counter()
-        unc: dict = {k: None for k in params}
-        if fit_res is not None:
-            params.update(fit_res.values)
-            unc.update({k: fit_res.std.get(k) for k in fit_res.values})
-        self.ga_params_ = ga_values
-        self.params_ = params
-        self.uncertainty_ = unc
-        self.fit_ = fit_res
-        self.screen_ = screen
-        self.logbook_ = ga["logbooks"]
-        self.evaluations_ = ga["evaluations"]
-        self.vehicle_ = veh.with_parameters(params, name=f"{veh.name}_calibrated").with_latency(
-            self.latency_["value"])
-        self.dofs_ = ga_dofs
-        self._train_runs = runs
-        with self._progress.stage(f"free simulations of the {len(ds.runs)} runs with the fitted and the starting "
-                                  "model (report, verdict)"):
-            self.identifiability_ = identifiability_report(self)
-            self.report_ = build_report(self, ds, runs, problems, ga, joint_bounds if self.refine else bounds_of, t0,
-                                        t_ga, t_ref)
+        report_bounds = joint_bounds if self.refine else bounds_of
+
+        def finish(res, label="fitted and starting"):  # params_, vehicle_, report_ ... of one joint result
+            values, unc = dict(params), {k: None for k in params}
+            if res is not None:
+                values.update(res.values)
+                unc.update({k: res.std.get(k) for k in res.values})
+            self.ga_params_, self.params_, self.uncertainty_, self.fit_ = ga_values, values, unc, res
+            self.screen_ = screen
+            self.logbook_ = ga["logbooks"]
+            self.evaluations_ = ga["evaluations"]
+            self.vehicle_ = veh.with_parameters(values, name=f"{veh.name}_calibrated").with_latency(
+                self.latency_["value"])
+            self.dofs_ = ga_dofs
+            self._train_runs = runs
+            with self._progress.stage(f"free simulations of the {len(ds.runs)} runs with the {label} model "
+                                      "(report, verdict)"):
+                self.identifiability_ = identifiability_report(self)
+                self.report_ = build_report(self, ds, runs, problems, ga, report_bounds, t0, t_ga, t_ref)
+            return self.report_.get("verdict")
+
+        verdict = finish(fit_res)
+        self.trade_off_ = None
+        if trade.check_setting(self.trade_off) == "explore" and fit_res is not None \
+                and (verdict or {}).get("status") == "trade-off":
+            first = fit_res
+            warm = start_veh.with_parameters(first.values)
+
+            mean = self.initial_vehicle_.parameters()
+            if (self.supply_voltage_ or {}).get("used"):  # the kept voltage refit's prior (supply.refit)
+                mean = {**mean, "supply_voltage": self.supply_voltage_["nominal_voltage"]}
+
+            def refit(h, names):
+                return joint(warm, joint_bounds, names, h.tag, mean if self.prior else None)[0]
+
+            self.trade_off_, adopted = trade.explore(
+                refit, lambda res: finish(res, "refitted"), verdict, first.values, list(first.names), fixed,
+                list(start_veh.parameters()), self.initial_vehicle_.parameters())
+            finish(adopted if adopted is not None else first)
+            if adopted is not None:
+                log.info("after a trade-off: keeping the fit with the %s freed", self.trade_off_["adopted"])
+        self.report_["trade_off"] = self.trade_off_  # None: not asked, or the verdict was no trade-off
+        if self.trade_off_ is not None and self.report_.get("verdict"):
+            self.report_["verdict"]["message"] += f" ({trade.message(self.trade_off_)})"
         self.wall_seconds_ = self.report_["wall_seconds"]
         return self
 

@@ -23,13 +23,14 @@ from uvsim.calibration.ga import fingerprint, run_ga
 from uvsim.calibration.inputs import combine_weights, run_amplitude
 from uvsim.calibration.joint import JointCheckpoint, joint_checkpoint_path, run_joint
 from uvsim.calibration.params import DOF_PARAMETERS, default_channel_weights
+from uvsim.calibration import trade_off
 from uvsim.calibration.selection import joint_candidates
 from uvsim.errors import CalibrationError
 from uvsim.fitting.evaluate import judged_scales
 
 #: The joint stage's progress label by checkpoint tag (the first fit, the refits).
 JOINT_LABELS = {"": "joint fit", ".latency": "joint fit again with the estimated sensor latency",
-                ".supply": "joint fit on the T200 voltage family (--supply-voltage auto)"}
+                ".supply": "joint fit on the T200 voltage family (--supply-voltage auto)", **trade_off.LABELS}
 #: The joint stage stops when an iteration lowers the cost by less than this fraction of it
 #: (:func:`uvsim.fitting.fit`'s ``ftol``). 1e-5 of a cost of N noise-normalized residuals is far
 #: below the cost's own sampling spread (sqrt(2N)); with the tight continuity

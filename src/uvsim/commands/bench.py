@@ -45,6 +45,9 @@ def register(sub) -> None:
     p.add_argument("--latency", default=REAL_LOG_LATENCY, metavar="auto|SECONDS|none",
                    help=f"(calibrate-structural) the calibration's --latency (default {REAL_LOG_LATENCY!r}, the "
                         "real-log command; 'none': no --latency, the releases before)")
+    p.add_argument("--trade-off", default="explore", choices=("explore", "none"),
+                   help="(calibrate-structural) the calibration's --trade-off (default 'explore', the real-log "
+                        "command; 'none': without it, the releases before)")
     p.add_argument("--compare-no-prior", action="store_true",
                    help="(calibrate-structural) calibrate each dataset also without the priors (--no-prior)")
     p.add_argument("--scenarios", type=int, default=20,
@@ -231,6 +234,7 @@ def _calibrate_structural(args) -> int:
                                                  loss=args.loss, supply=supply,
                                                  free=args.free,
                                                  latency=None if args.latency == "none" else args.latency,
+                                                 trade_off=None if args.trade_off == "none" else args.trade_off,
                                                  workers=args.workers, results=args.results,
                                                  progress=say, stages=stages))
     if out is None:

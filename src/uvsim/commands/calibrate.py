@@ -5,6 +5,7 @@
                     [--horizons 2,6] [--continuity 0.05] [--no-gyro-bias] [--no-prior] [--loss huber] [--sample-weighting per_sample] [--seed S]
                     [--population P --generations G]
                     [--workers N] [--dask ADDR|local] [--checkpoint CKPT] [--resume CKPT] [--no-refine]
+                    [--supply-voltage auto] [--trade-off explore]
                     --out fitted.yaml [--json report.json] [--plots DIR] [--progress | --no-progress]
 
 Seed 000's GA per DOF for runs marked with one DOF, then one joint windowed
@@ -90,6 +91,10 @@ def register(sub) -> None:
                    help="'auto': fit again with the thrusters on the T200 voltage family (supply_voltage freed) and "
                         "keep that fit when it fits the training runs better in every channel (vehicle on the "
                         "t200_16v curve; part of the real-log command; docs/calibration.md 'Supply voltage')")
+    p.add_argument("--trade-off", choices=("explore",), default=None,
+                   help="'explore': when the verdict is a trade-off, fit again with the structure the worse channels "
+                        "point to freed (thruster positions; centre of buoyancy) and keep a refit whose verdict is "
+                        "better (part of the real-log command; docs/calibration_method.md 'After a trade-off')")
     p.add_argument("--no-screen", action="store_true",
                    help="free every DOF's parameters for mixed runs, also those the data do not excite")
     p.add_argument("--ga-channels", choices=("own", "all"), default="own",
@@ -205,6 +210,7 @@ def _run(args) -> int:
                      screen=not args.no_screen,
                      ga_channels=args.ga_channels,
                      attitude_lag=lag, latency=args.latency, supply_voltage=args.supply_voltage,
+                     trade_off=args.trade_off,
                      low_speed_exponent=args.low_speed_exponent, progress=progress,
                      judge_horizon=judge_option(args.judge_horizon), allow=parse_allow(args.allow))
     logger = logging.getLogger("uvsim")
@@ -229,7 +235,9 @@ def _run(args) -> int:
     status = finish_calibration(cal, ds, out, args.json, args.plots, keep_worse=args.keep_worse, progress=progress)
     from uvsim.calibration.joint import joint_checkpoint_path
 
-    remove_checkpoints(ckpt, *(joint_checkpoint_path(f"{ckpt}{tag}") for tag in ("", ".latency", ".supply")))
+    from uvsim.calibration.trade_off import LABELS
+
+    remove_checkpoints(ckpt, *(joint_checkpoint_path(f"{ckpt}{tag}") for tag in ("", ".latency", ".supply", *LABELS)))
     return EXIT_CODES[status]
 
 
@@ -292,4 +300,10 @@ def _say_resume(ckpt) -> None:
     family = joint_checkpoint_path(f"{ckpt}.supply")
     if Path(family).is_file():
         held += f" and {family} the refit on the T200 voltage family (--supply-voltage auto)"
+    from uvsim.calibration.trade_off import LABELS
+
+    for tag, label in LABELS.items():
+        again = joint_checkpoint_path(f"{ckpt}{tag}")
+        if Path(again).is_file():
+            held += f" and {again} the {label}"
     say("calibrate", f"interrupted; {held}; continue with --resume {ckpt}")

@@ -85,7 +85,7 @@ HINTS = {
     "pitch": "the pitch restoring moment (CG/CB, an off-centre payload or float), the heave-pitch coupling",
     "yaw": "thruster alignment and asymmetry, a yaw moment from a tether or current, the yaw damping",
     "p": "the roll damping and restoring moment, gyro bias", "q": "the pitch damping and restoring moment, gyro bias",
-    "r": "the yaw damping, thruster asymmetry, gyro bias",
+    "r": "the yaw damping, the thrusters' positions and asymmetry, gyro bias",
     "u": "the surge damping and thrust curve, a current", "v": "the sway damping and thrust curve, a current",
     "w": "the heave damping and thrust curve, buoyancy",
     # an accelerometer reads the motion's acceleration plus gravity tilted by the attitude
