@@ -297,3 +297,48 @@ def test_equation_error_accelerations_equal_numpy(kind):
     ref = Model(veh, space.overrides(Z[:2], 20), n=40, input_kind=kind).rhs(0.0, np.tile(Y, (2, 1)),
                                                                              np.tile(U, (2, 1)))[:, 7:13]
     _close(acc.reshape(40, 6), ref)
+
+
+def _table_inputs(curve):
+    rng = np.random.default_rng(46)
+    pwm = rng.uniform(curve.pwm_min, curve.pwm_max, (4000, 8))
+    pwm[::5] = curve._xp[rng.integers(0, curve._xp.size, pwm[::5].shape)]   # exactly on knots
+    pwm[0, :2] = curve.pwm_min, curve.pwm_max
+    pwm[1, :2] = curve.deadband                                             # the deadband's edges
+    return pwm
+
+
+def _voltage_sheet(volts):
+    from uvsim.vehicle import load_vehicle
+
+    d = load_vehicle("bluerov2_heavy").to_dict()
+    d["thrusters"]["curve"] = {"voltage_table": "t200", "nominal_voltage": 16.0}
+    return vehicle_from_dict(d, source="test").actuators.curves[0].at_voltage(volts)
+
+
+@needs_numba
+@pytest.mark.parametrize("volts", [None, 18.5])
+def test_the_compiled_thrust_table_equals_numpy_to_the_bit(volts):
+    from uvsim.thrust_curves import shipped_curve
+
+    curve = shipped_curve("t200_16v") if volts is None else _voltage_sheet(volts)
+    assert curve._step is not None                      # the uniform-knot path
+    pwm = _table_inputs(curve)
+    got = _both(lambda: curve.thrust(pwm))
+    assert got["numba"].shape == pwm.shape and np.array_equal(got["numba"], got["numpy"])
+    assert np.array_equal(_both(lambda: curve.thrust(pwm[:, 3].copy()))["numba"], got["numpy"][:, 3])  # 1-D
+    with kernels.use("numba"):
+        with pytest.raises(SimulationError):           # the range check comes first, as before
+            curve.thrust(np.where(pwm == pwm.max(), np.nan, pwm))
+
+
+def test_the_uncompiled_table_lookup_equals_numpy():
+    from uvsim.kernels.table_lookup import uniform_table
+    from uvsim.thrust_curves import shipped_curve
+
+    curve = shipped_curve("t200_16v")
+    pwm = _table_inputs(curve)[:50].ravel()
+    out = np.empty(pwm.size)
+    uniform_table(pwm, float(curve._xp[0]), curve._step, curve._fp, out)   # the text, run by Python
+    with kernels.use("numpy"):
+        assert np.array_equal(out, curve.thrust(pwm))

@@ -297,7 +297,16 @@ class TabulatedThrustCurve(ThrustCurve):
             return np.interp(pwm, self._xp, self._fp)
         # Uniform knots: segment index by division, then the same linear interpolation
         # as np.interp, written so that knots (t = 0, or t = 1 at the last knot) return
-        # the table value exactly and zero-thrust segments return exactly 0.
+        # the table value exactly and zero-thrust segments return exactly 0.  Compiled where
+        # numba is (uvsim.kernels.table_lookup: these operations in one pass, to the bit).
+        from uvsim.kernels import compiled_uniform_table
+
+        table = compiled_uniform_table()
+        if table is not None:
+            flat = np.ascontiguousarray(pwm).ravel()
+            out = np.empty(flat.size)
+            table(flat, float(self._xp[0]), self._step, self._fp, out)
+            return out.reshape(pwm.shape)
         u = (pwm - self._xp[0]) / self._step
         i = np.minimum(u.astype(np.intp), self._xp.size - 2)
         t = u - i

@@ -102,3 +102,20 @@ def compiled_accelerations():
     """The compiled :func:`rk4_equations.accelerations` (the equation error's accelerations along a
     measured motion), or None when the setting or the install says numpy."""
     return _compiled("accelerations")
+
+
+@functools.lru_cache(maxsize=None)
+def _uniform_table():
+    import numba
+
+    from uvsim.kernels.table_lookup import uniform_table
+
+    return numba.njit(uniform_table, cache=True, nogil=True, error_model="numpy")
+
+
+def compiled_uniform_table():
+    """The compiled :func:`uvsim.kernels.table_lookup.uniform_table` (a thrust table on uniform knots),
+    or None when the setting or the install says numpy."""
+    if current() == "numpy" or not numba_installed():
+        return None
+    return _uniform_table()
