@@ -26,7 +26,8 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from uvsim.errors import CalibrationError, SimulationError
-from uvsim.simulate import INITIAL_WINDOW_S, initial_state_from_run, simulate_batch
+from uvsim.initial_state import INITIAL_WINDOW_S, initial_state_from_run
+from uvsim.simulate import simulate_batch
 from uvsim.vehicle import load_vehicle
 
 @dataclass
@@ -103,7 +104,7 @@ def signals_from_states(y: np.ndarray) -> dict[str, np.ndarray]:
 
 def initial_state(run, *, initial_velocity: str = "zero", window_s: float = INITIAL_WINDOW_S, sensors=None):
     """(pos0 (3,), q0 (4,), nu0 (6,), nu0_known (6,) bool) of one run, with the start
-    smoothed over :data:`INITIAL_WINDOW_S` (:func:`uvsim.simulate.initial_state_from_run`;
+    smoothed over :data:`INITIAL_WINDOW_S` (:func:`uvsim.initial_state.initial_state_from_run`;
     ``sensors``: sensor positions, for the depth of a pressure sensor)."""
     try:
         return initial_state_from_run(run, initial_velocity=initial_velocity, window_s=window_s, sensors=sensors)

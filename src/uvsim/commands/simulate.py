@@ -68,9 +68,10 @@ def _vehicle_for(args):
 
 def _run(args) -> int:
     from uvsim.gaps import split_run
+    from uvsim.initial_state import check_initial_window
     from uvsim.latency import delay_inputs
     from uvsim.logs import read_run, write_run
-    from uvsim.simulate import check_initial_window, check_method, check_substeps, simulate_run
+    from uvsim.simulate import check_method, check_substeps, simulate_run
     from uvsim.vehicle import load_vehicle
 
     if args.out is None and not args.compare:

@@ -11,7 +11,7 @@ Kinsey, Eustice & Whitcomb 2006, "A survey of underwater vehicle navigation", IF
     p_xy(t) = p_xy(t_0) + int_{t_0}^{t} [R(roll, pitch, yaw) v_DVL]_xy dt
 
 from the run's start (``p_xy(t_0)`` = 0, where a free simulation of the whole run starts it,
-:func:`uvsim.simulate.initial_state_from_run`), trapezoidal between samples, the DVL's drop-outs
+:func:`uvsim.initial_state.initial_state_from_run`), trapezoidal between samples, the DVL's drop-outs
 bridged linearly in time (a drop-out of a few seconds at a few dm/s: a few dm of track, below the
 position prior of a model reference, :data:`uvsim.fitting.nodes.PRIOR_SIGMA`).  Its error grows
 with the heading's (an attitude filter without a compass drifts with the gyro bias: 0.3 deg/s

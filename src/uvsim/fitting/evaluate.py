@@ -1,8 +1,8 @@
 """Open-loop predictions of logged runs: what every verdict, report and plot compares.
 
 ``open_loop(vehicle, runs)`` simulates every run from its estimated initial state
-(:func:`uvsim.simulate.initial_state_from_run`, start smoothed over
-:data:`uvsim.simulate.INITIAL_WINDOW_S`) with its logged inputs, all runs of one input
+(:func:`uvsim.initial_state.initial_state_from_run`, start smoothed over
+:data:`uvsim.initial_state.INITIAL_WINDOW_S`) with its logged inputs, all runs of one input
 kind in one batched call, and returns per run the states, the predicted measurements
 (:mod:`uvsim.measurements`) and their metrics (:func:`uvsim.metrics.measurement_metrics`).
 This is the "validation RMSE" of calibration and diagnosis reports: the error of a free
@@ -179,7 +179,7 @@ def windowed(vehicle, runs, horizon: float, *, overrides=None, meas=None, gyro_b
     """Per run (in order) what :func:`open_loop` returns, for predictions over windows of about
     ``horizon`` seconds (:func:`uvsim.fitting.windows.layout`): each window is simulated from the
     state logged at its start (position and attitude as a free simulation starts,
-    :func:`uvsim.simulate.initial_state_from_run`; velocities and rates from a straight-line fit
+    :func:`uvsim.initial_state.initial_state_from_run`; velocities and rates from a straight-line fit
     to the logged ones around the start, :func:`_local_value`, else derived from the logged
     motion, else 0) with its logged inputs, and the windows' states are joined into one
     prediction of the run (the attitude filter's lag restarts at each window,

@@ -11,11 +11,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from uvsim.initial_state import INITIAL_WINDOW_S, initial_state_from_run
 from uvsim.kinematics import quat_multiply
 from uvsim.latency import runs_for
 from uvsim.measurements import rotation_vector_error
 from uvsim.model import Model
-from uvsim.simulate import INITIAL_WINDOW_S, _rk4_loop, initial_state_from_run
+from uvsim.simulate import _rk4_loop
 
 
 def _expmap(dtheta: np.ndarray) -> np.ndarray:
