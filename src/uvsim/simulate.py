@@ -25,7 +25,8 @@ from uvsim.schema import did_you_mean, whole_number
 from uvsim.kernels import compiled_advance
 from uvsim.kernels.plan import compiled_plan
 from uvsim.kernels.run import blowup_message, rk4_compiled
-from uvsim.initial_state import initial_state_from_run
+from uvsim.initial_state import (  # noqa: F401 (INITIAL_WINDOW_S, check_initial_window re-exported)
+    INITIAL_WINDOW_S, check_initial_window, initial_state_from_run)
 from uvsim.kinematics import quat_to_euler
 from uvsim.model import NU, POS, QUAT, Model
 from uvsim.vehicle_schema import check_current_speed
