@@ -48,7 +48,8 @@ from uvsim.bilinear import matvec
 from uvsim.errors import SimulationError, VehicleError
 from uvsim.forces import register
 from uvsim.forces.base import ForceTerm
-from uvsim.forces.thrusters_section import DOF_LETTERS, force_factors, section_with_values, thruster_arguments
+from uvsim.forces.thrusters_section import (  # noqa: F401 (allocation_matrix re-exported: it lived here)
+    DOF_LETTERS, allocation_matrix, force_factors, section_with_values, thruster_arguments)
 
 
 @register("actuators")
