@@ -10,7 +10,8 @@ Quick use::
 
 Where things live: ``model.py`` (equations of motion), ``forces/`` (force-term
 plug-ins: restoring, damping, actuators), ``vehicle.py`` + ``vehicles/*.yaml``
-(vehicle definitions), ``logs.py`` (logged runs), ``simulate.py`` (integrators).
+(vehicle definitions), ``logs.py`` (logged runs and datasets; the run class in
+``logged_run.py``), ``simulate.py`` (integrators).
 """
 from __future__ import annotations
 

@@ -162,7 +162,7 @@ def _segment(run, a: int, b: int, name: str):
     data = run.data.iloc[a:b].reset_index(drop=True).copy()
     if VOLTAGE_COLUMN in data.columns and np.isnan(data[VOLTAGE_COLUMN].iloc[0]):
         data.loc[0, VOLTAGE_COLUMN] = run.voltage[a]  # the sample that holds there (zero-order hold)
-    # the run's own class (uvsim.logs.Run), which validates the rows: uvsim.logs imports this module
+    # the run's own class (uvsim.logged_run.Run), which validates the rows: uvsim.logs imports this module
     seg = type(run)(name=name, path=run.path, data=data, dof=run.dof, weight=run.weight, split=run.split)
     seg.empty_columns = list(dict.fromkeys(run.empty_columns + seg.empty_columns))
     seg.row_offset = run.row_offset + a

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from uvsim.logs import Run
+from uvsim.logged_run import Run
 
 
 def delay_inputs(run: Run, delay: float) -> Run:

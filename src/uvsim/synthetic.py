@@ -22,7 +22,8 @@ import pandas as pd
 
 from uvsim.errors import UvsimError
 from uvsim.kinematics import quat_multiply, quat_normalize, quat_to_euler
-from uvsim.logs import Run, write_dataset
+from uvsim.logged_run import Run
+from uvsim.logs import write_dataset
 from uvsim.simulate import simulate_batch
 from uvsim.vehicle import DOFS, load_vehicle
 

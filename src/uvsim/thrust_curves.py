@@ -6,9 +6,11 @@ A *thrust curve* is a small picklable strategy object with two vectorized method
 - ``pwm(thrust)``: the inverse, used by tests and data generators; 0 N maps to the
   neutral command (middle of the deadband).
 
-This module holds the curve classes and the shipped tables (the value checks of a
-specification: :mod:`uvsim.curve_checks`), and imports no other uvsim curve module: the battery-aware curve builds on it
-(:mod:`uvsim.voltage_curves`), and :mod:`uvsim.thrusters` turns vehicle-file
+This module holds the fixed curve classes and the shipped tables (the value checks of a
+specification: :mod:`uvsim.curve_checks`).  The interface they implement,
+:class:`ThrustCurve` (range checks, inverse, equality), is in :mod:`uvsim.thrust_curve_base`
+and re-exported here; no other uvsim curve module is imported: the battery-aware curve
+builds on this one (:mod:`uvsim.voltage_curves`), and :mod:`uvsim.thrusters` turns vehicle-file
 specifications into curves (:func:`uvsim.thrusters.load_thrust_curve`) and applies one
 per thruster (:class:`uvsim.thrusters.ThrustCurveSet`).
 
@@ -38,8 +40,9 @@ import numpy as np
 
 from uvsim.constants import PWM_RANGE_US
 from uvsim.curve_checks import as_1d, check_curve_keys, finite_number, number_pair, readonly_array
-from uvsim.errors import SimulationError, VehicleError
+from uvsim.errors import VehicleError
 from uvsim.schema import did_you_mean
+from uvsim.thrust_curve_base import ThrustCurve  # noqa: F401 (re-exported: the curves' interface)
 
 #: Directory of the shipped tables (``<name>.csv`` with columns pwm_us, thrust_N).
 DATA_DIR = Path(__file__).resolve().parent / "data" / "thrusters"
@@ -50,123 +53,6 @@ DEFAULT_CURVE = "t200_16v"
 #: Standard gravity used to convert kilogram-force to newtons (exact by definition of
 #: the kgf; CGPM 1901).  Only used to document/convert published kgf tables.
 KGF_TO_N = 9.80665
-
-
-# --------------------------------------------------------------------------- base class
-class ThrustCurve:
-    """Strategy interface: PWM (us) <-> thrust (N), vectorized over any shape.
-
-    Subclasses set ``pwm_min``, ``pwm_max`` (valid command range, us), ``deadband``
-    (``(lo, hi)``, us), ``neutral`` (us) and ``name``, and implement :meth:`_thrust`
-    and :meth:`_pwm` on already-validated float arrays.
-    """
-
-    pwm_min: float
-    pwm_max: float
-    deadband: tuple[float, float]
-    neutral: float
-    name: str
-    #: True for curves whose thrust depends on the supply voltage
-    #: (:class:`uvsim.voltage_curves.VoltageThrustCurve`); fixed curves ignore it.
-    voltage_dependent: bool = False
-
-    # -- public API ------------------------------------------------------------------
-    def thrust(self, pwm: np.ndarray) -> np.ndarray:
-        """Thrust for ESC commands.
-
-        Parameters
-        ----------
-        pwm : array_like, any shape
-            ESC pulse widths, microseconds.
-
-        Returns
-        -------
-        ndarray, same shape as ``pwm``
-            Thrust along the thruster axis, N (positive = forward branch).
-
-        Raises
-        ------
-        SimulationError
-            If any value is non-finite or outside ``[pwm_min, pwm_max]``.
-        """
-        pwm = np.asarray(pwm, dtype=float)
-        if pwm.size:
-            lo, hi = pwm.min(), pwm.max()
-            # NaN makes both comparisons False, so this also catches non-finite input.
-            if not (lo >= self.pwm_min and hi <= self.pwm_max):
-                self._range_error(pwm, self.pwm_min, self.pwm_max, "PWM", "us")
-        return self._thrust(pwm)
-
-    def pwm(self, thrust: np.ndarray) -> np.ndarray:
-        """Inverse curve: the ESC command that produces ``thrust``.
-
-        0 N maps to :attr:`neutral`.  Where the curve is flat (equal thrust at several
-        commands) the command nearest to neutral is returned, so
-        ``thrust(pwm(T)) == T`` (to round-off) for every reachable ``T``.
-
-        Parameters
-        ----------
-        thrust : array_like, any shape
-            Thrust, N.
-
-        Returns
-        -------
-        ndarray, same shape as ``thrust``
-            PWM, microseconds.
-
-        Raises
-        ------
-        SimulationError
-            If any value is non-finite or beyond ``[max_reverse, max_forward]``.
-        """
-        thrust = np.asarray(thrust, dtype=float)
-        if thrust.size:
-            lo, hi = thrust.min(), thrust.max()
-            if not (lo >= self.max_reverse and hi <= self.max_forward):
-                self._range_error(thrust, self.max_reverse, self.max_forward, "thrust", "N")
-        return self._pwm(thrust)
-
-    @property
-    def max_forward(self) -> float:
-        """Largest thrust the curve produces (N, >= 0)."""
-        return float(self._thrust(np.array(self.pwm_max)))
-
-    @property
-    def max_reverse(self) -> float:
-        """Most negative thrust the curve produces (N, <= 0)."""
-        return float(self._thrust(np.array(self.pwm_min)))
-
-    def to_mapping(self) -> dict:
-        """A mapping that :func:`uvsim.thrusters.load_thrust_curve` turns back into an equal curve."""
-        raise NotImplementedError
-
-    # -- helpers for subclasses ----------------------------------------------------------
-    def _thrust(self, pwm: np.ndarray) -> np.ndarray:  # pragma: no cover - abstract
-        raise NotImplementedError
-
-    def _pwm(self, thrust: np.ndarray) -> np.ndarray:  # pragma: no cover - abstract
-        raise NotImplementedError
-
-    def _key(self) -> tuple:  # pragma: no cover - abstract
-        raise NotImplementedError
-
-    def __eq__(self, other: object) -> bool:
-        return type(other) is type(self) and self._key() == other._key()  # type: ignore[attr-defined]
-
-    def __hash__(self) -> int:
-        return hash(self._key())
-
-    def _range_error(self, values, vmin, vmax, what, unit):
-        bad = ~((values >= vmin) & (values <= vmax))
-        idx = np.unravel_index(int(np.argmax(bad)), values.shape) if values.ndim else ()
-        first = values[idx]
-        n_bad = int(bad.sum())
-        where = f" at index {tuple(int(i) for i in idx)}" if values.ndim else ""
-        raise SimulationError(
-            f"thrust curve {self.name!r}: {what} {float(first):g} {unit}{where} is outside the "
-            f"valid range [{vmin:g}, {vmax:g}] {unit} ({n_bad} of {values.size} values out of "
-            f"range; values are never clipped)"
-        )
 
 
 # ------------------------------------------------------------------------- tabulated

@@ -7,10 +7,11 @@ CSV file, ``{"type": "linear", ...}`` or a battery-aware ``{"voltage_table": ...
 with one call per distinct curve.
 
 The curves themselves (PWM command -> thrust) live in :mod:`uvsim.thrust_curves` (fixed
-curves and the shipped tables) and :mod:`uvsim.voltage_curves` (battery-aware).  The
-public names of :mod:`uvsim.thrust_curves` are re-exported here, where vehicle code and
-user scripts import them (``from uvsim.thrusters import TabulatedThrustCurve`` keeps
-working).  Imports run one way: thrusters -> voltage_curves -> thrust_curves.
+curves and the shipped tables), :mod:`uvsim.voltage_curves` (battery-aware) and
+:mod:`uvsim.thrust_curve_base` (the :class:`ThrustCurve` interface).  The public names of
+:mod:`uvsim.thrust_curves` are re-exported here, where vehicle code and user scripts import
+them (``from uvsim.thrusters import TabulatedThrustCurve`` keeps working).  Imports run one
+way: thrusters -> voltage_curves -> thrust_curves -> thrust_curve_base.
 """
 from __future__ import annotations
 
@@ -26,10 +27,10 @@ from uvsim.thrust_curves import (  # noqa: F401  (re-exported, see the module do
     KGF_TO_N,
     LinearThrustCurve,
     TabulatedThrustCurve,
-    ThrustCurve,
     available_tables,
     shipped_curve,
 )
+from uvsim.thrust_curve_base import ThrustCurve
 from uvsim.voltage_curves import load_voltage_curve
 
 

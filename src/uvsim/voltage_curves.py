@@ -21,7 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from uvsim.errors import SimulationError, VehicleError
-from uvsim.thrust_curves import DATA_DIR, KGF_TO_N, TabulatedThrustCurve, ThrustCurve
+from uvsim.thrust_curve_base import ThrustCurve
+from uvsim.thrust_curves import DATA_DIR, KGF_TO_N, TabulatedThrustCurve
 
 #: Shipped voltage families: name -> directory of ``<name>_<V>v.csv`` sheets.
 FAMILIES = {"t200": DATA_DIR / "t200_voltage"}

@@ -22,7 +22,7 @@ def as_dataset(data) -> Dataset:
         return data
     if isinstance(data, (str, Path)):
         return read_dataset(data)
-    from uvsim.logs import Run
+    from uvsim.logged_run import Run
 
     runs = list(data) if isinstance(data, (list, tuple)) else None
     if runs is None or not all(isinstance(r, Run) for r in runs):

@@ -6,7 +6,8 @@ import numpy as np
 from uvsim.errors import LogFormatError
 from uvsim.importers.segments import Segment, cut_run
 from uvsim.importers.timeline import MERGE_TOL_S, merge_streams
-from uvsim.logs import PWM_RANGE_US, Run
+from uvsim.log_columns import PWM_RANGE_US
+from uvsim.logged_run import Run
 
 
 def build_runs(streams: list, segments: list[Segment], *, where: str, tol: float = MERGE_TOL_S,

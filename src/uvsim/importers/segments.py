@@ -27,7 +27,8 @@ import yaml
 from uvsim.errors import LogFormatError
 from uvsim.files import load_yaml, plain
 from uvsim.importers.timeline import gaps
-from uvsim.logs import DOFS, MANIFEST, MEASURED_COLUMNS, SPLITS, VOLTAGE_COLUMN, Run, write_run
+from uvsim.logged_run import DOFS, SPLITS, Run
+from uvsim.logs import MANIFEST, MEASURED_COLUMNS, VOLTAGE_COLUMN, write_run
 
 _KEYS = {"start", "end", "dof", "split", "name", "weight"}
 
