@@ -54,11 +54,7 @@ class ThrustCurve:
             If any value is non-finite or outside ``[pwm_min, pwm_max]``.
         """
         pwm = np.asarray(pwm, dtype=float)
-        if pwm.size:
-            lo, hi = pwm.min(), pwm.max()
-            # NaN makes both comparisons False, so this also catches non-finite input.
-            if not (lo >= self.pwm_min and hi <= self.pwm_max):
-                self._range_error(pwm, self.pwm_min, self.pwm_max, "PWM", "us")
+        self._check_range(pwm, self.pwm_min, self.pwm_max, "PWM", "us")
         return self._thrust(pwm)
 
     def pwm(self, thrust: np.ndarray) -> np.ndarray:
@@ -84,10 +80,7 @@ class ThrustCurve:
             If any value is non-finite or beyond ``[max_reverse, max_forward]``.
         """
         thrust = np.asarray(thrust, dtype=float)
-        if thrust.size:
-            lo, hi = thrust.min(), thrust.max()
-            if not (lo >= self.max_reverse and hi <= self.max_forward):
-                self._range_error(thrust, self.max_reverse, self.max_forward, "thrust", "N")
+        self._check_range(thrust, self.max_reverse, self.max_forward, "thrust", "N")
         return self._pwm(thrust)
 
     @property
@@ -119,6 +112,12 @@ class ThrustCurve:
 
     def __hash__(self) -> int:
         return hash(self._key())
+
+    def _check_range(self, values, vmin, vmax, what, unit) -> None:
+        """Raise :meth:`_range_error` unless every one of ``values`` lies in ``[vmin, vmax]``.
+        NaN makes both comparisons False, so this also catches non-finite input."""
+        if values.size and not (values.min() >= vmin and values.max() <= vmax):
+            self._range_error(values, vmin, vmax, what, unit)
 
     def _range_error(self, values, vmin, vmax, what, unit):
         bad = ~((values >= vmin) & (values <= vmax))

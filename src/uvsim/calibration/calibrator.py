@@ -432,8 +432,7 @@ class Calibrator:
 
         verdict = finish(fit_res)
         self.trade_off_ = None
-        if trade.check_setting(self.trade_off) == "explore" and fit_res is not None \
-                and (verdict or {}).get("status") == "trade-off":
+        if self.trade_off == "explore" and fit_res is not None and (verdict or {}).get("status") == "trade-off":
             first = fit_res
             warm = start_veh.with_parameters(first.values)
 

@@ -83,10 +83,15 @@ def describe() -> str:
     return f"numba {version('numba')} (models it cannot run: numpy)"
 
 
+def _numba_allowed() -> bool:
+    """True unless the setting or the install says numpy."""
+    return current() != "numpy" and numba_installed()
+
+
 def _compiled(name: str):
     """The compiled function ``name`` of :mod:`uvsim.kernels.numba_rk4`, or None when the setting
     or the install says numpy."""
-    if current() == "numpy" or not numba_installed():
+    if not _numba_allowed():
         return None
     from uvsim.kernels import numba_rk4
 
@@ -116,6 +121,4 @@ def _uniform_table():
 def compiled_uniform_table():
     """The compiled :func:`uvsim.kernels.table_lookup.uniform_table` (a thrust table on uniform knots),
     or None when the setting or the install says numpy."""
-    if current() == "numpy" or not numba_installed():
-        return None
-    return _uniform_table()
+    return _uniform_table() if _numba_allowed() else None
