@@ -249,6 +249,46 @@ def test_normal_pieces_with_a_window_without_rows():
     assert out.window_sse[2] == 0.0 and not out.scores[2].any()
 
 
+def _random_run_jacobian(rng, nw, k, nb, per_window, p, empty_window=None):
+    """A RunJacobian shaped like the solver's (channel-major measurement rows), with Jz, r, clusters."""
+    from uvsim.fitting.linearization import RunJacobian
+
+    own = np.tile(np.repeat(np.arange(nw), per_window), 3)
+    if empty_window is not None:
+        own = own[own != empty_window]
+    m_meas = own.size
+    dm = rng.normal(size=(m_meas, k))
+    if k > 1:
+        dm[:, 1] = 0.0  # a component read by nothing
+    db = rng.normal(size=(m_meas, nb)) * (rng.random((m_meas, 1)) < 0.5)
+    J = RunJacobian(nw, own, dm, rng.normal(size=(nw - 1, k, k)), rng.normal(size=(nw - 1, k, k)),
+                    1.0 + rng.random(nw * k), db, 1.0 + rng.random(nb))
+    m = m_meas + (nw - 1) * k + nw * k + nb
+    Jz, r = rng.normal(size=(m, p)), rng.normal(size=m)
+    Jz[m_meas + (nw - 1) * k:] = 0.0  # the priors do not depend on the parameters
+    cluster = np.concatenate([own, np.repeat(np.arange(1, nw), k), np.repeat(np.arange(nw), k), np.zeros(nb, int)])
+    return r, Jz, J, cluster
+
+
+@pytest.mark.parametrize("nw,k,nb,per_window,p,empty", [(1, 3, 0, 10, 2, None), (6, 4, 3, 30, 5, None),
+                                                        (18, 12, 5, 40, 34, None), (3, 2, 2, 1, 1, None),
+                                                        (5, 6, 8, 20, 4, 2), (4, 0, 3, 10, 2, None)])
+@pytest.mark.parametrize("scores", [False, True])
+def test_normal_pieces_by_blocks_equal_the_whole_matrix_products(nw, k, nb, per_window, p, empty, scores):
+    """The linearization's block-by-block products against the whole nuisance Jacobian's (dense)."""
+    from uvsim.fitting.linearization import structured_normal_pieces
+
+    rng = np.random.default_rng(11 + nw + k)
+    r, Jz, J, cluster = _random_run_jacobian(rng, nw, k, nb, per_window, p, empty)
+    Jn = J.to_sparse().toarray()
+    assert Jn.shape == (r.size, nw * k + nb)
+    out = structured_normal_pieces(r, Jz, J, cluster, scores)
+    ref = _ref_normal_pieces(r, Jz, Jn, cluster, nw, scores)
+    _assert_pieces_match(out, ref)
+    np.testing.assert_array_equal(out.window_sse, ref["window_sse"])
+    np.testing.assert_array_equal(out.D, out.D.T)
+
+
 def test_wrap_equals_the_remainder_formula_bit_for_bit():
     # wrap() takes the remainder only outside [0, 2 pi) after the shift: the same values, signs,
     # dtypes and scalar types as (a + pi) % 2 pi - pi everywhere, the input untouched

@@ -342,3 +342,47 @@ def test_the_uncompiled_table_lookup_equals_numpy():
     uniform_table(pwm, float(curve._xp[0]), curve._step, curve._fp, out)   # the text, run by Python
     with kernels.use("numpy"):
         assert np.array_equal(out, curve.thrust(pwm))
+
+
+def _voltage_curve():
+    from uvsim.vehicle import load_vehicle
+
+    d = load_vehicle("bluerov2_heavy").to_dict()
+    d["thrusters"]["curve"] = {"voltage_table": "t200", "nominal_voltage": 16.0}
+    return vehicle_from_dict(d, source="test").actuators.curves[0]
+
+
+def _voltage_inputs(curve):
+    rng = np.random.default_rng(47)
+    pwm = rng.uniform(curve.pwm_min, curve.pwm_max, (3000, 8))
+    pwm[::5] = curve.table_pwm[rng.integers(0, curve.table_pwm.size, pwm[::5].shape)]  # on knots
+    volts = rng.uniform(curve.voltages[0], curve.voltages[-1], (3000, 1))
+    volts[::7] = curve.voltages[rng.integers(0, curve.voltages.size, volts[::7].shape)]   # on sheets
+    volts[0], volts[1], volts[2] = curve.voltages[0], curve.voltages[-1], np.nan          # ends; nominal
+    return pwm, volts
+
+
+@needs_numba
+def test_the_compiled_voltage_table_equals_numpy_to_the_bit():
+    curve = _voltage_curve()
+    pwm, volts = _voltage_inputs(curve)
+    got = _both(lambda: curve.thrust(pwm, volts))
+    assert got["numba"].shape == pwm.shape and np.array_equal(got["numba"], got["numpy"])
+    assert np.array_equal(_both(lambda: curve.thrust(pwm))["numba"], _both(lambda: curve.thrust(pwm))["numpy"])
+    with kernels.use("numba"):
+        with pytest.raises(SimulationError, match="supply voltage"):  # the range checks come first, as before
+            curve.thrust(pwm, volts + 100.0)
+
+
+def test_the_uncompiled_voltage_table_equals_numpy():
+    from uvsim.kernels.table_lookup import voltage_table
+
+    curve = _voltage_curve()
+    pwm, volts = _voltage_inputs(curve)
+    pwm, volts = pwm[:40], np.where(np.isnan(volts[:40]), curve.nominal_voltage, volts[:40])
+    v = np.broadcast_to(volts, pwm.shape)
+    out = np.empty(pwm.size)
+    voltage_table(pwm.ravel(), np.ascontiguousarray(v).ravel(), float(curve.table_pwm[0]), curve._step,
+                  curve.voltages, curve.table_thrust, out)                    # the text, run by Python
+    with kernels.use("numpy"):
+        assert np.array_equal(out.reshape(pwm.shape), curve.thrust(pwm, volts))

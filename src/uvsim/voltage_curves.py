@@ -100,6 +100,18 @@ class VoltageThrustCurve(ThrustCurve):
                 self._range_error(v, self.voltages[0], self.voltages[-1], "supply voltage", "V")
             v = np.broadcast_to(v, np.broadcast_shapes(v.shape, pwm.shape))
             pwm = np.broadcast_to(pwm, v.shape)
+        if pwm.size >= 64:
+            # compiled where numba is (uvsim.kernels.table_lookup.voltage_table: these operations
+            # in one pass, to the bit)
+            from uvsim.kernels import compiled_voltage_table
+
+            table = compiled_voltage_table()
+            if table is not None:
+                flat = np.ascontiguousarray(pwm, dtype=float).ravel()
+                out = np.empty(flat.size)
+                table(flat, np.ascontiguousarray(v, dtype=float).ravel(), float(self.table_pwm[0]), self._step,
+                      self.voltages, self.table_thrust, out)
+                return out.reshape(pwm.shape)
         u = (pwm - self.table_pwm[0]) / self._step
         i = np.minimum(u.astype(np.intp), self.table_pwm.size - 2)
         t = u - i

@@ -62,6 +62,7 @@ from uvsim.logs import Dataset, read_dataset
 from uvsim.signals import check_signal_settings
 from uvsim.plausibility import check_runs, parse_allow
 from uvsim.progress import as_progress
+from uvsim.fitting.worker_pool import WorkerPool, with_worker_pool
 from uvsim.schema import check_workers, is_whole_number
 from uvsim.vehicle import load_vehicle
 
@@ -131,6 +132,7 @@ def _one_blas_thread(fn):
 
 
 @_one_blas_thread
+@with_worker_pool
 def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: Sequence[str] | None = None,
              noise: Mapping[str, float] | None = None, weights: Mapping[str, float] | None = None,
              horizon: float = DEFAULT_HORIZON, max_effects: int = 2, top: int = 3, max_iter: int = 12,
@@ -151,7 +153,8 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
     max_effects : largest number of effects added (forward selection steps).
     top : candidates fitted through the simulator per step (by screening rank).
     max_iter : Levenberg-Marquardt iterations per fit.
-    workers : processes for the simulations.
+    workers : processes for the simulations (kept for the whole diagnosis,
+        :class:`uvsim.fitting.worker_pool.WorkerPool`).
     progress : the stages (each fit, screening and validation) and notes: a callable(message)
         receiving each stage's name as it starts, or a :class:`uvsim.progress.Progress`.
     allow : names of plausibility checks (:mod:`uvsim.plausibility`) that may fail; every
@@ -183,10 +186,11 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         if unknown:
             raise CalibrationError(f"unknown candidate effect(s) {unknown}; known: {', '.join(EFFECTS)}")
     check_signal_settings(noise, weights)
-    for name, value in (("max_effects", max_effects), ("top", top), ("max_iter", max_iter), ("workers", workers)):
+    n_workers = workers.workers if isinstance(workers, WorkerPool) else workers
+    for name, value in (("max_effects", max_effects), ("top", top), ("max_iter", max_iter), ("workers", n_workers)):
         if not (is_whole_number(value) and value >= 1):
             raise CalibrationError(f"{name} must be a positive integer (1 or more), got {value!r}")
-    check_workers(workers, "workers", error=CalibrationError)  # and not more processes than the machine runs
+    check_workers(n_workers, "workers", error=CalibrationError)  # and not more processes than the machine runs
     if not (horizon is None or (np.isfinite(horizon) and horizon > 0)):
         raise CalibrationError(f"horizon must be a positive number of seconds, got {horizon!r}")
     check_judge_horizon(judge_horizon)

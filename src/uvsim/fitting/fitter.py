@@ -32,6 +32,7 @@ from uvsim.fitting.parameters import ParameterSpace
 from uvsim.fitting.priors import make_prior
 from uvsim.fitting.solver import covariance, solve
 from uvsim.fitting.windows import whole_runs
+from uvsim.fitting.worker_pool import with_worker_pool
 from uvsim.measurements import measurements_for
 
 #: Relative singular value below which a direction of the free parameters counts as
@@ -138,6 +139,7 @@ def build_problems(vehicle, runs, meas, space: ParameterSpace, horizon, z_ref, *
     return probs, order
 
 
+@with_worker_pool
 def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence = DEFAULT_HORIZONS,
         max_iter: int = 20, gyro_bias: bool = True, attitude_bias: bool = False, acc_bias: bool = False,
         noise=None, weights=None,
@@ -165,7 +167,8 @@ def fit(vehicle, runs, space: ParameterSpace, *, meas=None, horizons: Sequence =
         (:func:`uvsim.fitting.objective.acc_bias_sd` prior).
     z0 : start (scaled) instead of the space's start values.
     progress : callable(message) for stage / iteration reports.
-    workers : processes for the simulations (results do not depend on it).
+    workers : processes for the simulations (results do not depend on it), kept for all the
+        stages (:class:`uvsim.fitting.worker_pool.WorkerPool`; a pool given is used as it is).
     ftol : a stage stops when an iteration lowers the cost by less than this fraction.
     checkpoint : optional store of the fit's progress, any object with ``load()``
         (the saved state or None) and ``save(state, progress="...")``: saved after every

@@ -51,6 +51,7 @@ import numpy as np
 
 from uvsim.blas import single_thread
 from uvsim.fitting.evaluators import PoolEvaluator, PriorEvaluator, SerialEvaluator
+from uvsim.fitting.worker_pool import PersistentEvaluator, WorkerPool
 from uvsim.fitting.linearization import reduced_system
 
 #: After an accepted step, the next trial point is linearized at once (Jacobian included)
@@ -130,7 +131,7 @@ def solve(prob, z0: np.ndarray, nus0: list | None = None, *, max_iter: int = 20,
     ``prob`` is a :class:`WindowedProblem` or a list of them sharing one parameter space
     (e.g. one per input kind and chunk of runs); ``nus0`` lists the runs' nuisance
     vectors in order.  ``workers`` > 1 linearizes the problems in that many processes
-    (same result).  Returns dict with ``z``, ``nus``, ``cost`` (1/2 sum r^2), ``blocks``
+    (same result), a :class:`~uvsim.fitting.worker_pool.WorkerPool` in its processes.  Returns dict with ``z``, ``nus``, ``cost`` (1/2 sum r^2), ``blocks``
     (:class:`uvsim.fitting.linearization.RunNormal` per run at the solution, with window scores), ``iterations``,
     ``evaluations`` (parameter sets simulated per run chunk), ``message``, ``history``
     (cost per accepted step), ``seconds``.  Runs with one BLAS thread per process (small
@@ -147,8 +148,11 @@ def solve(prob, z0: np.ndarray, nus0: list | None = None, *, max_iter: int = 20,
     solution, ``posterior_blocks`` the weighted data's and the prior's (for
     :func:`covariance`: the posterior), and ``data_weight`` the final weight."""
     probs = _problems(prob)
-    ev = PoolEvaluator(probs, int(workers)) if workers and int(workers) > 1 and len(probs) > 1 \
-        else SerialEvaluator(probs)
+    if isinstance(workers, WorkerPool):  # processes kept across fits (a diagnosis)
+        ev = PersistentEvaluator(probs, workers) if len(probs) > 1 else SerialEvaluator(probs)
+    else:
+        ev = PoolEvaluator(probs, int(workers)) if workers and int(workers) > 1 and len(probs) > 1 \
+            else SerialEvaluator(probs)
     if prior is not None:
         ev = PriorEvaluator(ev, prior)
     try:

@@ -122,3 +122,18 @@ def compiled_uniform_table():
     """The compiled :func:`uvsim.kernels.table_lookup.uniform_table` (a thrust table on uniform knots),
     or None when the setting or the install says numpy."""
     return _uniform_table() if _numba_allowed() else None
+
+
+@functools.lru_cache(maxsize=None)
+def _voltage_table():
+    import numba
+
+    from uvsim.kernels.table_lookup import voltage_table
+
+    return numba.njit(voltage_table, cache=True, nogil=True, error_model="numpy")
+
+
+def compiled_voltage_table():
+    """The compiled :func:`uvsim.kernels.table_lookup.voltage_table` (thrust tables per supply voltage),
+    or None when the setting or the install says numpy."""
+    return _voltage_table() if _numba_allowed() else None

@@ -1,0 +1,205 @@
+"""Worker processes kept for a whole diagnosis: the fits' linearizations without a new pool per fit.
+
+A diagnosis makes dozens of fits, each a few Levenberg-Marquardt iterations long.  A process pool
+made for each fit (:class:`uvsim.fitting.evaluators.PoolEvaluator`) pays, every fit, for starting
+its processes and for their first linearization, which runs several times slower than the next
+ones in a fresh process (its memory is new; on the shipped tank tether 0.11 s against 0.02 s,
+docs/performance.md): with two workers the diagnosis took as long as with one.  A
+:class:`WorkerPool` starts its processes once; each fit sends them its problems (pickled, about
+1 MB per problem of four 14-s runs at 50 Hz) and then only the points to linearize at
+(:class:`PersistentEvaluator`).
+
+Each problem is linearized by one worker, whole, exactly as :class:`~uvsim.fitting.evaluators.SerialEvaluator`
+does it, so the results do not depend on the number of workers or on which worker took a problem.
+Problems go to the worker with the least work so far (samples times parameter sets), largest first.
+
+Use it as a context manager (the processes stop at the end, also on an error or Ctrl-C)::
+
+    with WorkerPool(2) as pool:
+        fit(vehicle, runs, space, workers=pool)
+"""
+from __future__ import annotations
+
+import functools
+import multiprocessing as mp
+import signal
+import traceback
+import weakref
+
+import numpy as np
+
+from uvsim.errors import CalibrationError
+from uvsim.fitting.evaluators import SerialEvaluator, _split
+
+
+def _serve(conn) -> None:
+    """A worker's loop: ``("load", {index: problem})`` keeps a fit's problems (replacing the last
+    fit's); ``("linearize", [(index, nus)], z, jacobian, scores)`` answers with their blocks;
+    ``("stop",)`` ends.  Errors are sent back to be raised in the parent."""
+    from uvsim.blas import single_thread
+    from uvsim.fitting.linearization import linearize
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle (it stops us)
+    probs: dict = {}
+    while True:
+        try:
+            msg = conn.recv()
+        except (EOFError, OSError):
+            return
+        if msg[0] == "stop":
+            return
+        try:
+            if msg[0] == "load":
+                probs = msg[1]
+                conn.send(("ok", None))
+            else:
+                _, items, z, jacobian, scores = msg
+                with single_thread():
+                    out = [linearize(probs[i], z, nus, jacobian=jacobian, scores=scores) for i, nus in items]
+                conn.send(("ok", out))
+        except Exception as exc:  # noqa: BLE001 -- sent to the parent, which raises it
+            conn.send(("error", exc, traceback.format_exc()))
+
+
+def _stop(procs, conns) -> None:
+    for c in conns:
+        try:
+            c.send(("stop",))
+        except (OSError, ValueError):
+            pass
+    for p in procs:
+        p.join(timeout=2.0)
+        if p.is_alive():
+            p.terminate()
+            p.join(timeout=2.0)
+    for c in conns:
+        c.close()
+
+
+class WorkerPool:
+    """``workers`` local processes (started at the first use) that linearize the problems of one
+    fit after another (module docstring)."""
+
+    def __init__(self, workers: int):
+        if not (isinstance(workers, (int, np.integer)) and workers >= 2):
+            raise CalibrationError(f"WorkerPool: need 2 or more workers, got {workers!r}")
+        self.workers = int(workers)
+        self._procs: list = []
+        self._conns: list = []
+        self._finalizer = None
+
+    # the pool stands for its number of processes where a count is expected (e.g. fit(workers=...))
+    def __int__(self) -> int:
+        return self.workers
+
+    def _start(self) -> None:
+        if self._procs:
+            return
+        ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
+        for _ in range(self.workers):
+            parent, child = ctx.Pipe()
+            p = ctx.Process(target=_serve, args=(child,), daemon=True)
+            p.start()
+            child.close()
+            self._procs.append(p)
+            self._conns.append(parent)
+        self._finalizer = weakref.finalize(self, _stop, self._procs, self._conns)
+
+    def _lost(self, w: int) -> CalibrationError:
+        self.close()
+        return CalibrationError(f"worker process {w + 1} of {self.workers} ended unexpectedly (out of memory?); "
+                                "run with fewer workers")
+
+    def _send(self, w: int, msg) -> None:
+        try:
+            self._conns[w].send(msg)
+        except (BrokenPipeError, EOFError, OSError):
+            raise self._lost(w) from None
+
+    def _gather(self, busy: list[int]) -> dict:
+        """The replies of the workers ``busy`` (every one read before an error is raised, so that
+        none is left in a pipe for the next call)."""
+        got, error = {}, None
+        for w in busy:
+            try:
+                reply = self._conns[w].recv()
+            except (EOFError, OSError):
+                raise self._lost(w) from None
+            if reply[0] == "error":
+                error = error or reply[1]
+            else:
+                got[w] = reply[1]
+        if error is not None:
+            raise error
+        return got
+
+    def load(self, probs: list) -> list[list[int]]:
+        """Send the problems of a fit to the workers; returns each worker's problem indices."""
+        self._start()
+        load = [0.0] * self.workers
+        owned: list[list[int]] = [[] for _ in range(self.workers)]
+        size = [sum(r.t.size for r in p.runs) * (p.space.p + 13) for p in probs]
+        for i in sorted(range(len(probs)), key=lambda i: -size[i]):
+            w = int(np.argmin(load))
+            owned[w].append(i)
+            load[w] += size[i]
+        for w in range(self.workers):
+            self._send(w, ("load", {i: probs[i] for i in owned[w]}))
+        self._gather(list(range(self.workers)))
+        return owned
+
+    def linearize(self, owned: list[list[int]], z, nus_split: list, *, jacobian: bool, scores: bool) -> list:
+        """Each problem's blocks (in problem order) at ``z`` with its runs' nuisance ``nus_split[i]``."""
+        busy = []
+        for w, idx in enumerate(owned):
+            if idx:
+                self._send(w, ("linearize", [(i, nus_split[i]) for i in idx], z, jacobian, scores))
+                busy.append(w)
+        out: list = [None] * len(nus_split)
+        for w, res in self._gather(busy).items():
+            for i, blocks in zip(owned[w], res):
+                out[i] = blocks
+        return out
+
+    def close(self) -> None:
+        """Stop the processes (also done when the pool is garbage-collected)."""
+        if self._finalizer is not None:
+            self._finalizer()
+        self._procs, self._conns, self._finalizer = [], [], None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
+
+
+class PersistentEvaluator(SerialEvaluator):
+    """Linearizes one fit's problems in a :class:`WorkerPool` (the same results as serially)."""
+
+    def __init__(self, probs, pool: WorkerPool):
+        super().__init__(probs)
+        self.pool = pool
+        self.owned = pool.load(self.probs)
+
+    def linearize(self, z, nus, *, jacobian=True, scores=False) -> list:
+        per = self.pool.linearize(self.owned, z, _split(nus, self.sizes), jacobian=jacobian, scores=scores)
+        return [b for blocks in per for b in blocks]
+
+    def close(self):
+        pass  # the pool outlives the fit
+
+
+def with_worker_pool(fn):
+    """``fn`` (which takes a keyword ``workers``) run with ``workers`` > 1 turned into a
+    :class:`WorkerPool` of that many processes, kept for all of its fits and stopped when it
+    returns or raises; a pool already given is used as it is (an outer call owns it)."""
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        w = kwargs.get("workers", 1)
+        if isinstance(w, (int, np.integer)) and not isinstance(w, bool) and w >= 2:
+            with WorkerPool(int(w)) as pool:
+                return fn(*args, **{**kwargs, "workers": pool})
+        return fn(*args, **kwargs)
+    return wrapper
