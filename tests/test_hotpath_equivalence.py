@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 from uvsim.fitting.objective import WindowedProblem
-from uvsim.fitting.linearization import _normal_pieces
 from uvsim.kinematics import quat_to_euler, cross_components, down_axis_components, quat_down_axis, quat_to_rotation
 from uvsim.measurements import Group, RunMeasurements, specific_force
 from uvsim.signals import GROUPS
@@ -168,32 +167,8 @@ def _ref_normal_pieces(r, Jz, Jn, cluster, nw, scores):
     return dict(rss=float(r @ r), n=r.size, A=Jz.T @ Jz, gz=Jz.T @ r, D=D, B=B, gn=gn, window_sse=sse, scores=sc)
 
 
-def _windowed_jacobian(rng, nw, k, nb, per_window, p):
-    """Residuals, Jacobians and clusters shaped like the solver's: measurement rows (channel-major,
-    each seeing its window's k node components and the biases), defects (two nodes), priors."""
-    q = nw * k + nb
-    own = np.tile(np.repeat(np.arange(nw), per_window), 3)  # 3 channels, time inside
-    m_meas = own.size
-    rows_def = (nw - 1) * k
-    m = m_meas + rows_def + nw * k + nb
-    Jn = np.zeros((m, q))
-    for j in range(k):
-        Jn[np.arange(m_meas), own * k + j] = rng.normal(size=m_meas) * (j != 1)  # component 1: read by nothing
-    Jn[:m_meas, nw * k:] = rng.normal(size=(m_meas, nb)) * (rng.random((m_meas, 1)) < 0.5)
-    for w in range(1, nw):
-        rr = m_meas + (w - 1) * k + np.arange(k)
-        Jn[rr[:, None], (w - 1) * k + np.arange(k)] = rng.normal(size=(k, k))
-        Jn[rr[:, None], w * k + np.arange(k)] = rng.normal(size=(k, k))
-    base = m_meas + rows_def
-    Jn[base + np.arange(nw * k + nb), np.arange(q)] = 1.0 + rng.random(q)
-    Jz = rng.normal(size=(m, p))
-    r = rng.normal(size=m)
-    cluster = np.concatenate([own, np.repeat(np.arange(1, nw), k), np.repeat(np.arange(nw), k), np.zeros(nb, int)])
-    return r, Jz, Jn, cluster
-
-
-#: The products with the nuisance Jacobian go over its nonzeros (scipy.sparse): the same sums in
-#: another order, equal to round-off (the window sums and Jz's products stay bit for bit)
+#: The products with the nuisance Jacobian go block by block (linearization.structured_normal_pieces):
+#: the same sums in another order, equal to round-off (the window sums and Jz's products stay bit for bit)
 SPARSE_RTOL = 1e-12
 
 
@@ -208,45 +183,6 @@ def _assert_pieces_match(out, ref, rtol=SPARSE_RTOL):
         scale = max(np.abs(v).max(initial=0.0), 1e-300)
         err = np.abs(got - v).max(initial=0.0) / scale
         assert err <= rtol, f"{name}: relative difference {err:.2e}"
-
-
-@pytest.mark.parametrize("nw,k,nb,per_window,p", [(1, 3, 0, 10, 2), (6, 4, 3, 30, 5), (18, 12, 5, 40, 34),
-                                                   (3, 2, 2, 1, 1)])
-@pytest.mark.parametrize("scores", [False, True])
-def test_normal_pieces_equal_the_dense_products(nw, k, nb, per_window, p, scores):
-    rng = np.random.default_rng(7 + nw)
-    args = _windowed_jacobian(rng, nw, k, nb, per_window, p)
-    out = _normal_pieces(*args, nw, scores)
-    ref = _ref_normal_pieces(*args, nw, scores)
-    _assert_pieces_match(out, ref)
-    np.testing.assert_array_equal(out.window_sse, ref["window_sse"])  # same additions in the same order
-    np.testing.assert_array_equal(out.D, out.D.T)
-
-
-@pytest.mark.parametrize("scores", [False, True])
-def test_normal_pieces_dense_and_empty_nuisance(scores):
-    """No sparsity to exploit (every entry nonzero), and no nuisance at all."""
-    rng = np.random.default_rng(8)
-    m, p, q, nw = 60, 3, 5, 4
-    r, Jz, Jn = rng.normal(size=m), rng.normal(size=(m, p)), rng.normal(size=(m, q))
-    cluster = rng.integers(0, nw, m)
-    _assert_pieces_match(_normal_pieces(r, Jz, Jn, cluster, nw, scores), _ref_normal_pieces(r, Jz, Jn, cluster, nw, scores))
-    Jn0 = np.zeros((m, 0))
-    out = _normal_pieces(r, Jz, Jn0, cluster, nw, scores)
-    _assert_pieces_match(out, _ref_normal_pieces(r, Jz, Jn0, cluster, nw, scores))
-    assert out.D.shape == (0, 0) and out.B.shape == (0, p)
-
-
-def test_normal_pieces_with_a_window_without_rows():
-    rng = np.random.default_rng(9)
-    m, p, q, nw = 40, 2, 6, 5
-    r, Jz, Jn = rng.normal(size=m), rng.normal(size=(m, p)), rng.normal(size=(m, q))
-    Jn[:, :2] *= 0.0
-    Jn[np.arange(q), np.arange(q)] = 1.0  # D nonsingular
-    cluster = rng.choice([0, 1, 3, 4], m)  # window 2 owns nothing
-    out = _normal_pieces(r, Jz, Jn, cluster, nw, True)
-    _assert_pieces_match(out, _ref_normal_pieces(r, Jz, Jn, cluster, nw, True))
-    assert out.window_sse[2] == 0.0 and not out.scores[2].any()
 
 
 def _random_run_jacobian(rng, nw, k, nb, per_window, p, empty_window=None):
@@ -272,7 +208,8 @@ def _random_run_jacobian(rng, nw, k, nb, per_window, p, empty_window=None):
 
 @pytest.mark.parametrize("nw,k,nb,per_window,p,empty", [(1, 3, 0, 10, 2, None), (6, 4, 3, 30, 5, None),
                                                         (18, 12, 5, 40, 34, None), (3, 2, 2, 1, 1, None),
-                                                        (5, 6, 8, 20, 4, 2), (4, 0, 3, 10, 2, None)])
+                                                        (5, 6, 8, 20, 4, 2), (4, 0, 3, 10, 2, None),
+                                                        (3, 0, 0, 5, 2, None)])
 @pytest.mark.parametrize("scores", [False, True])
 def test_normal_pieces_by_blocks_equal_the_whole_matrix_products(nw, k, nb, per_window, p, empty, scores):
     """The linearization's block-by-block products against the whole nuisance Jacobian's (dense)."""

@@ -100,12 +100,14 @@ class RunJacobian:
 
 
 def structured_normal_pieces(r, Jz, J: RunJacobian, cluster, scores: bool) -> RunNormal:
-    """One run's :class:`RunNormal` from its residuals ``r``, ``Jz`` (m, p) and the nuisance
-    Jacobian by blocks ``J``: what :func:`_normal_pieces` computes from the whole matrix, here
-    block by block (a window's measurement entries give one k x k block of ``Jn^T Jn``, a defect
-    four, a prior one diagonal entry), which on a 2-run 100 Hz log took a fifth of the time of the
-    sparse products (docs/performance.md).  The sums are the same in another order: equal to
-    round-off (``tests/test_hotpath_equivalence.py``)."""
+    """One run's :class:`RunNormal` from its residuals ``r`` (m_all,), ``Jz`` (m_all, p) and the
+    nuisance Jacobian by blocks ``J``, block by block: a window's measurement entries give one
+    k x k block of ``Jn^T Jn``, a defect four, a prior one diagonal entry.  On a 2-run 100 Hz log
+    this took half the time of the sparse products it replaced (docs/performance.md).  The sums
+    are those of the whole matrix's products in another order, equal to round-off
+    (``tests/test_hotpath_equivalence.py`` holds them to the dense products of
+    :meth:`RunJacobian.to_sparse`).  ``cluster`` (m_all,): the window of each residual entry;
+    ``scores``: also the projected window scores (nw, p), nuisance profiled out."""
     k, nb, nw = J.k, J.bias_inv.size, J.nw
     p = Jz.shape[1]
     m = J.w_meas.size
@@ -175,12 +177,18 @@ def structured_normal_pieces(r, Jz, J: RunJacobian, cluster, scores: bool) -> Ru
                 Jt[m:base] -= (np.einsum("wij,wjp->wip", J.E, Xn[:-1])
                                + np.einsum("wij,wjp->wip", J.N, Xn[1:])).reshape(nd * k, p)
             Jt[base:base + q] -= inv[:, None] * X
-        contrib = Jt * r[:, None]
-        sc = np.empty((nw, p))
-        for j in range(p):
-            sc[:, j] = np.bincount(cluster, weights=contrib[:, j], minlength=nw)
-        out.scores = sc
+        out.scores = _window_sums(Jt * r[:, None], cluster, nw)
     return out
+
+
+def _window_sums(contrib, cluster, nw: int) -> np.ndarray:
+    """(nw, p): the rows of ``contrib`` (m, p) summed by window (``cluster``), by
+    :func:`numpy.bincount` with weights: the same additions in the same order as ``np.add.at``,
+    many times faster."""
+    sc = np.empty((nw, contrib.shape[1]))
+    for j in range(contrib.shape[1]):
+        sc[:, j] = np.bincount(cluster, weights=contrib[:, j], minlength=nw)
+    return sc
 
 
 def _run_meta(prob: WindowedProblem, r: int):
@@ -299,45 +307,6 @@ def linearize(prob: WindowedProblem, z: np.ndarray, nus: list, *, jacobian: bool
                                   np.zeros(bsd.size, int)])
         blocks.append(structured_normal_pieces(res0, Jz, J, cluster, scores))
     return blocks
-
-
-def _normal_pieces(r, Jz, Jn, cluster, nw, scores) -> RunNormal:
-    """One run's :class:`RunNormal` from its residuals and Jacobians.
-
-    Parameters
-    ----------
-    r : (m,) residuals.
-    Jz : (m, p) Jacobian w.r.t. the global parameters.
-    Jn : (m, q) Jacobian w.r.t. the run's nuisance, a :mod:`scipy.sparse` matrix (or dense).
-    cluster : (m,) int, the window (0 .. nw - 1) each residual entry belongs to.
-    nw : number of windows.
-    scores : also compute the projected window scores (nw, p).
-
-    The per-window sums are :func:`numpy.bincount` with weights (one per column for the
-    scores): the same additions in the same order as ``np.add.at``, so the same values to the
-    last bit, many times faster.  The products with ``Jn`` go over its nonzeros
-    (:mod:`scipy.sparse`): a residual entry sees only its own window's node, its neighbour's
-    for a defect, and the sensor biases, so a 2-run 100 Hz log's ``Jn`` is over 95 % zeros
-    and the dense products were half of a linearization.  Their round-off differs from the
-    dense products' (the fitted parameters of a real-sensor benchmark moved by up to 7e-6
-    relative, far inside the fit's tolerance).
-    """
-    p = Jz.shape[1]
-    sse = np.bincount(cluster, weights=r * r, minlength=nw)
-    Jn_s = sparse.csr_matrix(Jn)
-    JnT = Jn_s.T.tocsr()
-    D = (JnT @ Jn_s).toarray()
-    D = 0.5 * (D + D.T)  # symmetric to the last bit (the sparse product need not be)
-    out = RunNormal(float(r @ r), r.size, Jz.T @ Jz, Jz.T @ r, D, np.asarray(JnT @ Jz),
-                    np.asarray(JnT @ r), sse)
-    if scores:
-        Jt = Jz - Jn_s @ np.linalg.solve(out.D, out.B) if Jn.shape[1] else Jz  # D > 0: every nuisance has a prior
-        contrib = Jt * r[:, None]
-        sc = np.empty((nw, p))
-        for j in range(p):
-            sc[:, j] = np.bincount(cluster, weights=contrib[:, j], minlength=nw)
-        out.scores = sc
-    return out
 
 
 def reduced_system(blocks, lam: float):

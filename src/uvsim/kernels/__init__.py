@@ -110,30 +110,21 @@ def compiled_accelerations():
 
 
 @functools.lru_cache(maxsize=None)
-def _uniform_table():
+def _table(name: str):
     import numba
 
-    from uvsim.kernels.table_lookup import uniform_table
+    from uvsim.kernels import table_lookup
 
-    return numba.njit(uniform_table, cache=True, nogil=True, error_model="numpy")
+    return numba.njit(getattr(table_lookup, name), cache=True, nogil=True, error_model="numpy")
 
 
 def compiled_uniform_table():
     """The compiled :func:`uvsim.kernels.table_lookup.uniform_table` (a thrust table on uniform knots),
     or None when the setting or the install says numpy."""
-    return _uniform_table() if _numba_allowed() else None
-
-
-@functools.lru_cache(maxsize=None)
-def _voltage_table():
-    import numba
-
-    from uvsim.kernels.table_lookup import voltage_table
-
-    return numba.njit(voltage_table, cache=True, nogil=True, error_model="numpy")
+    return _table("uniform_table") if _numba_allowed() else None
 
 
 def compiled_voltage_table():
     """The compiled :func:`uvsim.kernels.table_lookup.voltage_table` (thrust tables per supply voltage),
     or None when the setting or the install says numpy."""
-    return _voltage_table() if _numba_allowed() else None
+    return _table("voltage_table") if _numba_allowed() else None
