@@ -106,3 +106,48 @@ def test_a_worker_that_dies_is_named(problems):
 def test_a_pool_needs_two_or_more_workers(n):
     with pytest.raises(CalibrationError, match="2 or more workers"):
         WorkerPool(n)
+
+
+def _square_plus(shared, x):
+    if x < 0:
+        raise ValueError(f"item {x} refused")
+    return shared + x * x
+
+
+def test_map_deals_the_items_out_and_keeps_their_order():
+    with WorkerPool(2) as pool:
+        out, extra = pool.map(_square_plus, 100, list(range(7)), meanwhile=lambda: "parent's part")
+        assert out == [100 + x * x for x in range(7)] and extra == "parent's part"
+        with pytest.raises(ValueError, match="item -3 refused"):
+            pool.map(_square_plus, 0, [1, -3, 2])
+        assert pool.map(_square_plus, 1, [2])[0] == [5]  # usable after an error; one worker idle
+
+
+def test_screening_in_the_pool_equals_the_screening_here(tmp_path):
+    """The screening's candidates outside the tether chain, fitted in the workers while this
+    process fits the chain, give the numbers of the screening in one process."""
+    from uvsim.diagnosis.candidates import catalogue
+    from uvsim.diagnosis.selector import Selector
+    from uvsim.latency import runs_for
+    from uvsim.logs import read_dataset
+    from uvsim.scenarios import generate, sample_scenario
+
+    out = generate(sample_scenario(3, profile="diagnose", n_runs=6, duration=[6, 8], rate_hz=20.0,
+                                   effects=[{"type": "current", "magnitude": 0.05}]), tmp_path / "d")
+    ds = read_dataset(out)
+    veh = uvsim.load_vehicle(ds.vehicle_file or ds.vehicle)
+    train, val = runs_for(veh, ds.train), runs_for(veh, ds.validation)
+    results = []
+    for workers in (1, WorkerPool(2)):
+        sel = Selector(veh, train, val, retune=None, noise=None, weights=None, horizon=3.0, max_iter=5,
+                       workers=workers, say=None)
+        has_pos, p_ref, z_max, has_depth = sel.signals()
+        cands = catalogue(input_kind=train[0].input_kind, n_thrusters=veh.n_thrusters, dt=0.05, p_ref=p_ref,
+                          has_position=has_pos, z_max=z_max, has_depth=has_depth, base=veh.parameters())
+        screened, info = sel.screen(sel.current([], {}), cands)
+        results.append([(c.label, s) for c, s in screened])
+        if isinstance(workers, WorkerPool):
+            workers.close()
+    assert info["available"] and len(results[0]) > 10
+    assert sum(lab.startswith("tether") for lab, _ in results[0]) >= 2  # a chain beside the pool's part
+    assert results[0] == results[1]

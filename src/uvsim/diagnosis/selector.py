@@ -12,7 +12,6 @@ free parameters) and judges them (:mod:`uvsim.diagnosis.decision`).
 from __future__ import annotations
 
 from contextlib import nullcontext
-from typing import Mapping
 
 import numpy as np
 
@@ -20,11 +19,12 @@ from uvsim.diagnosis.candidates import (Candidate, catalogue, coupled_candidate,
                                         observability)
 from uvsim.diagnosis.decision import judge
 from uvsim.diagnosis.regression import BaseBlock, ls_step, stepwise
+from uvsim.diagnosis.screening import screen_candidates
 from uvsim.diagnosis.simulator_fits import SimulatorFits
-from uvsim.diagnosis.starts import SLACK_GN_ITERATIONS, candidate_starts, slack_starts
 from uvsim.errors import UvsimError
 from uvsim.fitting.equation_error import EquationError
 from uvsim.fitting.parameters import GAIN_RANGE, ParameterSpace
+from uvsim.fitting.worker_pool import WorkerPool
 
 #: A variant is as good as the best of its effect when it removes this share of what the
 #: best removes in the screening.
@@ -106,79 +106,9 @@ class Selector(SimulatorFits):
                 single[g] = (*ls_step(base, J[col], rl, [*cur["free"], g], {**vals0}), float(cp @ cp))
         order = sorted(cands, key=lambda c: (c.effect != "tether", c.complexity if c.effect == "tether" else 0,
                                              c.variant != "3d"))
-        res = self._screen_each(order, motions, cur, vals0, base, ee0.scale, single, rss0)
+        pool = self.workers if isinstance(self.workers, WorkerPool) else None
+        res = screen_candidates(order, motions, cur, vals0, base, ee0.scale, single, rss0, pool=pool)
         return list(zip(order, res)), info
-
-    def _screen_each(self, cands, motions, cur, vals0, base: BaseBlock, scale, single, rss0) -> list:
-        """Screening numbers of ``cands`` in order; each tether starts from the best simpler
-        tether before it (a small multi-start on the cheap equation error, the global
-        stage, for the first)."""
-        tether_best = (np.inf, {})
-        res = []
-        for c in cands:
-            if c.effect == "thruster_gain" and len(c.free) == 1 and c.free[0] in single:
-                # one gain: the linearized optimum, held within the variant's range (a unit's gain
-                # >= 0, a reversed unit's <= 0), so a reversed thruster ranks its own variant first
-                vals, rss, curv = single[c.free[0]]
-                g_hat = vals[c.free[0]]
-                lo, hi = c.bounds[c.free[0]]
-                g = min(max(g_hat, lo), hi)
-                vals, rss = {**vals, c.free[0]: g}, rss + (g - g_hat) ** 2 * curv
-                res.append({"reduction": max(0.0, 1.0 - rss / rss0), "values": vals})
-                continue
-            veh = cur["vehicle"].with_effects([c.spec]) if c.spec is not None else cur["vehicle"]
-            best = None
-            if c.effect == "tether" and tether_best[1]:
-                starts = [{**c.start, **{k: v for k, v in tether_best[1].items() if k in c.free}}]
-                starts += slack_starts(c, starts[0])
-            else:
-                starts = candidate_starts(c)
-            its = SLACK_GN_ITERATIONS if "tether_slack_length" in c.free else 2
-            for st in starts:
-                try:
-                    r = self._joint_gn(veh, motions, c, cur, vals0, st, base, scale, iterations=its)
-                except (UvsimError, np.linalg.LinAlgError, ValueError) as exc:
-                    r = {"rss": np.inf, "values": {}, "error": str(exc)}
-                if best is None or r["rss"] < best["rss"]:
-                    best = r
-            red = max(0.0, 1.0 - best["rss"] / rss0) if np.isfinite(best["rss"]) else 0.0
-            if c.effect == "tether" and best.get("values") and best["rss"] < tether_best[0]:
-                tether_best = (best["rss"], {k: v for k, v in best["values"].items() if k.startswith("tether_")})
-            res.append({"reduction": red, "values": best["values"], **({"error": best["error"]}
-                                                                       if "error" in best else {})})
-        return res
-
-    def _joint_gn(self, veh, motions, c: Candidate, cur, vals0: Mapping, start: Mapping, block: BaseBlock,
-                  scale: np.ndarray, iterations: int = 2) -> dict:
-        """Gauss-Newton on the equation error of candidate ``c`` together with the current
-        free parameters: the candidate's columns are re-differentiated at every step, the
-        current parameters' columns (``block``: per unit, at ``vals0``, factored once) are reused
-        (they move little), so a step costs ``1 + len(c.free)`` evaluations."""
-        base = dict(vals0)
-        names_b = list(cur["free"])
-        lo_b = np.array([cur["bounds"][n][0] for n in names_b])
-        hi_b = np.array([cur["bounds"][n][1] for n in names_b])
-        xc = {n: float(start.get(n, c.start[n])) for n in c.free}
-        best = None
-        for it in range(iterations + 1):
-            sp = self.space(veh, c.free, c.bounds, xc, base)
-            ee = EquationError(veh, motions, sp, scale=scale)
-            if it == iterations:  # the last point needs its residual only
-                Jc, r = None, ee.residuals(sp.z0[None])[0]
-            else:
-                Jc, r = ee.jacobian()
-            rss = float(r @ r)
-            if best is None or rss < best["rss"]:
-                best = {"rss": rss, "values": {**{n: base[n] for n in names_b}, **xc}}
-            if it == iterations:
-                break
-            d, _ = block.solve(Jc / sp.scale[:, None], r)
-            nb = len(names_b)
-            if nb:
-                b = np.clip(np.array([base[n] for n in names_b]) + d[:nb], lo_b, hi_b)
-                base.update(zip(names_b, map(float, b)))
-            xc = {n: float(np.clip(xc[n] + dd, *c.bounds[n])) for n, dd in zip(c.free, d[nb:])}
-        return best
 
     # ---------------------------------------------------------------- one step
     def signals(self) -> tuple[bool, np.ndarray, float | None, bool]:

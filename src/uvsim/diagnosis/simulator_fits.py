@@ -38,6 +38,18 @@ from uvsim.progress import as_progress
 FTOL = 1e-4
 
 
+def free_space(vehicle, free: Sequence[str], bounds: Mapping, start: Mapping, fixed: Mapping) -> ParameterSpace:
+    """The parameter space of ``vehicle`` with ``free`` within ``bounds``, started at ``start``
+    (clipped into the bounds; the vehicle's value where missing) and ``fixed`` values for the rest."""
+    base = vehicle.parameters()
+    fp = []
+    for n in free:
+        lo, hi = bounds[n]
+        s0 = float(np.clip(start.get(n, base[n]), lo, hi))  # seeds may come from a screening at a bound
+        fp.append(FreeParameter(n, s0, lo, hi))
+    return ParameterSpace(fp, base, {k: v for k, v in fixed.items() if k not in free})
+
+
 class SimulatorFits:
     """The runs and fits of one diagnosis (module docstring).
 
@@ -99,13 +111,7 @@ class SimulatorFits:
         return self.base_vehicle.with_effects(specs) if specs else self.base_vehicle
 
     def space(self, vehicle, free: Sequence[str], bounds: Mapping, start: Mapping, fixed: Mapping) -> ParameterSpace:
-        base = vehicle.parameters()
-        fp = []
-        for n in free:
-            lo, hi = bounds[n]
-            s0 = float(np.clip(start.get(n, base[n]), lo, hi))  # seeds may come from a screening at a bound
-            fp.append(FreeParameter(n, s0, lo, hi))
-        return ParameterSpace(fp, base, {k: v for k, v in fixed.items() if k not in free})
+        return free_space(vehicle, free, bounds, start, fixed)
 
     def _fit(self, kind: str, vehicle, space: ParameterSpace, runs, meas, max_iter: int, label: str):
         """``fit`` with the store: a fit already made (same model, free parameters, start and

@@ -1,4 +1,5 @@
-"""Worker processes kept for a whole diagnosis: the fits' linearizations without a new pool per fit.
+"""Worker processes kept for a whole diagnosis: the fits' linearizations without a new pool per fit,
+and the screening's independent candidate fits (:meth:`WorkerPool.map`).
 
 A diagnosis makes dozens of fits, each a few Levenberg-Marquardt iterations long.  A process pool
 made for each fit (:class:`uvsim.fitting.evaluators.PoolEvaluator`) pays, every fit, for starting
@@ -35,7 +36,8 @@ from uvsim.fitting.evaluators import SerialEvaluator, _split
 def _serve(conn) -> None:
     """A worker's loop: ``("load", {index: problem})`` keeps a fit's problems (replacing the last
     fit's); ``("linearize", [(index, nus)], z, jacobian, scores)`` answers with their blocks;
-    ``("stop",)`` ends.  Errors are sent back to be raised in the parent."""
+    ``("map", fn, shared, items)`` with ``[fn(shared, item) for item in items]``; ``("stop",)``
+    ends.  Errors are sent back to be raised in the parent."""
     from uvsim.blas import single_thread
     from uvsim.fitting.linearization import linearize
 
@@ -52,6 +54,10 @@ def _serve(conn) -> None:
             if msg[0] == "load":
                 probs = msg[1]
                 conn.send(("ok", None))
+            elif msg[0] == "map":
+                _, fn, shared, items = msg
+                with single_thread():
+                    conn.send(("ok", [fn(shared, it) for it in items]))
             else:
                 _, items, z, jacobian, scores = msg
                 with single_thread():
@@ -160,6 +166,25 @@ class WorkerPool:
             for i, blocks in zip(owned[w], res):
                 out[i] = blocks
         return out
+
+    def map(self, fn, shared, items: list, *, meanwhile=None) -> tuple[list, object]:
+        """``[fn(shared, item) for item in items]`` in the workers (``fn`` a module-level function;
+        ``shared`` sent once to each worker, the items dealt out in turn), while this process runs
+        ``meanwhile()`` (None: nothing); returns (the results in order, what ``meanwhile`` returned)."""
+        self._start()
+        owned = [list(range(w, len(items), self.workers)) for w in range(self.workers)]
+        busy = [w for w in range(self.workers) if owned[w]]
+        for w in busy:
+            self._send(w, ("map", fn, shared, [items[i] for i in owned[w]]))
+        try:
+            extra = None if meanwhile is None else meanwhile()
+        finally:
+            got = self._gather(busy)  # read every reply, also when meanwhile() raised
+        out: list = [None] * len(items)
+        for w, res in got.items():
+            for i, v in zip(owned[w], res):
+                out[i] = v
+        return out, extra
 
     def close(self) -> None:
         """Stop the processes (also done when the pool is garbage-collected)."""
