@@ -386,3 +386,48 @@ def test_the_uncompiled_voltage_table_equals_numpy():
                   curve.voltages, curve.table_thrust, out)                    # the text, run by Python
     with kernels.use("numpy"):
         assert np.array_equal(out.reshape(pwm.shape), curve.thrust(pwm, volts))
+
+
+def _lag_inputs():
+    """Predicted angles shaped like a windowed fit's (sets, windows, L, 3): smooth motion with wraps
+    through +-pi, jumps of exactly pi and beyond, a constant stretch."""
+    rng = np.random.default_rng(48)
+    t = np.arange(60) * 0.02
+    base = rng.uniform(-np.pi, np.pi, (5, 4, 1, 3)) + rng.normal(0, 3.0, (5, 4, 1, 3)) * t[:, None]
+    e = (base + np.pi) % (2 * np.pi) - np.pi                    # wrapped into (-pi, pi]
+    e[0, 0, :10, 0], e[0, 0, 10:, 0] = 0.0, np.pi               # a jump of exactly +pi (kept: numpy.unwrap)
+    e[0, 1, :10, 0], e[0, 1, 10:, 0] = 0.0, -np.pi              # and of exactly -pi
+    e[1, 2, 30:, 1] -= 4.0                                      # beyond pi
+    e[2, 1, :, 2] = 0.5                                         # constant
+    start = rng.uniform(-np.pi, np.pi, (5, 4, 3))
+    start[3, 0, 1] = np.nan                                     # no logged start: the prediction's own
+    return t, e, start
+
+
+@needs_numba
+def test_the_compiled_attitude_lag_equals_unwrap_and_lfilter_to_the_bit():
+    from uvsim.measurements import RunMeasurements
+
+    t, e, start = _lag_inputs()
+    m = object.__new__(RunMeasurements)  # _lag_segments reads the lag only
+    m.attitude_lag = 0.15
+    got = _both(lambda: RunMeasurements._lag_segments(m, e, start, t))
+    assert got["numba"].shape == e.shape and np.array_equal(got["numba"], got["numpy"])
+    e2 = e.copy()
+    e2[4, 3, 7, 0] = np.nan                                     # a diverged sample: numpy's path
+    got = _both(lambda: RunMeasurements._lag_segments(m, e2, start, t))
+    assert np.array_equal(got["numba"], got["numpy"], equal_nan=True)
+
+
+def test_the_uncompiled_attitude_lag_text_equals_numpy():
+    from uvsim.estimation.lag import first_order_lag
+    from uvsim.kernels.attitude_lag import unwrapped_lag
+    from uvsim.kinematics import unwrap_angles
+
+    t, e, start = _lag_inputs()
+    flat = e.reshape(-1, t.size, 3)[:6]
+    y0 = np.nan_to_num(start.reshape(-1, 3)[:6])
+    a = float(np.exp(-(t[1] - t[0]) / 0.15))
+    out = np.empty_like(flat)
+    unwrapped_lag(flat, y0, 1.0 - a, a, out)                    # the text, run by Python
+    assert np.array_equal(out, first_order_lag(t, unwrap_angles(flat, axis=-2), 0.15, y0))

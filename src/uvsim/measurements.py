@@ -248,10 +248,22 @@ class RunMeasurements:
 
     def _lag_segments(self, euler, start, t):
         """The lagged angles of segments ``euler`` (..., L, 3) started at ``start`` (..., 3)."""
-        x = unwrap_angles(euler, axis=-2)
-        y0 = np.where(np.isfinite(start), start, x[..., 0, :])
-        y0 = x[..., 0, :] + wrap(y0 - x[..., 0, :])  # on the prediction's branch
-        return first_order_lag(t, x, self.attitude_lag, y0)
+        x0 = euler[..., 0, :]  # the unwrapped series starts at the first sample
+        y0 = np.where(np.isfinite(start), start, x0)
+        y0 = x0 + wrap(y0 - x0)  # on the prediction's branch
+        L = euler.shape[-2]
+        if L >= 2 and self.attitude_lag > 0 and uniform_steps(np.diff(t)):
+            from uvsim.kernels import compiled_unwrapped_lag  # the same values, in one pass
+
+            kernel = compiled_unwrapped_lag()
+            if kernel is not None and np.isfinite(euler).all():
+                a = float(np.exp(-(t[1] - t[0]) / self.attitude_lag))
+                flat = np.ascontiguousarray(euler, dtype=float).reshape(-1, L, euler.shape[-1])
+                out = np.empty_like(flat)
+                kernel(flat, np.ascontiguousarray(np.broadcast_to(y0, euler[..., 0, :].shape)).reshape(flat.shape[0], -1),
+                       1.0 - a, a, out)
+                return out.reshape(euler.shape)
+        return first_order_lag(t, unwrap_angles(euler, axis=-2), self.attitude_lag, y0)
 
     def _uniform_clock(self) -> bool:
         """True when the run's time steps are uniform (the lag's one-coefficient filter)."""

@@ -110,21 +110,28 @@ def compiled_accelerations():
 
 
 @functools.lru_cache(maxsize=None)
-def _table(name: str):
+def _jitted(module: str, name: str):
+    import importlib
+
     import numba
 
-    from uvsim.kernels import table_lookup
-
-    return numba.njit(getattr(table_lookup, name), cache=True, nogil=True, error_model="numpy")
+    return numba.njit(getattr(importlib.import_module(f"uvsim.kernels.{module}"), name), cache=True, nogil=True,
+                      error_model="numpy")
 
 
 def compiled_uniform_table():
     """The compiled :func:`uvsim.kernels.table_lookup.uniform_table` (a thrust table on uniform knots),
     or None when the setting or the install says numpy."""
-    return _table("uniform_table") if _numba_allowed() else None
+    return _jitted("table_lookup", "uniform_table") if _numba_allowed() else None
 
 
 def compiled_voltage_table():
     """The compiled :func:`uvsim.kernels.table_lookup.voltage_table` (thrust tables per supply voltage),
     or None when the setting or the install says numpy."""
-    return _table("voltage_table") if _numba_allowed() else None
+    return _jitted("table_lookup", "voltage_table") if _numba_allowed() else None
+
+
+def compiled_unwrapped_lag():
+    """The compiled :func:`uvsim.kernels.attitude_lag.unwrapped_lag` (the attitude filter's lag on
+    predicted angles), or None when the setting or the install says numpy."""
+    return _jitted("attitude_lag", "unwrapped_lag") if _numba_allowed() else None
