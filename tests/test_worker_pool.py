@@ -151,3 +151,21 @@ def test_screening_in_the_pool_equals_the_screening_here(tmp_path):
     assert info["available"] and len(results[0]) > 10
     assert sum(lab.startswith("tether") for lab, _ in results[0]) >= 2  # a chain beside the pool's part
     assert results[0] == results[1]
+
+
+class _Unpicklable(Exception):
+    def __init__(self):
+        super().__init__("holds a lambda")
+        self.f = lambda: 0
+
+
+def _raises_unpicklable(shared, x):
+    raise _Unpicklable()
+
+
+def test_an_error_that_does_not_pickle_arrives_as_its_text():
+    with WorkerPool(2) as pool:
+        with pytest.raises(CalibrationError, match="_Unpicklable: holds a lambda") as got:
+            pool.map(_raises_unpicklable, None, [1, 2])
+        assert any("raised in worker process" in n for n in got.value.__notes__)
+        assert pool.map(_square_plus, 0, [3])[0] == [9]  # the workers live on

@@ -64,7 +64,11 @@ def _serve(conn) -> None:
                     out = [linearize(probs[i], z, nus, jacobian=jacobian, scores=scores) for i, nus in items]
                 conn.send(("ok", out))
         except Exception as exc:  # noqa: BLE001 -- sent to the parent, which raises it
-            conn.send(("error", exc, traceback.format_exc()))
+            tb = traceback.format_exc()
+            try:
+                conn.send(("error", exc, tb))
+            except Exception:  # noqa: BLE001 -- an exception that does not pickle: its text
+                conn.send(("error", CalibrationError(f"{type(exc).__name__}: {exc}"), tb))
 
 
 def _stop(procs, conns) -> None:
@@ -132,7 +136,9 @@ class WorkerPool:
             except (EOFError, OSError):
                 raise self._lost(w) from None
             if reply[0] == "error":
-                error = error or reply[1]
+                if error is None:
+                    error = reply[1]
+                    error.add_note(f"raised in worker process {w + 1} of {self.workers}:\n{reply[2]}")
             else:
                 got[w] = reply[1]
         if error is not None:
