@@ -125,6 +125,34 @@ def test_workers_die_with_the_parent(sig, tiny, tmp_path):
     assert not left, f"processes left behind: {[p.cmdline() for p in left]}"
 
 
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM, signal.SIGINT], ids=["SIGKILL", "SIGTERM", "SIGINT"])
+def test_diagnosis_workers_die_with_the_parent(sig, tmp_path):
+    """The worker processes a diagnosis keeps for all its fits (uvsim.fitting.worker_pool)."""
+    import uvsim
+
+    data = Path(uvsim.__file__).parent / "data" / "datasets" / "bluerov2_tank_tether"
+    env = dict(os.environ, PYTHONPATH=SRC + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    cmd = [sys.executable, "-m", "uvsim.cli", "diagnose", "--data", str(data), "--vehicle", "bluerov2_heavy",
+           "--workers", "2", "--quiet", "--json", str(tmp_path / "report.json")]
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=_default_sigint)
+    def two_workers():
+        kids = [p for p in psutil.Process(proc.pid).children(recursive=True) if p.status() != psutil.STATUS_ZOMBIE]
+        return kids if len(kids) >= 2 else None
+
+    workers = _wait(two_workers, what="the diagnosis's 2 worker processes")
+    proc.send_signal(sig)
+    _, err = _finish(proc, tmp_path)
+    if sig == signal.SIGKILL:
+        assert proc.returncode == -signal.SIGKILL
+    else:
+        assert proc.returncode == (143 if sig == signal.SIGTERM else 130), err
+        assert "Traceback" not in err
+    left = _left_behind(tmp_path, workers)
+    assert not left, f"processes left behind: {[p.cmdline() for p in left]}"
+    assert not (tmp_path / "report.json").exists()
+
+
 def _numbers(out: Path) -> dict:
     rep = json.loads(out.with_suffix(".json").read_text())
     keep = ("parameters", "uncertainty", "ga_parameters", "training_rmse", "validation_rmse", "evaluations",

@@ -29,6 +29,7 @@ import numpy as np
 from uvsim.calibration.batching import RunBatch, simulate_rows
 from uvsim.calibration.fitness import abs_error_fitness
 from uvsim.errors import CalibrationError
+from uvsim.fitting.worker_pool import die_with_parent
 
 #: Default largest number of simulated trajectories per batched call.  Batched
 #: RK4 reaches ~90 % of its peak vehicle-steps/s from ~500 rows on (core_api.md).
@@ -199,35 +200,6 @@ class SerialMap:
 
 
 _WORKER_EVALUATOR = None
-
-#: prctl(2) option asking the kernel to signal this process when its parent dies (Linux).
-_PR_SET_PDEATHSIG = 1
-
-
-def die_with_parent(parent_pid: int) -> None:
-    """Make this (worker) process end with its parent, whatever ends the parent.
-
-    On Linux the kernel sends SIGKILL to the worker when the parent dies, even by
-    SIGKILL (``prctl(PR_SET_PDEATHSIG)``); if the parent is already gone (it died
-    between the fork and this call) the worker exits now.  SIGTERM gets its default
-    action back (a forked worker inherits the parent's Python handler) and SIGINT is
-    ignored: a Ctrl-C reaches the whole process group, and the parent, which receives it
-    too, stops the workers itself (:meth:`ProcessMap.close`)."""
-    import signal
-    import sys
-
-    if sys.platform.startswith("linux"):
-        import ctypes
-
-        try:
-            ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
-        except (OSError, AttributeError):  # pragma: no cover - no prctl in this libc
-            pass
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    if os.getppid() != parent_pid:
-        os._exit(1)
-
 
 def _init_worker(evaluator, parent_pid=None):
     global _WORKER_EVALUATOR

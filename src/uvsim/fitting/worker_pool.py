@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import functools
 import multiprocessing as mp
-import signal
+import os
 import traceback
 import weakref
 
@@ -33,7 +33,36 @@ from uvsim.errors import CalibrationError
 from uvsim.fitting.evaluators import SerialEvaluator, _split
 
 
-def _serve(conn) -> None:
+#: prctl(2) option asking the kernel to signal this process when its parent dies (Linux).
+_PR_SET_PDEATHSIG = 1
+
+
+def die_with_parent(parent_pid: int) -> None:
+    """Make this (worker) process end with its parent, whatever ends the parent.
+
+    On Linux the kernel sends SIGKILL to the worker when the parent dies, even by
+    SIGKILL (``prctl(PR_SET_PDEATHSIG)``); if the parent is already gone (it died
+    between the fork and this call) the worker exits now.  SIGTERM gets its default
+    action back (a forked worker inherits the parent's Python handler) and SIGINT is
+    ignored: a Ctrl-C reaches the whole process group, and the parent, which receives it
+    too, stops the workers itself (:meth:`uvsim.calibration.evaluation.ProcessMap.close`, :meth:`WorkerPool.close`)."""
+    import signal
+    import sys
+
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        try:
+            ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+        except (OSError, AttributeError):  # pragma: no cover - no prctl in this libc
+            pass
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if os.getppid() != parent_pid:
+        os._exit(1)
+
+
+def _serve(conn, parent_pid: int) -> None:
     """A worker's loop: ``("load", {index: problem})`` keeps a fit's problems (replacing the last
     fit's); ``("linearize", [(index, nus)], z, jacobian, scores)`` answers with their blocks;
     ``("map", fn, shared, items)`` with ``[fn(shared, item) for item in items]``; ``("stop",)``
@@ -41,7 +70,7 @@ def _serve(conn) -> None:
     from uvsim.blas import single_thread
     from uvsim.fitting.linearization import linearize
 
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle (it stops us)
+    die_with_parent(parent_pid)  # whatever ends the parent (SIGKILL included); Ctrl-C is the parent's
     probs: dict = {}
     while True:
         try:
@@ -108,7 +137,7 @@ class WorkerPool:
         ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
         for _ in range(self.workers):
             parent, child = ctx.Pipe()
-            p = ctx.Process(target=_serve, args=(child,), daemon=True)
+            p = ctx.Process(target=_serve, args=(child, os.getpid()), daemon=True)
             p.start()
             child.close()
             self._procs.append(p)
