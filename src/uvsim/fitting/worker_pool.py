@@ -127,10 +127,6 @@ class WorkerPool:
         self._conns: list = []
         self._finalizer = None
 
-    # the pool stands for its number of processes where a count is expected (e.g. fit(workers=...))
-    def __int__(self) -> int:
-        return self.workers
-
     def _start(self) -> None:
         if self._procs:
             return
