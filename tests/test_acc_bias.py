@@ -136,3 +136,35 @@ def test_the_vehicle_file_states_the_accelerometer_offset(dataset):
     d["sensors"]["pressure"] = {"position": [0.0, 0.0, 0.0], "acc_bias_sd": 0.1}
     with pytest.raises(VehicleError, match="only the imu"):
         vehicle_from_dict(d)
+
+
+def test_the_bias_columns_are_the_one_bias_at_a_time_differences(dataset, monkeypatch):
+    """The linearization moves the 8 sensor biases (gyro, attitude filter, accelerometer) in one
+    batch of predictions; each column equals the forward difference of that bias alone, to the bit."""
+    import uvsim.fitting.linearization as lin
+    from uvsim.fitting.objective import FILL, robust_residuals
+
+    v = load_vehicle(read_dataset(dataset).vehicle_file)
+    runs = _runs(dataset)
+    meas = [measurements_for(r, v) for r in runs]
+    space = make_space(v.parameters(), FREE)
+    wp = WindowedProblem(v, runs, meas, space, 2.0, gyro_bias=True, attitude_bias=True, acc_bias=True)
+    rng = np.random.default_rng(4)
+    nus = [rng.normal(scale=0.01, size=wp.nuisance_size(r)) for r in range(len(runs))]
+    seen = []
+    monkeypatch.setattr(lin, "structured_normal_pieces",
+                        lambda r, Jz, J, cluster, scores: seen.append(J) or lin.RunNormal(0.0))
+    lin.linearize(wp, space.z0, nus)
+    D, biases = wp.assemble(nus)
+    Y, A = wp.simulate(space.z0[None], D)
+    for r, J in enumerate(seen):
+        b = biases[r]
+        assert J.db.shape[1] == 8
+        m0 = wp.measurement_residuals(Y, A, r, b)[0]
+        y, a = wp.run_prediction(Y, A, r)
+        for j in range(8):
+            b1 = b.copy()
+            b1[0, j] += lin.FD_STEP_BIAS
+            with np.errstate(all="ignore"):
+                m1 = robust_residuals(wp.meas[r].normalized(wp.predict_run(r, y, a, b1), fill=FILL), wp.loss)[0]
+            np.testing.assert_array_equal(J.db[:, j], (m1 - m0) / lin.FD_STEP_BIAS)

@@ -431,3 +431,39 @@ def test_the_uncompiled_attitude_lag_text_equals_numpy():
     out = np.empty_like(flat)
     unwrapped_lag(flat, y0, 1.0 - a, a, out)                    # the text, run by Python
     assert np.array_equal(out, first_order_lag(t, unwrap_angles(flat, axis=-2), 0.15, y0))
+
+
+def _window_sum_case(seed, m, p, nw):
+    rng = np.random.default_rng(seed)
+    J = rng.normal(size=(m, p)) * 10.0 ** rng.integers(-6, 6, size=(m, 1))  # magnitudes that round
+    r = rng.normal(size=m)
+    cluster = rng.integers(0, nw, size=m)
+    if nw > 2:
+        cluster[cluster == 1] = 0  # a window with no entries
+    return J, r, cluster
+
+
+@needs_numba
+@pytest.mark.parametrize("m,p,nw", [(500, 7, 5), (3000, 35, 18), (1, 1, 1), (0, 3, 2)])
+def test_the_compiled_window_sums_equal_bincount_to_the_bit(m, p, nw):
+    """The window scores' sums (uvsim.kernels.window_sums) against the numpy form
+    (linearization._window_sums: bincount per column), to the bit."""
+    from uvsim.fitting.linearization import _scores, _window_sums
+
+    J, r, cluster = _window_sum_case(m + p, m, p, nw)
+    ref = _window_sums(J * r[:, None], cluster, nw)
+    with kernels.use("numba"):
+        got = _scores(J, r, cluster, nw)
+    np.testing.assert_array_equal(got, ref)
+    with kernels.use("numpy"):
+        np.testing.assert_array_equal(_scores(J, r, cluster, nw), ref)
+
+
+def test_the_uncompiled_window_sums_text_equals_bincount():
+    from uvsim.fitting.linearization import _window_sums
+    from uvsim.kernels.window_sums import window_sums
+
+    J, r, cluster = _window_sum_case(3, 400, 6, 7)
+    out = np.zeros((7, 6))
+    window_sums(J, r, cluster, out)
+    np.testing.assert_array_equal(out, _window_sums(J * r[:, None], cluster, 7))

@@ -22,6 +22,7 @@ import sys
 import threading
 
 from uvsim.errors import UvsimError
+from uvsim.heap import keep_freed_memory
 from uvsim.progress import LineHandler, write_line
 
 #: Modules that contribute sub-commands, in the order they appear in ``--help``.
@@ -126,6 +127,7 @@ def _raise_terminated(signum, frame):
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    keep_freed_memory()  # this process and the workers it forks (uvsim.heap)
     in_main = threading.current_thread() is threading.main_thread()
     old_term = signal.signal(signal.SIGTERM, _raise_terminated) if in_main else None
     logger = logging.getLogger("uvsim")

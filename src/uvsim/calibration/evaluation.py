@@ -30,6 +30,7 @@ from uvsim.calibration.batching import RunBatch, simulate_rows
 from uvsim.calibration.fitness import abs_error_fitness
 from uvsim.errors import CalibrationError
 from uvsim.fitting.worker_pool import die_with_parent
+from uvsim.heap import keep_freed_memory
 
 #: Default largest number of simulated trajectories per batched call.  Batched
 #: RK4 reaches ~90 % of its peak vehicle-steps/s from ~500 rows on (core_api.md).
@@ -205,6 +206,7 @@ def _init_worker(evaluator, parent_pid=None):
     global _WORKER_EVALUATOR
     if parent_pid is not None:
         die_with_parent(parent_pid)
+    keep_freed_memory()  # uvsim.heap
     _WORKER_EVALUATOR = evaluator
 
 

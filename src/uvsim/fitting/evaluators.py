@@ -13,6 +13,7 @@ import numpy as np
 from uvsim.blas import single_thread
 from uvsim.fitting.linearization import RunNormal, linearize, reduced_system
 from uvsim.fitting.priors import data_weight
+from uvsim.heap import keep_freed_memory
 
 
 def _split(seq, sizes):
@@ -45,6 +46,7 @@ _WORKER_PROBS = None
 
 def _init_worker(probs):
     global _WORKER_PROBS
+    keep_freed_memory()  # uvsim.heap
     _WORKER_PROBS = probs
 
 

@@ -177,7 +177,20 @@ def structured_normal_pieces(r, Jz, J: RunJacobian, cluster, scores: bool) -> Ru
                 Jt[m:base] -= (np.einsum("wij,wjp->wip", J.E, Xn[:-1])
                                + np.einsum("wij,wjp->wip", J.N, Xn[1:])).reshape(nd * k, p)
             Jt[base:base + q] -= inv[:, None] * X
-        out.scores = _window_sums(Jt * r[:, None], cluster, nw)
+        out.scores = _scores(Jt, r, cluster, nw)
+    return out
+
+
+def _scores(Jt, r, cluster, nw: int) -> np.ndarray:
+    """(nw, p): the rows of ``Jt * r[:, None]`` summed by window (``cluster``), compiled
+    (:mod:`uvsim.kernels.window_sums`, the same values) or by :func:`_window_sums`."""
+    from uvsim.kernels import compiled_window_sums
+
+    kernel = compiled_window_sums()
+    if kernel is None:
+        return _window_sums(Jt * r[:, None], cluster, nw)
+    out = np.zeros((nw, Jt.shape[1]))
+    kernel(np.ascontiguousarray(Jt), np.ascontiguousarray(r), np.ascontiguousarray(cluster), out)
     return out
 
 
@@ -293,14 +306,16 @@ def linearize(prob: WindowedProblem, z: np.ndarray, nus: list, *, jacobian: bool
         bsd = prob.bias_sd(r)
         db = np.empty((m_meas, bsd.size))
         if bsd.size:
+            # every bias moved in turn, all in one batch of parameter sets: each set's prediction
+            # is computed alone, so the columns are those of one call per bias
+            nb = bsd.size
             yb, ab = prob.run_prediction(Y[:1], None if A is None else A[:1], r)
-            for j in range(bsd.size):
-                b1 = b.copy()
-                b1[0, j] += FD_STEP_BIAS
-                pred = prob.predict_run(r, yb, ab, b1)
-                with np.errstate(all="ignore"):
-                    m1 = robust_residuals(prob.meas[r].normalized(pred, fill=FILL), prob.loss)[0]
-                db[:, j] = (m1 - meas[0]) / FD_STEP_BIAS
+            b1 = np.repeat(b, nb, axis=0)
+            b1[np.arange(nb), np.arange(nb)] += FD_STEP_BIAS
+            pred = prob.predict_run(r, np.repeat(yb, nb, axis=0), None if ab is None else np.repeat(ab, nb, axis=0), b1)
+            with np.errstate(all="ignore"):
+                m1 = robust_residuals(prob.meas[r].normalized(pred, fill=FILL), prob.loss)
+            db[:] = ((m1 - meas[0]) / FD_STEP_BIAS).T
         J = RunJacobian(nw, w_local, dm, E, N, prior_inv, db, 1.0 / bsd)
         assert J.q == q, "internal: the nuisance Jacobian's blocks do not add up to the run's nuisance"
         cluster = np.concatenate([w_local, np.repeat(np.arange(1, nw), k), np.repeat(np.arange(nw), k),

@@ -343,6 +343,8 @@ class WindowedProblem:
             Ys.append(Y.reshape(pc, W, L, -1))
             if acc is not None:
                 As.append(acc.reshape(pc, W, L, 6))
+        if len(Ys) == 1:  # one call: its arrays as they are (a copy of them is tens of MB)
+            return Ys[0], (As[0] if As else None)
         return np.concatenate(Ys), (np.concatenate(As) if As else None)
 
     # ------------------------------------------------------------------ residuals

@@ -69,8 +69,10 @@ def _serve(conn, parent_pid: int) -> None:
     ends.  Errors are sent back to be raised in the parent."""
     from uvsim.blas import single_thread
     from uvsim.fitting.linearization import linearize
+    from uvsim.heap import keep_freed_memory
 
     die_with_parent(parent_pid)  # whatever ends the parent (SIGKILL included); Ctrl-C is the parent's
+    keep_freed_memory()  # a linearization's arrays served from a heap kept mapped (uvsim.heap)
     probs: dict = {}
     while True:
         try:

@@ -131,6 +131,12 @@ def compiled_voltage_table():
     return _jitted("table_lookup", "voltage_table") if _numba_allowed() else None
 
 
+def compiled_window_sums():
+    """The compiled :func:`uvsim.kernels.window_sums.window_sums` (a fit's window scores), or None
+    when the setting or the install says numpy."""
+    return _jitted("window_sums", "window_sums") if _numba_allowed() else None
+
+
 def compiled_unwrapped_lag():
     """The compiled :func:`uvsim.kernels.attitude_lag.unwrapped_lag` (the attitude filter's lag on
     predicted angles), or None when the setting or the install says numpy."""
