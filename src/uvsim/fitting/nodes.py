@@ -27,6 +27,9 @@ position error along a 2 s window, the size of the noise.
 """
 from __future__ import annotations
 
+import hashlib
+from collections import OrderedDict
+
 import numpy as np
 
 from uvsim.estimation.derivatives import euler_rates_to_body
@@ -49,10 +52,35 @@ PRIOR_SIGMA = {
 TANGENT_NAMES = ("x", "y", "z", "roll", "pitch", "yaw", "u", "v", "w", "p", "q", "r")
 
 
+#: Local fits kept (:func:`local_fit`): a diagnosis builds the same runs' windows for each of its
+#: fits, and these fits were a twentieth of its time (docs/performance.md).
+LOCAL_FIT_CACHE = 4096
+_local_fits: OrderedDict = OrderedDict()
+
+
 def local_fit(t: np.ndarray, x: np.ndarray, t0: np.ndarray, half: float, *, min_samples: int = 5):
     """Value and slope at times ``t0`` (W,) of local quadratic least-squares fits of
     ``x`` (n,) (NaN skipped) over ``[t0 - half, t0 + half]`` (shifted inside the run at
-    its ends).  Returns (value (W,), slope (W,)); NaN where fewer than ``min_samples``."""
+    its ends).  Returns (value (W,), slope (W,)); NaN where fewer than ``min_samples``.
+    The answers of the last :data:`LOCAL_FIT_CACHE` calls are kept, keyed by a digest of the
+    inputs' bytes, and returned as copies."""
+    t, x, t0 = (np.ascontiguousarray(a, dtype=float) for a in (t, x, t0))
+    h = hashlib.blake2b(digest_size=20)
+    for a in (t, x, t0, np.array([half, min_samples], float)):
+        h.update(np.array(a.shape, np.int64).tobytes())
+        h.update(a.tobytes())
+    key = h.digest()
+    hit = _local_fits.get(key)
+    if hit is None:
+        hit = _local_fits[key] = _local_fit(t, x, t0, half, min_samples)
+        if len(_local_fits) > LOCAL_FIT_CACHE:
+            _local_fits.popitem(last=False)
+    else:
+        _local_fits.move_to_end(key)
+    return hit[0].copy(), hit[1].copy()
+
+
+def _local_fit(t, x, t0, half: float, min_samples: int):
     ok = np.isfinite(x)
     val = np.full(t0.size, np.nan)
     slope = np.full(t0.size, np.nan)
