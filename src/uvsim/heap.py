@@ -4,8 +4,9 @@ A linearization allocates and frees tens of megabytes of numpy arrays: the batch
 (parameter sets x windows x steps x states), the predicted measurements of every parameter set, the
 Jacobian's columns.  glibc's ``malloc`` serves an array above its *mmap threshold* with a fresh
 ``mmap`` and gives it back to the kernel when freed, and returns the top of its heap to the kernel
-once more than the *trim threshold* is free there.  Both thresholds move with what was freed last
-(up to 32 MiB on 64-bit), so a fit's alternating large and medium arrays keep being mapped and
+once more than the *trim threshold* is free there.  Unless set, both thresholds move with what was
+freed last (from 128 KiB up to 32 MiB on 64-bit; the GNU C Library manual, "Malloc Tunable
+Parameters", and mallopt(3)), so a fit's alternating large and medium arrays keep being mapped and
 unmapped, and every page is faulted in again by its first write.  On the docs' real-log command a
 linearization of one 35-s, 100 Hz run took 136-154 ms that way and 103-108 ms with the thresholds
 fixed as below (a 4-run, 14-s problem of the timing dataset 44-49 ms and 39-40 ms; records in

@@ -53,7 +53,7 @@ TANGENT_NAMES = ("x", "y", "z", "roll", "pitch", "yaw", "u", "v", "w", "p", "q",
 
 
 #: Local fits kept (:func:`local_fit`): a diagnosis builds the same runs' windows for each of its
-#: fits, and these fits were a twentieth of its time (docs/performance.md).
+#: fits; on the timing dataset these fits took 0.7 s of its 15 (docs/records/performance_kernel.md).
 LOCAL_FIT_CACHE = 4096
 _local_fits: OrderedDict = OrderedDict()
 
