@@ -44,3 +44,22 @@ def test_kept_answers_equal_fresh_ones_and_are_not_shared(monkeypatch):
     # another half-width or other times are another fit
     assert not np.array_equal(nodes.local_fit(t, xs[-1], t0, 0.2)[0], fresh[-1][0])
     assert not np.array_equal(nodes.local_fit(t, xs[-1], t0 + 0.1, 0.3)[0], fresh[-1][0])
+
+
+def test_threads_share_the_kept_fits_safely(monkeypatch):
+    from concurrent.futures import ThreadPoolExecutor
+
+    monkeypatch.setattr(nodes, "_local_fits", type(nodes._local_fits)())
+    monkeypatch.setattr(nodes, "LOCAL_FIT_CACHE", 2)  # constant eviction
+    rng = np.random.default_rng(3)
+    t = np.arange(0.0, 6.0, 0.02)
+    xs = [rng.normal(size=t.size) for _ in range(6)]
+    t0 = t[::60]
+    fresh = [nodes._local_fit(t, x, t0, 0.3, 5)[0] for x in xs]
+
+    def one(i):
+        return np.array_equal(nodes.local_fit(t, xs[i % 6], t0, 0.3)[0], fresh[i % 6])
+
+    with ThreadPoolExecutor(4) as ex:
+        assert all(ex.map(one, range(600)))
+    assert len(nodes._local_fits) <= 2

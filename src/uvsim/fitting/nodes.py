@@ -28,6 +28,7 @@ position error along a 2 s window, the size of the noise.
 from __future__ import annotations
 
 import hashlib
+import threading
 from collections import OrderedDict
 
 import numpy as np
@@ -56,6 +57,7 @@ TANGENT_NAMES = ("x", "y", "z", "roll", "pitch", "yaw", "u", "v", "w", "p", "q",
 #: fits; on the timing dataset these fits took 0.7 s of its 15 (docs/records/performance_kernel.md).
 LOCAL_FIT_CACHE = 4096
 _local_fits: OrderedDict = OrderedDict()
+_local_fits_lock = threading.Lock()  # fits run from several threads share it safely
 
 
 def local_fit(t: np.ndarray, x: np.ndarray, t0: np.ndarray, half: float, *, min_samples: int = 5):
@@ -70,13 +72,16 @@ def local_fit(t: np.ndarray, x: np.ndarray, t0: np.ndarray, half: float, *, min_
         h.update(np.array(a.shape, np.int64).tobytes())
         h.update(a.tobytes())
     key = h.digest()
-    hit = _local_fits.get(key)
+    with _local_fits_lock:
+        hit = _local_fits.get(key)
+        if hit is not None:
+            _local_fits.move_to_end(key)
     if hit is None:
-        hit = _local_fits[key] = _local_fit(t, x, t0, half, min_samples)
-        if len(_local_fits) > LOCAL_FIT_CACHE:
-            _local_fits.popitem(last=False)
-    else:
-        _local_fits.move_to_end(key)
+        hit = _local_fit(t, x, t0, half, min_samples)
+        with _local_fits_lock:
+            _local_fits[key] = hit
+            while len(_local_fits) > LOCAL_FIT_CACHE:
+                _local_fits.popitem(last=False)
     return hit[0].copy(), hit[1].copy()
 
 
