@@ -18,6 +18,7 @@ MODULES = {
     "calibration": "uvsim.benchmarks.calibration",
     "diagnosis": "uvsim.benchmarks.diagnosis",
     "calibrate-realsensor": "uvsim.benchmarks.realsensor",
+    "real-log": "uvsim.benchmarks.real_log",
 }
 
 

@@ -62,7 +62,7 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--quick", action="store_true", help="smaller problems (a smoke test, not the recorded figures)")
     p.add_argument("--only", default=None, help="comma-separated areas (core, hydro, sam, calibration, diagnosis; "
-                                                 "calibrate-realsensor runs only when named); diagnose-structural: "
+                                                 "calibrate-realsensor and real-log run only when named); diagnose-structural: "
                                                  "classes; diagnose-field: cases (clean, dead, reversed, ...)")
     add_progress_arguments(p)
     p.set_defaults(func=_run)
