@@ -8,8 +8,8 @@ once more than the *trim threshold* is free there.  Unless set, both thresholds 
 freed last (from 128 KiB up to 32 MiB on 64-bit; the GNU C Library manual, "Malloc Tunable
 Parameters", and mallopt(3)), so a fit's alternating large and medium arrays keep being mapped and
 unmapped, and every page is faulted in again by its first write.  On the docs' real-log command a
-linearization of one 35-s, 100 Hz run took 136-154 ms that way and 103-108 ms with the thresholds
-fixed as below (a 4-run, 14-s problem of the timing dataset 44-49 ms and 39-40 ms; records in
+linearization of one 35-s, 100 Hz run took 132-154 ms that way and 101-108 ms with the thresholds
+fixed as below (a 4-run, 14-s problem of the timing dataset 45-51 ms and 40-44 ms; records in
 docs/records/performance_kernel.md).
 
 :func:`keep_freed_memory` fixes them (``mallopt(3)``): arrays up to :data:`MMAP_THRESHOLD` come from
