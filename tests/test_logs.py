@@ -643,3 +643,46 @@ def test_vehicle_file_is_resolved_against_dataset_dir(tmp_path):
     assert ds.vehicle_file == tmp_path / "my_rov.yaml"
     ds.vehicle = "bluerov2_heavy"
     assert ds.vehicle_file is None
+
+
+def test_kept_columns_follow_the_table(tmp_path):
+    """The column arrays a run keeps (Run._column) are the table's, follow a replaced table, are
+    not pickled, and cannot be changed through an accessor."""
+    import pickle
+
+    run = read_run(save(tmp_path, frame()))
+    t = run.t
+    np.testing.assert_array_equal(t, run.data["t"].to_numpy())
+    assert not t.flags.writeable
+    with pytest.raises(ValueError):
+        t[0] = 1.0
+    u = run.inputs
+    np.testing.assert_array_equal(u, run.data[run.input_columns].to_numpy())
+    u[:] = -1.0  # a fresh array each call: the run's inputs are untouched
+    np.testing.assert_array_equal(run.inputs[:, 0], 10.0)
+    np.testing.assert_array_equal(run.position[:, 0], run.data["x"].to_numpy())
+    # a derived run (another table) reads its own table, the original keeps its own
+    other = run.data.copy()
+    other["X"] = 3.0
+    d = run.derived(other)
+    np.testing.assert_array_equal(d.inputs[:, 0], 3.0)
+    np.testing.assert_array_equal(run.inputs[:, 0], 10.0)
+    # a table assigned to the run is read from then on
+    run.data = other.iloc[:3].reset_index(drop=True)
+    assert run.t.shape == (3,) and run.inputs.shape == (3, 6)
+    back = pickle.loads(pickle.dumps(d))
+    assert "_kept_columns" not in back.__dict__
+    np.testing.assert_array_equal(back.inputs, d.inputs)
+
+
+def test_kept_columns_see_edits_in_place(tmp_path):
+    """A column assigned, a column added and a value edited in the run's own table after the
+    arrays were read are what the accessors give next (as a notebook edits a run)."""
+    run = read_run(save(tmp_path, frame()))
+    assert run.inputs[0, 0] == 10.0 and run.t[-1] == 0.5 and not run.has_velocity
+    run.data["X"] = run.data["X"] + 1.0
+    np.testing.assert_array_equal(run.inputs[:, 0], 11.0)
+    run.data.loc[2, "t"] = 0.25
+    assert run.t[2] == 0.25
+    run.data["u"] = 0.3
+    np.testing.assert_array_equal(run.velocity[:, 0], 0.3)

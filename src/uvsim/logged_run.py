@@ -112,12 +112,42 @@ class Run:
             out.name = name
         return out
 
+    def _column(self, c: str) -> np.ndarray | None:
+        """Column ``c`` of :attr:`data` as a read-only float array (None when absent).  The fits
+        read a run's columns thousands of times, and pandas' column lookup costs microseconds to a
+        millisecond each, so the arrays are kept while :attr:`data` is the same table with the
+        same column blocks: a column assigned or added (``run.data["z"] = ...``) or a new table
+        is read again, and a value edited in place shows through (the arrays are views)."""
+        blocks = getattr(getattr(self.data, "_mgr", None), "blocks", None)  # (pandas' column storage)
+        kept = self.__dict__.get("_kept_columns")
+        if kept is None or kept[0] is not self.data or kept[1] is not blocks:
+            kept = (self.data, blocks, {})
+            if blocks is not None:
+                self.__dict__["_kept_columns"] = kept
+        cols = kept[2]
+        if c not in cols:
+            a = None
+            if c in self.data.columns:
+                a = self.data[c].to_numpy()
+                if a.flags.writeable:  # (pandas before copy-on-write: a view of the table)
+                    a = a.view()
+                    a.flags.writeable = False
+            cols[c] = a
+        return cols[c]
+
+    def __getstate__(self):
+        # the kept columns are not sent to worker processes (the table is)
+        state = dict(self.__dict__)
+        state.pop("_kept_columns", None)
+        return state
+
     def _cols(self, names) -> np.ndarray:
         """(n, len(names)) array, NaN for absent columns."""
         out = np.full((len(self.data), len(names)), np.nan)
         for j, c in enumerate(names):
-            if c in self.data.columns:
-                out[:, j] = self.data[c].to_numpy()
+            a = self._column(c)
+            if a is not None:
+                out[:, j] = a
         return out
 
     def _has(self, names) -> bool:
@@ -126,7 +156,7 @@ class Run:
     @property
     def t(self) -> np.ndarray:
         """Sample times, s, shape (n,)."""
-        return self.data["t"].to_numpy()
+        return self._column("t")
 
     @property
     def input_kind(self) -> str:
@@ -141,7 +171,10 @@ class Run:
     @property
     def inputs(self) -> np.ndarray:
         """Inputs, shape (n, k): X,Y,Z,K,M,N (N, N m) or thrust_i (N) or pwm_i (us)."""
-        return self.data[self._input_columns].to_numpy()
+        out = np.empty((len(self.data), len(self._input_columns)), order="F")  # (as pandas gives it)
+        for j, c in enumerate(self._input_columns):
+            out[:, j] = self._column(c)
+        return out
 
     @property
     def n_thrusters(self) -> int | None:
