@@ -46,3 +46,28 @@ def test_the_equation_error_recovers_a_damping_coefficient_from_a_wrong_start():
     out = ee.gauss_newton(iterations=4)
     assert abs(out["values"]["X_uu"] / truth - 1) < 0.05
     assert out["rss"] < out["rss0"]
+
+
+def test_the_compiled_path_is_kept_per_vehicle_and_goes_with_it():
+    """EquationError._compiled looks up once per vehicle object whether its models run compiled (the
+    screening builds an evaluation per Gauss-Newton step); the answer is the same as a fresh look-up,
+    the residuals are the same with and without the kept answer, and the entry goes with the vehicle."""
+    import gc
+
+    from uvsim.fitting import equation_error as ee
+
+    runs, _ = generate_runs("bluerov2_heavy", dofs=("surge",), runs_per_dof=1, validation_per_dof=0, duration=6.0,
+                            rate=25.0, seed=2, off=4.0)
+    v = uvsim.load_vehicle("bluerov2_heavy").with_effects([{"type": "current"}])
+    space = make_space(v.parameters(), ["X_uu", "current_n"])
+    motions = [measured_motion(r) for r in runs]
+    first = EquationError(v, motions, space, scale=np.ones(6))
+    r1 = first.residuals(space.z0[None])
+    assert id(v) in ee._COMPILED_VEHICLES or not first._compiled()
+    again = EquationError(v, motions, space, scale=np.ones(6))
+    assert again._compiled() == first._compiled()
+    np.testing.assert_array_equal(again.residuals(space.z0[None]), r1)
+    key = id(v)
+    del v, first, again
+    gc.collect()
+    assert key not in ee._COMPILED_VEHICLES

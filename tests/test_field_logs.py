@@ -126,3 +126,41 @@ def test_a_base_model_on_its_search_edge_is_not_told_to_be_calibrated():
     on_edge = msg(True)
     assert "calibrate it (uvsim calibrate)" not in on_edge and "on the edge of its search range" in on_edge
     assert "thrust_scale_scale 1 -> 0.5" in on_edge
+
+
+def test_a_random_angle_is_off_by_pi_over_root_3():
+    """The reference of a lost angle (uvsim.fitting.evaluate.RANDOM_ANGLE_RMSE): the wrapped error of
+    angles drawn at random against a logged series, by sampling."""
+    from uvsim.fitting.evaluate import RANDOM_ANGLE_RMSE
+
+    rng = np.random.default_rng(3)
+    logged = np.cumsum(rng.normal(0, 0.05, 200_000))          # any heading history
+    drawn = rng.uniform(-np.pi, np.pi, logged.size)
+    err = np.angle(np.exp(1j * (logged - drawn)))
+    assert np.sqrt(np.mean(err ** 2)) == pytest.approx(RANDOM_ANGLE_RMSE, rel=0.01)
+    assert RANDOM_ANGLE_RMSE == pytest.approx(1.8138, abs=1e-4)
+
+
+def test_a_lost_heading_over_whole_runs_is_a_caveat(tmp_path):
+    """A compass-less heading hold (the field generator, written apart from the fitting code) leaves the
+    given model's free-simulated yaw as far off as a random angle, which the spread rule cannot see
+    for a wrapped angle: the verdict still compares whole runs, and says the heading is lost; the
+    shipped tank data lose nothing."""
+    from pathlib import Path
+
+    from uvsim.fitting.evaluate import judged_prediction
+    from uvsim.measurements import measurements_for
+    from uvsim.scenarios.field import generate_field, sample_field
+
+    d = generate_field(sample_field(0, "clean", duration=40.0, n_train=1, n_validation=1), tmp_path / "field")
+    val = [r for r in read_dataset(d).runs if r.split == "validation"]
+    veh = str(Path(d) / "myrov.yaml")
+    judged = judged_prediction(veh, val, [measurements_for(r, veh) for r in val])
+    assert judged["prediction"] == "whole runs"
+    assert set(judged["lost_angles"]) == {"yaw"} and judged["lost_angles"]["yaw"] > 1.0
+    assert "has lost yaw" in judged["why"]
+    (caveat,) = diagnosis_caveats({"judged": judged, "rmse_before": {}, "rmse_after": {}}, val)
+    assert "has lost yaw (RMS error" in caveat and "--judge-horizon" in caveat
+    tank = [r for r in read_dataset(SHIPPED_DATASET).runs if r.split == "validation"]
+    calm = judged_prediction("bluerov2_heavy", tank, [measurements_for(r, "bluerov2_heavy") for r in tank])
+    assert "lost_angles" not in calm and diagnosis_caveats({"judged": calm, "rmse_before": {}}, tank) == []

@@ -202,6 +202,22 @@ def calibration_problems(rep: Mapping, ds) -> list[str]:
     return probs
 
 
+def _lost_angle_caveat(judged: Mapping, who: str, doc: str) -> list[str]:
+    """The caveat of a verdict judged over whole runs whose reference model (``who``) lost an angle
+    (``judged["lost_angles"]``, :func:`uvsim.fitting.evaluate.lost_angles`), else nothing."""
+    lost = judged.get("lost_angles")
+    if not lost or judged.get("prediction") == "windows":
+        return []
+    from uvsim.fitting.evaluate import lost_angles_text
+
+    return [f"the {who} model's free simulation of the validation runs has lost {lost_angles_text(lost)}, as a model "
+            f"flown open loop does where an autopilot held the vehicle: over whole runs, {' and '.join(lost)} and the "
+            "body-frame velocities of anything fixed in the world (a current, a tether's pull) are compared on "
+            f"trajectories that have lost {'it' if len(lost) == 1 else 'them'}, so a trade-off there may be the "
+            "comparison's own; --judge-horizon "
+            f"SECONDS judges predictions over windows from the logged states instead ({doc}, 'Closed-loop logs')"]
+
+
 def calibration_caveats(rep: Mapping, ds) -> list[str]:
     """What a user should know about a calibration that does not change its verdict: a joint fit
     stopped at the iteration limit (*unfinished*) is judged like any other fit, by how its model
@@ -219,6 +235,7 @@ def calibration_caveats(rep: Mapping, ds) -> list[str]:
     if judged.get("prediction") == "windows":
         out.append(_windows_caveat(judged, "starting", "docs/calibration.md", "the RMSEs, Fit % and plots are"))
         return out
+    out += _lost_angle_caveat(judged, "starting", "docs/calibration.md")
     for split, key in (("train", "training_rmse"), ("validation", "validation_rmse")):
         spread = _spread([r for r in ds.runs if r.split == split])
         names = sorted(_exploded(rep.get(key) or {}, spread) & _exploded(rep.get("initial_" + key) or {}, spread))
@@ -238,15 +255,16 @@ def diagnosis_caveats(rep: Mapping, val_runs) -> list[str]:
     judged = rep.get("judged") or {}
     if judged.get("prediction") == "windows":  # (judged_prediction recorded which channels the given model left)
         return [_windows_caveat(judged, "given", "docs/diagnose.md", "the RMSEs reported are")]
+    lost = _lost_angle_caveat(judged, "given", "docs/diagnose.md")
     spread = _spread(val_runs)
     given = _exploded(rep.get("rmse_before") or {}, spread)
     if not given:
-        return []
+        return lost
     still = sorted(given & _exploded(rep.get("rmse_after") or {}, spread))
     return [f"the given model's free simulation leaves the validation data ({', '.join(sorted(given))} beyond "
             f"{EXPLODE_FACTOR:g} times the measured spread: a model flown open loop where the vehicle was under an "
             "autopilot, or a large missing effect)" + (f"; the corrected model's still does in {', '.join(still)}"
-                                                        if still else "; the corrected model's stays with it")]
+                                                        if still else "; the corrected model's stays with it")] + lost
 
 
 #: A fitted value within this fraction of its search range from a bound is "on the bound"

@@ -25,6 +25,7 @@ parameter set (the vehicle state teacher-forced), exactly as in the windowed fit
 """
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -176,6 +177,23 @@ def motion_or_why(run, *, window_s: float = WINDOW_S) -> tuple[Motion | None, st
     valid[n - half:] = False
     return Motion(run.name, t, run.inputs, run.input_kind, y, np.where(np.isfinite(nud), nud, 0.0), have, valid, win,
                   run.voltage), None
+
+
+#: id of a vehicle object -> (a weak reference to it, the input kinds for which its models were
+#: found to run compiled) (:meth:`EquationError._compiled`); an entry goes with its vehicle.
+_COMPILED_VEHICLES: dict = {}
+
+
+def _remember_compiled(vehicle, kinds: frozenset) -> None:
+    key = id(vehicle)
+    ref, known = _COMPILED_VEHICLES.get(key, (None, frozenset()))
+    if ref is None or ref() is not vehicle:
+        try:
+            ref = weakref.ref(vehicle, lambda _r, key=key: _COMPILED_VEHICLES.pop(key, None))
+        except TypeError:  # (an object that cannot be weakly referenced: looked up each time)
+            return
+        known = frozenset()
+    _COMPILED_VEHICLES[key] = (ref, known | kinds)
 
 
 class EquationError:
@@ -333,14 +351,24 @@ class EquationError:
 
     def _compiled(self) -> bool:
         """Whether :meth:`forces` takes the compiled path (:meth:`_compiled_accelerations`) for
-        this model (looked up once, on a one-row model: what the chunk size depends on)."""
+        this model (looked up once, on a one-row model: what the chunk size depends on, and only
+        that: every set's residual is the same in any chunking).  Whether a model runs compiled
+        depends on its terms, not on their values, so a yes is kept per vehicle object (the
+        screening builds an evaluation per Gauss-Newton step of the same candidate)."""
         if self._compiled_path is None:
+            kinds = frozenset(m.input_kind for m in self.motions)
+            ref, known = _COMPILED_VEHICLES.get(id(self.vehicle), (None, None))
+            if ref is not None and ref() is self.vehicle and kinds <= known:
+                self._compiled_path = compiled_accelerations() is not None
+                return self._compiled_path
             try:
                 self._compiled_path = compiled_accelerations() is not None and all(
                     compiled_plan(Model(self.vehicle, self.space.overrides(self.space.z0[None]), n=1,
-                                        input_kind=kind)) is not None for kind in {m.input_kind for m in self.motions})
+                                        input_kind=kind)) is not None for kind in kinds)
             except (UvsimError, ValueError, np.linalg.LinAlgError):  # a start the model refuses: the evaluation says why
                 self._compiled_path = False
+            if self._compiled_path:
+                _remember_compiled(self.vehicle, kinds)
         return self._compiled_path
 
     def residuals(self, Z: np.ndarray) -> np.ndarray:

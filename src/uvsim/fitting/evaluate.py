@@ -263,6 +263,28 @@ def windowed(vehicle, runs, horizon: float, *, overrides=None, meas=None, gyro_b
 #: 5-s windows with the fault modelled).
 CLOSED_LOOP_HORIZON_S = 5.0
 
+#: RMS of the wrapped difference between a logged angle and an angle drawn independently and
+#: uniformly on the circle: that difference is uniform on (-pi, pi], whose RMS is pi / sqrt(3)
+#: (1.81 rad): the error of a prediction that knows nothing of the angle.
+RANDOM_ANGLE_RMSE = float(np.pi / np.sqrt(3.0))
+#: A free simulation has *lost* a logged Euler angle when its RMS error there is at least this
+#: share of :data:`RANDOM_ANGLE_RMSE` (0.91 rad, 52 deg: the error of a heading known to a
+#: half-circle at best; ours).  A wrapped angle's error is bounded, so the spread rule of
+#: :func:`judged_prediction` never sees it: the field logs' compass-less heading hold leaves the
+#: given model's yaw 1.2-2.0 rad off over whole runs, within 10 times the yaw's spread
+#: (docs/records/diagnose.md).  Said as a caveat; what is judged does not change.
+LOST_ANGLE_SHARE = 0.5
+
+
+def lost_angles(results: list) -> dict[str, float]:
+    """{angle channel: RMS error, rad} of the Euler angles (roll, pitch, yaw) that the free
+    simulations ``results`` (:func:`open_loop`, pooled over the runs) have lost
+    (:data:`LOST_ANGLE_SHARE`); empty when none."""
+    ch = pooled_metrics([r["metrics"] for r in results])["channels"]
+    limit = LOST_ANGLE_SHARE * RANDOM_ANGLE_RMSE
+    return {c: float(ch[c]["rmse"]) for c in ("roll", "pitch", "yaw")
+            if c in ch and np.isfinite(ch[c]["rmse"]) and ch[c]["rmse"] >= limit}
+
 
 def check_judge_horizon(setting, name: str = "judge_horizon"):
     """``setting`` of :func:`judged_prediction` as given ("auto", "whole" or seconds >= 0), else a
@@ -297,12 +319,19 @@ def judged_prediction(vehicle, val, meas, setting="auto", *, initial_velocity: s
         return {"prediction": "windows", "horizon_s": h, "setting": h,
                 "why": f"predictions over windows of {h:g} s from the logged states (asked)",
                 "free_rmse_given": None}
-    free = pooled(open_loop(vehicle, val, meas=meas, initial_velocity=initial_velocity))
+    res = open_loop(vehicle, val, meas=meas, initial_velocity=initial_velocity)
+    free = pooled(res)
     left = sorted(beyond_spread(free, signal_spread(val)))
     if not left:
-        return {"prediction": "whole runs", "horizon_s": None, "setting": "auto",
-                "why": f"free simulations of whole runs: the {who} model's stays with the {split} data",
-                "free_rmse_given": free}
+        lost = lost_angles(res)
+        out = {"prediction": "whole runs", "horizon_s": None, "setting": "auto",
+               "why": f"free simulations of whole runs: the {who} model's stays with the {split} data",
+               "free_rmse_given": free}
+        if lost:
+            out["lost_angles"] = lost
+            out["why"] = (f"free simulations of whole runs: the {who} model's stays within {EXPLODE_FACTOR:g} times the "
+                          f"spread of the {split} data, but has lost {lost_angles_text(lost)}")
+        return out
     h = CLOSED_LOOP_HORIZON_S
     return {"prediction": "windows", "horizon_s": h, "setting": "auto", "left_data": left, "split": split,
             "why": (f"predictions over windows of {h:g} s from the logged states: the {who} model's free "
@@ -310,6 +339,15 @@ def judged_prediction(vehicle, val, meas, setting="auto", *, initial_velocity: s
                     f"{EXPLODE_FACTOR:g} times the measured spread), as a model flown open loop does where an "
                     "autopilot held the vehicle, so whole runs cannot tell models apart"),
             "free_rmse_given": free}
+
+
+def lost_angles_text(lost: dict) -> str:
+    """``lost`` (:func:`lost_angles`) in words: "yaw (RMS error 1.78 rad; an angle drawn at random
+    would be off by 1.81 rad)"."""
+    names = " and ".join(lost)
+    errs = " and ".join(f"{v:.3g}" for v in lost.values())
+    return (f"{names} (RMS error{'s' if len(lost) > 1 else ''} {errs} rad; an angle drawn at random would be off "
+            f"by {RANDOM_ANGLE_RMSE:.3g} rad)")
 
 
 def judged_label(judged: dict | None, whole: str = "free simulations") -> str:
