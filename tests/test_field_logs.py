@@ -164,3 +164,16 @@ def test_a_lost_heading_over_whole_runs_is_a_caveat(tmp_path):
     tank = [r for r in read_dataset(SHIPPED_DATASET).runs if r.split == "validation"]
     calm = judged_prediction("bluerov2_heavy", tank, [measurements_for(r, "bluerov2_heavy") for r in tank])
     assert "lost_angles" not in calm and diagnosis_caveats({"judged": calm, "rmse_before": {}}, tank) == []
+
+
+def test_calibrate_says_a_lost_angle_of_the_runs_it_judged():
+    """calibrate's caveats name the runs its verdict compared (the training runs when there are no
+    validation runs) and say nothing of a verdict judged over windows."""
+    from uvsim.commands.checks import calibration_caveats
+
+    ds = read_dataset(SHIPPED_DATASET)
+    judged = {"prediction": "whole runs", "lost_angles": {"yaw": 1.5}, "split": "train"}
+    (caveat,) = [c for c in calibration_caveats({"judged": judged}, ds) if "has lost" in c]
+    assert caveat.startswith("the starting model's free simulation of the training runs has lost yaw (RMS error 1.5 rad")
+    windows = {"prediction": "windows", "horizon_s": 5.0, "lost_angles": {"yaw": 1.5}}
+    assert not [c for c in calibration_caveats({"judged": windows}, ds) if "has lost" in c]

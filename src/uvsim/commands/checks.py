@@ -210,7 +210,10 @@ def _lost_angle_caveat(judged: Mapping, who: str, doc: str) -> list[str]:
         return []
     from uvsim.fitting.evaluate import lost_angles_text
 
-    return [f"the {who} model's free simulation of the validation runs has lost {lost_angles_text(lost)}, as a model "
+    split = judged.get("split") or "validation"
+    split = "training" if split == "train" else split
+    return [f"the {who} model's free simulation of the {split} runs has lost "
+            f"{lost_angles_text(lost)}, as a model "
             f"flown open loop does where an autopilot held the vehicle: over whole runs, {' and '.join(lost)} and the "
             "body-frame velocities of anything fixed in the world (a current, a tether's pull) are compared on "
             f"trajectories that have lost {'it' if len(lost) == 1 else 'them'}, so a trade-off there may be the "

@@ -328,7 +328,7 @@ def judged_prediction(vehicle, val, meas, setting="auto", *, initial_velocity: s
                "why": f"free simulations of whole runs: the {who} model's stays with the {split} data",
                "free_rmse_given": free}
         if lost:
-            out["lost_angles"] = lost
+            out["lost_angles"], out["split"] = lost, split
             out["why"] = (f"free simulations of whole runs: the {who} model's stays within {EXPLODE_FACTOR:g} times the "
                           f"spread of the {split} data, but has lost {lost_angles_text(lost)}")
         return out
