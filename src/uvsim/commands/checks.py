@@ -204,9 +204,10 @@ def calibration_problems(rep: Mapping, ds) -> list[str]:
 
 def _lost_angle_caveat(judged: Mapping, who: str, doc: str) -> list[str]:
     """The caveat of a verdict judged over whole runs whose reference model (``who``) lost an angle
-    (``judged["lost_angles"]``, :func:`uvsim.fitting.evaluate.lost_angles`), else nothing."""
+    (``judged["lost_angles"]``, :func:`uvsim.fitting.evaluate.lost_angles`, recorded with whole runs
+    only), else nothing."""
     lost = judged.get("lost_angles")
-    if not lost or judged.get("prediction") == "windows":
+    if not lost:
         return []
     from uvsim.fitting.evaluate import lost_angles_text
 
