@@ -26,10 +26,10 @@ def tether(tmp_path_factory):
     from uvsim.scenarios.field import generate_field, sample_field, simulate_field
 
     spec = sample_field(7, "tether")   # 41-s runs at 5 Hz, DVL drop-outs of 0.6-6 s
-    out = generate_field(spec, tmp_path_factory.mktemp("dr") / "tether7")
+    sim = simulate_field(spec)         # the flight the logs were written from
+    out = generate_field(spec, tmp_path_factory.mktemp("dr") / "tether7", sim=sim)
     ds = read_dataset(out)
     veh = load_vehicle(ds.vehicle_file)
-    sim = simulate_field(spec, noise=False)
     step = int(round(spec["control_hz"] / spec["log_hz"]))
     return veh, ds, sim["pos"][:, ::step], spec
 

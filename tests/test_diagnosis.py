@@ -180,6 +180,12 @@ def test_cli_writes_report_corrected_vehicle_and_plots(tmp_path, capsys):
     assert not list(tmp_path.glob("*.ckpt"))  # finished: the checkpoint (r.json.ckpt) is removed (issue 47)
 
 
+@pytest.fixture(scope="module")
+def small_clean(tmp_path_factory):
+    """A small clean dataset, generated once for the tests that only read it."""
+    return _scenario(tmp_path_factory.mktemp("clean"), 4, n_effects=0, n_runs=4, duration=[6, 6])[0]
+
+
 @pytest.mark.parametrize("kw, match", [
     ({"only": ["currents"]}, "unknown candidate effect"),
     ({"max_effects": 0}, "max_effects"),
@@ -188,10 +194,9 @@ def test_cli_writes_report_corrected_vehicle_and_plots(tmp_path, capsys):
     ({"horizon": -1.0}, "horizon"),
     ({"retune": ["X_uuu"]}, "retune: unknown base parameter"),
 ])
-def test_bad_options_are_clear_errors(tmp_path, kw, match):
-    out, _ = _scenario(tmp_path, 4, n_effects=0, n_runs=4, duration=[6, 6])
+def test_bad_options_are_clear_errors(small_clean, kw, match):
     with pytest.raises(CalibrationError, match=match):
-        diagnose(out, **kw)
+        diagnose(small_clean, **kw)
 
 
 def test_interrupted_diagnosis_resumes_without_repeating_finished_fits(tmp_path):

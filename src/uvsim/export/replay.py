@@ -48,7 +48,7 @@ from uvsim.errors import VehicleError
 from uvsim.export.frames import S3, S6
 from uvsim.export.plugins import GzHydrodynamics, UuvFossen
 from uvsim.kinematics import quat_to_rotation
-from uvsim.rigid_body import skew
+from uvsim.rigid_body import coriolis_from_momentum, cross, skew
 
 #: NED -> ENU on world vectors (its own inverse).
 T_NED_ENU = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
@@ -188,7 +188,7 @@ class _Target:
             a = np.asarray(th["axis"], float)
             F = T * a / np.linalg.norm(a)
             f[:3] += F
-            f[3:] += np.cross(th["position"], F)
+            f[3:] += cross(th["position"], F)
         return f
 
     def _pwm_thrust(self, th: dict, pwm: float, voltage: float | None) -> float:
@@ -220,13 +220,12 @@ class _Target:
             w_h = self.plugin.wrench(s, h, abs_state=v)["total"]
         else:  # UUV Simulator works in FRD: flip, apply, flip back (HydrodynamicModel.cc:128-140)
             w_h = S6 @ self.plugin.wrench(S6 @ s, h)["total"]
-            w_h[3:] += np.cross(self.hydro_at, w_h[:3])
+            w_h[3:] += cross(self.hydro_at, w_h[:3])
         e3 = R.T[:, 2]                                   # world up in the body frame
         fb = self.rho * self.g * self._volume(p[2]) * e3
         restoring = np.concatenate([-self.mass * self.g * e3 + fb,
-                                    np.cross(self.mass_moment, -self.g * e3) + np.cross(self.cb, fb)])
-        ab = self.M @ v  # C(v) v = [w x a; v x a + w x b] (Fossen 2021 eq. 3.46)
-        cor = np.concatenate([np.cross(v[3:], ab[:3]), np.cross(v[:3], ab[:3]) + np.cross(v[3:], ab[3:])])
+                                    cross(self.mass_moment, -self.g * e3) + cross(self.cb, fb)])
+        cor = coriolis_from_momentum(self.M @ v, v)   # C(v) v = [w x a; v x a + w x b] (Fossen 2021 eq. 3.46)
         tau = w_h + restoring + f_thr - cor
         v_new = v + h * (self.Minv @ tau)
         p_new = p + h * (R @ v_new[:3])

@@ -435,10 +435,11 @@ def log_tables(spec: dict, sim: dict) -> list[pd.DataFrame]:
     return tables
 
 
-def generate_field(spec: dict, out_dir) -> Path:
-    """Fly ``spec`` (:func:`sample_field`) and write the dataset into ``out_dir``."""
+def generate_field(spec: dict, out_dir, *, sim: dict | None = None) -> Path:
+    """Fly ``spec`` (:func:`sample_field`) and write the dataset into ``out_dir``; ``sim``, the
+    caller's own ``simulate_field(spec)``, is written instead of flying it again."""
     out = Path(out_dir)
-    sim = simulate_field(spec)
+    sim = simulate_field(spec) if sim is None else sim
     tables = log_tables(spec, sim)
     runs = [Run(name=r["name"], path=None, data=tab, dof="mixed", split=r["split"])
             for r, tab in zip(spec["runs"], tables)]
