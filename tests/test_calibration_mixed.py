@@ -297,8 +297,12 @@ def test_a_fit_that_trades_channels_is_a_trade_off_with_the_channels_named(mixed
 
     monkeypatch.setattr(calibration_output, "calibration_problems", lambda rep, ds: ["an injected problem"])
     assert main(argv) == 2
-    assert "an injected problem" in capsys.readouterr().err
+    text = capsys.readouterr()
+    assert "an injected problem" in text.err
+    # refused, not called worse: the line says what the verdict alone said of the same fit
+    assert "VERDICT (exit 2) refused: an injected problem; without the check the verdict is trade-off: " in text.out
     assert not out.exists() and rep.exists() and (plots / "channel_errors.png").exists()
-    assert json.loads(rep.read_text())["status"]["verdict"] == "worse"
+    st = json.loads(rep.read_text())["status"]
+    assert st["verdict"] == "refused" and st["exit_code"] == 2 and st["problems"] == ["an injected problem"]
     assert main(argv + ["--keep-worse"]) == 2
     assert out.exists() and json.loads(rep.read_text())["status"]["vehicle_written"]

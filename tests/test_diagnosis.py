@@ -199,6 +199,28 @@ def test_bad_options_are_clear_errors(small_clean, kw, match):
         diagnose(small_clean, **kw)
 
 
+def test_a_diagnosis_that_fails_a_sanity_check_is_refused_not_called_worse(tmp_path, capsys, monkeypatch):
+    """A sanity problem (e.g. every parameter of the accepted effect on its search bound: field tether
+    seeds, every channel better or the same) used to make the status *worse*, a word the verdict's
+    own table contradicted. It is *refused* (exit 2 as before, nothing written), and the VERDICT line
+    says what the verdict alone said of the same model."""
+    from uvsim.commands import diagnose as command
+
+    monkeypatch.setattr(command, "diagnosis_problems", lambda rep, val: ["an injected problem"])
+    out, _ = _scenario(tmp_path, 1, effects=[{"type": "current", "magnitude": 0.05}])
+    rep, veh = tmp_path / "r.json", tmp_path / "fixed.yaml"
+    rc = main(["diagnose", "--data", str(out), "--only", "current", "--retune", "X_u,N_r", "--json", str(rep),
+               "--out", str(veh), "--quiet"])
+    text = capsys.readouterr()
+    doc = json.loads(rep.read_text())
+    st, mv = doc["status"], doc["model_verdict"]
+    assert rc == 2 and st["verdict"] == "refused" and st["exit_code"] == 2 and not st["ok"]
+    assert mv["status"] == "better"   # the re-tune validates better: the verdict alone would keep it
+    assert f"VERDICT (exit 2) refused: an injected problem; without the check the verdict is {mv['message']}" \
+        in text.out
+    assert "verdict refused: an injected problem" in text.err and not veh.exists()
+
+
 def test_interrupted_diagnosis_resumes_without_repeating_finished_fits(tmp_path):
     """Every finished fit is checkpointed; a resumed run takes them from the file and reaches
     the same answer as an uninterrupted one."""

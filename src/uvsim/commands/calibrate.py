@@ -35,8 +35,9 @@ def register(sub) -> None:
                                          "prediction-error fit of all runs)",
                        epilog="Exit status: 0 the verdict is 'better' (the fitted model beats the one you started from "
                               "on the validation runs, no channel worse); 3 'trade-off' (better pooled, some channel "
-                              "worse: named; vehicle written); 2 'worse' or an error (report and plots written, the "
-                              "vehicle only with --keep-worse). docs/calibration.md, 'The verdict'.")
+                              "worse: named; vehicle written); 2 'worse', 'refused' (a sanity check failed) or "
+                              "an error (report and plots written, the vehicle only with --keep-worse). "
+                              "docs/calibration.md, 'The verdict'.")
     p.add_argument("--data", required=True, help="dataset directory (manifest.yaml + runs)")
     p.add_argument("--vehicle", default=None, help="starting vehicle: built-in name, YAML file, or NAME with "
                                                     "NAME.yaml beside the manifest (default: the manifest's vehicle)")
@@ -119,8 +120,8 @@ def register(sub) -> None:
     p.add_argument("--json", default=None, help="report JSON")
     p.add_argument("--keep-worse", action="store_true",
                    help="write the fitted vehicle also when the verdict is 'worse' (not better than the starting "
-                        "model, or a fit that failed a sanity check such as the iteration limit); the exit status "
-                        "stays 2 and report.json says status.verdict: worse")
+                        "model) or 'refused' (a fit that failed a sanity check); the exit status stays 2 and "
+                        "report.json's status.verdict says which")
     p.add_argument("--plots", default=None, help="directory for plots (measured vs simulated, error boxplots, "
                                                  "GA convergence); written whatever the verdict")
     add_judge_horizon_argument(p, "starting")

@@ -8,7 +8,7 @@ import math
 import sys
 from pathlib import Path
 
-from uvsim.commands.checks import calibration_caveats, calibration_problems
+from uvsim.commands.checks import calibration_caveats, calibration_problems, refusal
 from uvsim.fitting.verdict import EXIT_CODES
 
 ADDED_MASS_ROWS = ("X_udot", "Y_vdot", "Z_wdot", "K_pdot", "M_qdot", "N_rdot")
@@ -208,16 +208,17 @@ def _rmse_text(rmse) -> str:
 
 def outcome(rep, ds) -> tuple[str, str, list[str], list[str]]:
     """(status, why, problems, caveats) of a calibration report: the verdict's status ("better",
-    "trade-off", "worse") and message, or "worse" when a sanity check fails
+    "trade-off", "worse") and message, or "refused" when a sanity check fails
     (:func:`calibration_problems`: a simulation that diverges or explodes where the starting
-    model's does not, every parameter of a DOF on a bound), ``problems`` then saying which.
+    model's does not, every parameter of a DOF on a bound), ``problems`` then saying which and
+    ``why`` what the verdict alone said (:func:`refusal`).
     ``why`` ends with the caveats that do not change the status (:func:`calibration_caveats`:
     an unfinished fit, simulations of both models that leave the data)."""
     problems = calibration_problems(rep, ds)
     caveats = calibration_caveats(rep, ds)
     v = rep.get("verdict")
     if problems:
-        status, why = "worse", "worse: " + "; ".join(problems)
+        status, why = "refused", refusal(problems, v)
     elif v is None:
         status, why = "better", "no runs to compare with the starting model"
     else:
@@ -231,7 +232,7 @@ def outcome(rep, ds) -> tuple[str, str, list[str], list[str]]:
 def record_outcome(cal, ds, *, keep_worse: bool = False) -> tuple[str, str, bool]:
     """(status, why, keep) of a fitted Calibrator (:func:`outcome`), also written into its
     report's ``status``; ``keep``: whether the fitted vehicle may be written (*better* or
-    *trade-off*, and *worse* only with ``keep_worse``)."""
+    *trade-off*; *worse* or *refused* only with ``keep_worse``)."""
     rep = cal.report_
     status, why, problems, caveats = outcome(rep, ds)
     keep = status in ("better", "trade-off") or keep_worse

@@ -184,6 +184,14 @@ def fail_if(problems: Iterable[str], command: str, hint: str) -> None:
                                f"success: {'; '.join(problems)}. {hint}")
 
 
+def refusal(problems: list[str], verdict: dict | None) -> str:
+    """The message of a fit refused by a sanity check: the ``problems``, then what the verdict
+    (``{"message": ...}``, the one measure) said of the same fit, so that a fit the measure calls
+    better is not read as worse."""
+    alone = f"; without the check the verdict is {verdict['message']}" if verdict else ""
+    return "refused: " + "; ".join(problems) + alone
+
+
 def calibration_problems(rep: Mapping, ds) -> list[str]:
     """Sanity problems of a calibration report (``Calibrator.report_``), beside its verdict
     (:mod:`uvsim.fitting.verdict`, which judges the fitted model against the start)."""

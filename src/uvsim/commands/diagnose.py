@@ -13,7 +13,8 @@ from pathlib import Path
 from uvsim.commands import lag_option, parse_pairs
 from uvsim.commands.checks import (add_allow_argument, add_judge_horizon_argument, add_progress_arguments,
                                    check_outputs, check_runs_at_door, judge_option, judged_label,
-                                   command_progress, diagnosis_caveats, diagnosis_problems, remove_checkpoints, say)
+                                   command_progress, diagnosis_caveats, diagnosis_problems, refusal, remove_checkpoints,
+                                   say)
 from uvsim.fitting.verdict import EXIT_CODES
 from uvsim.fitting.verdict import table as verdict_table
 
@@ -30,8 +31,8 @@ def register(subparsers) -> None:
                     "simulations calls it better (docs/calibration.md 'The verdict'); repeat with the rest.  See "
                     "docs/diagnose.md.",
         epilog="Exit status: 0 the corrected model is 'better' than the given one (or nothing changed); 3 a "
-               "'trade-off' (corrected vehicle written, the worse channels named); 2 'worse' or an error (report "
-               "and plots written, no corrected vehicle).")
+               "'trade-off' (corrected vehicle written, the worse channels named); 2 'worse', 'refused' (a sanity "
+               "check failed) or an error (report and plots written, no corrected vehicle).")
     p.add_argument("--data", required=True, help="dataset directory (manifest.yaml + runs, docs/log_format.md)")
     p.add_argument("--vehicle", help="built-in vehicle name or vehicle YAML (default: the manifest's vehicle)")
     p.add_argument("--json", dest="json_out", help="write the report as JSON to this file")
@@ -190,9 +191,12 @@ def run(args) -> int:
     rep["input_notes"] = notes
     problems = diagnosis_problems(rep, diag.validation)
     mv = rep.get("model_verdict")
-    status = "worse" if problems else (mv["status"] if mv is not None else "better")
+    if problems:   # the fit fails a sanity check, whatever the verdict said of it (which why keeps)
+        status, why = "refused", refusal(problems, mv)
+    else:
+        status = mv["status"] if mv is not None else "better"
+        why = mv["message"] if mv is not None else "better: the model is unchanged"
     keep = status in ("better", "trade-off")
-    why = "; ".join(problems) if problems else (mv["message"] if mv is not None else "the model is unchanged")
     caveats = diagnosis_caveats(rep, diag.validation)
     rep["status"] = {"ok": status == "better", "verdict": status, "exit_code": EXIT_CODES[status], "why": why,
                      "problems": problems, "caveats": caveats, "vehicle_written": bool(keep and args.out)}
@@ -212,9 +216,8 @@ def run(args) -> int:
         save_fixed_vehicle(diag, args.out)
         print(f"corrected vehicle: {args.out}")
     remove_checkpoints(ckpt, args.resume)  # finished: every fit is in the report
-    print(f"VERDICT (exit {EXIT_CODES[status]}) {why if problems else (mv['message'] if mv else why)}"
-          + "".join(f"; {c}" for c in caveats))
+    print(f"VERDICT (exit {EXIT_CODES[status]}) {why}" + "".join(f"; {c}" for c in caveats))
     if status != "better":
-        say("diagnose", f"verdict {status}: {why}" + ("" if keep or not args.out else
-                                                      f"; no corrected vehicle was written to {args.out}"))
+        say("diagnose", f"verdict {why}" + ("" if keep or not args.out else
+                                            f"; no corrected vehicle was written to {args.out}"))
     return EXIT_CODES[status]

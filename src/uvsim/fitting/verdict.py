@@ -93,8 +93,9 @@ HINTS = {
     "acc_y": "the sway thrust and damping, the roll attitude (gravity along y), the IMU's position and offset",
     "acc_z": "the heave thrust and damping, net buoyancy, the IMU's position and offset",
 }
-#: Exit status of each outcome (the commands; docs/calibration.md).
-EXIT_CODES = {"better": 0, "trade-off": 3, "worse": 2}
+#: Exit status of each outcome (the commands; docs/calibration.md). *refused* is the commands' own:
+#: the fit fails a sanity check (``uvsim.commands.checks``) whatever the verdict says of it.
+EXIT_CODES = {"better": 0, "trade-off": 3, "worse": 2, "refused": 2}
 
 
 def _horizon(meas, pred_a: dict, pred_b: dict) -> tuple[np.ndarray, dict]:
