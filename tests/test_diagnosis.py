@@ -199,6 +199,16 @@ def test_bad_options_are_clear_errors(small_clean, kw, match):
         diagnose(small_clean, **kw)
 
 
+def test_a_single_run_is_a_clear_error_that_says_how_to_make_runs(tmp_path):
+    """An imported log is often one armed interval (the shipped ArduSub tlog): the error says how
+    to cut it into runs rather than only that it is one."""
+    from contract_data import TINY_RUNS, write_tiny_dataset
+
+    ds = write_tiny_dataset(tmp_path / "one", runs=[(TINY_RUNS[0][0], "train")])
+    with pytest.raises(CalibrationError, match=r"need at least 3 runs .* got 1: .*--segments"):
+        diagnose(ds)
+
+
 def test_a_diagnosis_that_fails_a_sanity_check_is_refused_not_called_worse(tmp_path, capsys, monkeypatch):
     """A sanity problem (e.g. every parameter of the accepted effect on its search bound: field tether
     seeds, every channel better or the same) used to make the status *worse*, a word the verdict's

@@ -111,7 +111,8 @@ def _split(dataset: Dataset) -> tuple[list, list, str]:
     runs = dataset.runs
     if len(runs) < 3:
         raise CalibrationError(f"{dataset.path}: need at least 3 runs to diagnose (training and validation), "
-                               f"got {len(runs)}")
+                               f"got {len(runs)}: log more runs, or cut a long one into runs with a segments file "
+                               "(uvsim import ... --segments, docs/import_export.md)")
     val = runs[2::3]
     train = [r for r in runs if r not in val]
     return train, val, ("the manifest has no training/validation split: every third run is used for validation "
