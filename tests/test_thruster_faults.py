@@ -51,6 +51,11 @@ def test_gain_ranges_are_physical_and_a_dead_unit_is_an_answer_not_an_edge():
     variants = {c.variant for c in catalogue(input_kind="pwm", n_thrusters=8, dt=0.05, p_ref=np.zeros(3),
                                              has_position=True, z_max=None) if c.effect == "thruster_gain"}
     assert {"unit_8", "reversed_8", "all"} <= variants
+    # every gain: the unit that stands out, in words (a dead one as dead)
+    every = next(c for c in _gain(8) if c.variant == "all")
+    g = {f"thruster_gain_{i}": v for i, v in enumerate([0.81, 0.8, 0.79, 0.82, 0.78, 0.8, 0.49, 0.78], start=1)}
+    assert plain_answer(every, g) == "every unit's gain: thruster 7 at 0.49 of its curve, the other 7 at 0.78-0.82"
+    assert plain_answer(every, {**g, "thruster_gain_7": 0.0}).startswith("thruster 7 gives no thrust (a dead unit)")
 
 
 def _fault(tmp_path, magnitude, seed=3):
