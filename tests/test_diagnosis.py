@@ -199,6 +199,24 @@ def test_bad_options_are_clear_errors(small_clean, kw, match):
         diagnose(small_clean, **kw)
 
 
+def test_a_retuned_coefficient_on_the_edge_of_its_range_is_marked():
+    """Field logs, clean seed 0 with the quadratic drags re-tuned: four of six ended at +50 % and the
+    report printed them like any value. ``retuned`` now says which are on the edge of the re-tune's
+    range in the last fit that freed them (kept: a coefficient far off is not unphysical)."""
+    from types import SimpleNamespace
+
+    from uvsim.diagnosis.summary import retuned_report
+
+    veh = uvsim.load_vehicle("bluerov2_heavy")
+    p = veh.parameters()
+    sel = SimpleNamespace(retune=["X_uu", "Y_vv", "N_rr"])
+    values = {"X_uu": 1.2 * p["X_uu"], "Y_vv": 1.5 * p["Y_vv"]}          # N_rr was not kept
+    rep = retuned_report(sel, values, veh, SimpleNamespace(at_bounds=["Y_vv", "thruster_gain_1"]))
+    assert rep == {"X_uu": {"value": values["X_uu"], "before": p["X_uu"], "at_bound": False},
+                   "Y_vv": {"value": values["Y_vv"], "before": p["Y_vv"], "at_bound": True}}
+    assert not any(d["at_bound"] for d in retuned_report(sel, values, veh, None).values())
+
+
 def test_a_single_run_is_a_clear_error_that_says_how_to_make_runs(tmp_path):
     """An imported log is often one armed interval (the shipped ArduSub tlog): the error says how
     to cut it into runs rather than only that it is one."""

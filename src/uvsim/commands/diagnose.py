@@ -104,7 +104,9 @@ def format_table(report: dict) -> str:
             std = f" +- {d['std']:.2g}" if d.get("std") is not None else ""
             lines.append(f"    {k} = {d['value']:.5g}{std} {d['unit']}")
     for k, d in report.get("retuned", {}).items():
-        lines.append(f"  re-tuned {k}: {d['before']:.5g} -> {d['value']:.5g}")
+        lines.append(f"  re-tuned {k}: {d['before']:.5g} -> {d['value']:.5g}"
+                     + ("  AT BOUND (the edge of the re-tune's range: the data push it further)"
+                        if d.get("at_bound") else ""))
     rv = report.get("retune_verdict")
     if rv is not None and not rv["kept"]:
         lines.append(f"  re-tune of {', '.join(rv['retune'])} not kept: {rv['message']}")

@@ -51,7 +51,7 @@ from uvsim.diagnosis.selector import VARIANT_SHARE, Selector
 from uvsim.diagnosis.step_choice import (alternative_challenger, base_effect_challenge, base_effect_kept,
                                          blocked_fallback, inertia_challenger, parsimonious, richer_challenger,
                                          simplest_sufficient, still_needed, unit_beside_base)
-from uvsim.diagnosis.summary import parameter_reports, row_report, summary_message
+from uvsim.diagnosis.summary import parameter_reports, retuned_report, row_report, summary_message
 from uvsim.diagnosis.unit_choice import every_gain_step, unit_forms, unit_in_every_gain
 from uvsim.estimation.lag import attitude_lag_setting
 from uvsim.errors import CalibrationError
@@ -217,6 +217,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         say(f"the verdict compares {judged['why']}")
     # 1. baseline ----------------------------------------------------------------------
     values: dict = {}
+    base_fit = None
     if sel.retune:
         start = sel.seed_retune(veh)
         sp = sel.space(veh, sel.retune, sel.retune_bounds, start, {})
@@ -402,7 +403,7 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         "effect": names[0] if len(names) == 1 else ("none" if not names else "+".join(names)),
         "confidence": confidence,
         "message": msg,
-        "retuned": {n: {"value": values[n], "before": veh.parameters()[n]} for n in sel.retune if n in values},
+        "retuned": retuned_report(sel, values, veh, final if final is not None else base_fit),
         "retune_verdict": None if retune_verdict is None else {"retune": asked_retune,
                                                                "status": retune_verdict["status"],
                                                                "kept": bool(retune_verdict["ok"]),

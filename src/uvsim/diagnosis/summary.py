@@ -45,6 +45,19 @@ def parameter_reports(accepted, values: Mapping[str, float], final, vehicle) -> 
     return effects_rep, base_rep
 
 
+def retuned_report(sel, values: Mapping[str, float], vehicle, fit) -> dict:
+    """The report's ``retuned``: per re-tuned coefficient kept in ``values``, its ``value``, the given
+    model's (``before``) and ``at_bound``: on the edge of its search range (the re-tune's margin round
+    the given value) in ``fit``, the last fit that freed it. A re-tune on its edge is kept (a
+    coefficient far off is not unphysical, :func:`uvsim.diagnosis.candidates.search_bound_hits`), but
+    the reader is told: the data push it further, so it is the edge, not an estimate (field logs, clean
+    seed 0: four of the six quadratic drags at +50 %, standing in for a drag along the relative velocity
+    the diagonal form lacks)."""
+    hits = set(fit.at_bounds) if fit is not None else set()
+    return {n: {"value": values[n], "before": vehicle.parameters()[n], "at_bound": n in hits}
+            for n in sel.retune if n in values}
+
+
 def every_parameter_on_bound(params: Mapping[str, Mapping]) -> bool:
     """Whether a reported effect's (or base model's) ``parameters`` (``{name: {"at_bound", ...}}``,
     :func:`parameter_reports`) are all on the edge of their search ranges (none: False)."""
