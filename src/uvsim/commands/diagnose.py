@@ -197,7 +197,7 @@ def run(args) -> int:
         status, why = "refused", refusal(problems, mv)
     else:
         status = mv["status"] if mv is not None else "better"
-        why = mv["message"] if mv is not None else "better: the model is unchanged"
+        why = mv["message"] if mv is not None else "the model is unchanged (no effect named, no re-tune kept)"
     keep = status in ("better", "trade-off")
     caveats = diagnosis_caveats(rep, diag.validation)
     rep["status"] = {"ok": status == "better", "verdict": status, "exit_code": EXIT_CODES[status], "why": why,
