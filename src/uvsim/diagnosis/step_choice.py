@@ -33,6 +33,7 @@ import numpy as np
 
 from uvsim.diagnosis.candidates import BASE_MODEL, inertia_start
 from uvsim.diagnosis.decision import LEVEL, MIN_RELATIVE, VAL_LEVEL, clearly_better, compare, judge
+from uvsim.diagnosis.units import farthest_from_median
 from uvsim.errors import UvsimError
 from uvsim.fitting.compare import bootstrap_improvement
 
@@ -326,8 +327,7 @@ def outlying_unit(effect_row) -> int | None:
     c = effect_row["candidate"]
     if c.effect != "thruster_gain" or "unit" in c.tags or len(c.free) < 3:
         return None
-    g = np.array([float(effect_row["values"][n]) for n in c.free])
-    return int(c.free[int(np.argmax(np.abs(g - np.median(g))))].rsplit("_", 1)[1])
+    return int(farthest_from_median({n: float(effect_row["values"][n]) for n in c.free}).rsplit("_", 1)[1])
 
 
 def unit_beside_base(sel, base_row, effect_row, screened):

@@ -31,6 +31,7 @@ import numpy as np
 from uvsim.diagnosis.candidates import BASE_MODEL, _base_model, _gain
 from uvsim.diagnosis.decision import MIN_RELATIVE, clearly_better, judge
 from uvsim.diagnosis.summary import row_report
+from uvsim.diagnosis.units import farthest_from_median
 from uvsim.errors import UvsimError
 from uvsim.fitting.parameters import GAIN_RANGE
 
@@ -172,8 +173,7 @@ def unit_in_every_gain(sel, accepted: list, values: dict, val_cur: dict):
     if c_all is None:
         return None
     g = {n: float(values[n]) for n in c_all.free}
-    med = float(np.median(list(g.values())))
-    name = max(g, key=lambda n: abs(g[n] - med))
+    name = farthest_from_median(g)
     k = int(name.rsplit("_", 1)[1])
     common = float(np.median([v for n, v in g.items() if n != name]))
     bases = _with_scale(sel, [c for c in accepted if c.effect == BASE_MODEL])

@@ -53,6 +53,13 @@ def reported_variant(c, values: Mapping[str, float]) -> str:
     return c.variant
 
 
+def farthest_from_median(gains: Mapping):
+    """The key of ``gains`` ({key: gain}) farthest from the median of all of them (the first in
+    order on a tie): the one unit that stands out of every unit's gain."""
+    med = float(np.median(list(gains.values())))
+    return max(gains, key=lambda k: abs(gains[k] - med))
+
+
 def plain_answer(c, values: Mapping[str, float]) -> str | None:
     """The answer in words when it is at a physical limit or names a fault: a dead, a reversed or a
     fouled thruster (issue 48: "thruster 1 gives no thrust"), and for every unit's gain the unit
@@ -66,8 +73,7 @@ def plain_answer(c, values: Mapping[str, float]) -> str | None:
             # which unit stands out is what a reader looks for (field logs at 50 Hz, weak seeds 3 and
             # 23: thruster 7 at 0.49, the other seven 0.78-0.82, every gain 9 % better on validation
             # than one unit beside a common scale, so "all" is named)
-            med = float(np.median(list(gains.values())))
-            k = max(gains, key=lambda i: abs(gains[i] - med))
+            k = farthest_from_median(gains)
             rest = [g for i, g in gains.items() if i != k]
             return (f"every unit's gain: thruster {k} at {gains[k]:.2f} of its curve, the other {len(rest)} at "
                     f"{min(rest):.2f}-{max(rest):.2f}") if rest else None
