@@ -49,6 +49,7 @@ from typing import Callable
 import numpy as np
 
 from uvsim.errors import SimulationError
+from uvsim.scenarios import dynamics_compiled
 
 POS, QUAT, NU = slice(0, 3), slice(3, 7), slice(7, 13)
 N_BASE = 13
@@ -159,6 +160,9 @@ class Plant:
         self.has_cg_offset = bool(np.any(self.r_g != 0.0))
         self.lagged = self.lag_time > 0.0
         self.rate = np.where(self.lagged, 1.0 / np.where(self.lagged, self.lag_time, 1.0), 0.0)
+        # the parameters as the compiled form reads them (fixed after construction; ``current``,
+        # ``has_current`` and ``wrenches`` may change between calls)
+        self.packed = dynamics_compiled.pack(self)
 
     @property
     def n(self) -> int:
@@ -169,7 +173,31 @@ class Plant:
         return self.allocation.shape[1]
 
     def rhs(self, t: float, y: np.ndarray, f_e: np.ndarray) -> np.ndarray:
-        """State derivative ``(n_y, n)`` for held actuator commands ``f_e`` (a, n)."""
+        """State derivative ``(n_y, n)`` for held actuator commands ``f_e`` (a, n).
+
+        Compiled (:mod:`uvsim.scenarios.dynamics_compiled`) where numba is installed, the extra
+        wrenches summed here; else :meth:`rhs_numpy`, the reference.
+        """
+        fast = compiled()
+        if fast is None:
+            return self.rhs_numpy(t, y, f_e)
+        # one type signature for numba: C-ordered float arrays, Python bools
+        y, f_e = np.ascontiguousarray(y, dtype=float), np.ascontiguousarray(f_e, dtype=float)
+        current, has_current = np.ascontiguousarray(self.current, dtype=float), bool(self.has_current)
+        n = y.shape[1]
+        tau_w = np.zeros((6, n))
+        if self.wrenches:
+            R, nu_r = np.empty((3, 3, n)), np.empty((6, n))
+            fast[2](y, current, has_current, R, nu_r)
+            ctx = Context(t, y[POS], R, y[NU], nu_r)
+            for wr in self.wrenches:
+                tau_w += wr(ctx)
+        out = np.empty((y.shape[0], n))
+        fast[0](y, f_e, self.packed, current, has_current, self.has_cg_offset, tau_w, out)
+        return out
+
+    def rhs_numpy(self, t: float, y: np.ndarray, f_e: np.ndarray) -> np.ndarray:
+        """:meth:`rhs` in numpy: the reference of the compiled form, and the path without numba."""
         q, nu = y[QUAT], y[NU]
         v, w = nu[:3], nu[3:]
         R = rotation(q)
@@ -215,6 +243,23 @@ class Plant:
         return dy
 
 
+def compiled():
+    """``(rhs, advance, frame)`` of :mod:`uvsim.scenarios.dynamics_compiled` compiled by numba (compiled on
+    first use, cached on disk), or None where numba is not installed or ``use_compiled(False)``."""
+    return dynamics_compiled.compiled() if _use_compiled else None
+
+
+_use_compiled = True
+
+
+def use_compiled(flag: bool) -> bool:
+    """Run the truth model compiled where numba is installed (True, the default) or always in
+    numpy (False: the reference, for tests). Returns the previous setting."""
+    global _use_compiled
+    previous, _use_compiled = _use_compiled, bool(flag)
+    return previous
+
+
 def integrate(plant: Plant, t: np.ndarray, commands: np.ndarray, y0: np.ndarray, max_step: float = 0.002,
               *, renormalize: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Integrate ``plant`` over the log grid ``t`` with fixed-step RK4.
@@ -234,13 +279,21 @@ def integrate(plant: Plant, t: np.ndarray, commands: np.ndarray, y0: np.ndarray,
     nu_dot : (n_t, 6, n) body acceleration at the samples (right limit: the command of
         that sample already acts).
     """
-    t = np.asarray(t, dtype=float)
+    t = np.ascontiguousarray(t, dtype=float)
     dts = np.diff(t)
     if t.size < 2 or np.any(dts <= 0):
         raise SimulationError("scenario truth model: times must be strictly increasing (>= 2 samples)")
     n_t = t.size
     Y = np.empty((n_t,) + y0.shape)
     A = np.empty((n_t, 6, y0.shape[1]))
+    fast = compiled()
+    if fast is not None and not plant.wrenches:
+        bad = fast[1](t, np.ascontiguousarray(commands, dtype=float), np.array(y0, dtype=float), plant.packed,
+                      np.ascontiguousarray(plant.current, dtype=float), bool(plant.has_current), plant.has_cg_offset,
+                      float(max_step), bool(renormalize), Y, A)
+        if bad >= 0:
+            raise SimulationError(f"scenario truth model diverged at t = {t[bad]:.3f} s")
+        return Y, A
     y = np.array(y0, dtype=float)
     Y[0] = y
     for k in range(n_t - 1):
