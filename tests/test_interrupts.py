@@ -105,7 +105,8 @@ def tiny(tmp_path):
     return write_tiny_dataset(tmp_path / "ds", seconds=5.0)
 
 
-@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM, signal.SIGINT], ids=["SIGKILL", "SIGTERM", "SIGINT"])
+@pytest.mark.parametrize("sig", [signal.SIGKILL, pytest.param(signal.SIGTERM, marks=pytest.mark.slow), signal.SIGINT],
+                         ids=["SIGKILL", "SIGTERM", "SIGINT"])
 def test_workers_die_with_the_parent(sig, tiny, tmp_path):
     out = tmp_path / "run" / "fit.yaml"
     proc = _start(tmp_path, tiny, out, "--generations", "500")
@@ -133,7 +134,8 @@ def _signal_and_check(proc, sig, tmp_path, workers) -> str:
     return err
 
 
-@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM, signal.SIGINT], ids=["SIGKILL", "SIGTERM", "SIGINT"])
+@pytest.mark.parametrize("sig", [pytest.param(signal.SIGKILL, marks=pytest.mark.slow), signal.SIGTERM,
+                                 pytest.param(signal.SIGINT, marks=pytest.mark.slow)], ids=["SIGKILL", "SIGTERM", "SIGINT"])
 def test_diagnosis_workers_die_with_the_parent(sig, tmp_path):
     """The worker processes a diagnosis keeps for all its fits (uvsim.fitting.worker_pool)."""
     import uvsim
@@ -179,6 +181,7 @@ def reference(tmp_path_factory):
     return ds, ref
 
 
+@pytest.mark.slow  # end to end: three calibrate processes, one killed (in-process resume: test_calibration_ga.py)
 @pytest.mark.parametrize("phase", ["ga", "refinement"])
 def test_kill_and_resume_is_bit_identical(phase, reference, tmp_path):
     tiny, ref = reference

@@ -13,8 +13,8 @@ A tutorial is read block by block, in order, in one scratch directory:
   after the blocks before it, and must not raise.
 * ```` <!-- file: NAME --> ```` just before a block writes the block's text to ``NAME``
   instead of running it (a vehicle file the user would type).
-* ```` <!-- tutorial: slow --> ```` anywhere marks a page whose commands take minutes: it
-  runs in ``make test-all``.
+* ```` <!-- tutorial: slow --> ```` anywhere marks a page that runs commands end to end for
+  more than a few seconds: it runs in ``make test-all`` (``make test`` stays under 5 minutes).
 
 The scratch directory has ``src`` and ``examples`` linked to the checkout's, so the
 pages' paths to shipped data (``src/uvsim/data/...``) are those of a fresh clone.

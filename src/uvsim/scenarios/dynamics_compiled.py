@@ -176,43 +176,54 @@ def frame(y, current, has_current, R, nu_r):
 def advance(t, commands, y0, th, current, has_current, has_cg, max_step, renormalize, Y, A):
     """:func:`~uvsim.scenarios.dynamics.integrate`'s loop into ``Y`` (n_t, n_y, n) and ``A``
     (n_t, 6, n) for a plant without extra wrenches; returns the index of the first sample whose
-    state is not finite (-1: none)."""
+    state is not finite (-1: none).
+
+    Written in loops with one call of :func:`rhs` (not array expressions and four calls, which
+    numba takes several times longer to compile: the compiler copies the callee into each call)."""
     n_y, n = y0.shape
     tau_w = np.zeros((6, n))
     y = y0.copy()
     yt = np.empty((n_y, n))
-    k1 = np.empty((n_y, n))
-    k2 = np.empty((n_y, n))
-    k3 = np.empty((n_y, n))
-    k4 = np.empty((n_y, n))
-    Y[0] = y
+    K = np.empty((4, n_y, n))
     n_t = t.shape[0]
-    for k in range(n_t - 1):
-        u = commands[k]
-        dt = t[k + 1] - t[k]
-        m = max(1, int(np.ceil(dt / max_step - 1e-9)))
-        h = dt / m
+    for k in range(n_t):
+        for i in range(n_y):
+            for j in range(n):
+                Y[k, i, j] = y[i, j]
+        last = k == n_t - 1
+        m, h = 1, 0.0
+        if not last:
+            dt = t[k + 1] - t[k]
+            m = max(1, int(np.ceil(dt / max_step - 1e-9)))
+            h = dt / m
         for s in range(m):
-            rhs(y, u, th, current, has_current, has_cg, tau_w, k1)
-            if s == 0:
-                A[k] = k1[7:13]
-            yt[:] = y + 0.5 * h * k1
-            rhs(yt, u, th, current, has_current, has_cg, tau_w, k2)
-            yt[:] = y + 0.5 * h * k2
-            rhs(yt, u, th, current, has_current, has_cg, tau_w, k3)
-            yt[:] = y + h * k3
-            rhs(yt, u, th, current, has_current, has_cg, tau_w, k4)
-            y = y + (h / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
+            for st in range(4):
+                c = 0.0 if st == 0 else (0.5 * h if st < 3 else h)
+                for i in range(n_y):
+                    for j in range(n):
+                        yt[i, j] = y[i, j] if st == 0 else y[i, j] + c * K[st - 1, i, j]
+                rhs(yt, commands[k], th, current, has_current, has_cg, tau_w, K[st])
+                if st == 0 and s == 0:
+                    for i in range(6):
+                        for j in range(n):
+                            A[k, i, j] = K[0, 7 + i, j]
+                if last:
+                    break
+            if last:
+                break
+            for i in range(n_y):
+                for j in range(n):
+                    y[i, j] = y[i, j] + (h / 6.0) * (K[0, i, j] + 2.0 * (K[1, i, j] + K[2, i, j]) + K[3, i, j])
             if renormalize:
                 for j in range(n):
                     nq = np.sqrt(y[3, j] ** 2 + y[4, j] ** 2 + y[5, j] ** 2 + y[6, j] ** 2)
                     for i in range(3, 7):
                         y[i, j] /= nq
-        if not np.all(np.isfinite(y)):
-            return k + 1
-        Y[k + 1] = y
-    rhs(y, commands[n_t - 1], th, current, has_current, has_cg, tau_w, k1)
-    A[n_t - 1] = k1[7:13]
+        if not last:
+            for i in range(n_y):
+                for j in range(n):
+                    if not np.isfinite(y[i, j]):
+                        return k + 1
     return -1
 
 
