@@ -16,6 +16,7 @@ probe file is removed and no directory is created by the check.
 """
 from __future__ import annotations
 
+import functools
 import os
 import tempfile
 from pathlib import Path
@@ -75,12 +76,14 @@ def read_text(path, *, error: type = UvsimError, what: str = "file") -> str:
                     "in UTF-8 text") from None
 
 
-def _unique_key_loader():
+@functools.lru_cache(maxsize=None)
+def _unique_key_loader(fast: bool = False):
     """A ``yaml.SafeLoader`` that refuses a mapping with the same key twice (YAML 1.2 requires
-    unique keys, sec. 3.2.1.1; PyYAML silently keeps the last one)."""
+    unique keys, sec. 3.2.1.1; PyYAML silently keeps the last one). ``fast``: on libyaml's parser
+    (``yaml.CSafeLoader``, where PyYAML was built with it), the same constructor."""
     import yaml
 
-    class UniqueKeyLoader(yaml.SafeLoader):
+    class UniqueKeyLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader) if fast else yaml.SafeLoader):
         def construct_mapping(self, node, deep=False):
             seen = {}
             for key_node, _ in node.value:
@@ -106,7 +109,11 @@ def load_yaml(path, *, error: type = UvsimError, what: str = "YAML file"):
 
     text = read_text(path, error=error, what=what)
     try:
-        return yaml.load(text, Loader=_unique_key_loader())  # noqa: S506 (a SafeLoader subclass)
+        return yaml.load(text, Loader=_unique_key_loader(fast=True))  # noqa: S506 (a SafeLoader subclass)
+    except yaml.YAMLError:
+        pass
+    try:  # the error again from PyYAML's own parser, whose messages and marks the docs show
+        return yaml.load(text, Loader=_unique_key_loader())  # noqa: S506
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" line {mark.line + 1}, column {mark.column + 1}:" if mark is not None else ""

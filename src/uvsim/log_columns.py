@@ -74,9 +74,16 @@ def _clean(df: pd.DataFrame, source: str) -> tuple[pd.DataFrame, list[str]]:
     df = df.reset_index(drop=True)
     if len(df) < 2:
         raise LogFormatError(f"{source}: needs at least 2 samples, found {len(df)}")
-    empty = [c for c in df.columns if df[c].isna().all()]
+    all_nan = df.isna().all().to_numpy()
+    empty = [c for c, e in zip(df.columns, all_nan) if e]
     df = df.drop(columns=empty)
+    # float64 columns (what a numeric CSV reads as) need only the infinity check: done for all of
+    # them at once; the others are converted one by one, in column order as the errors are
+    floats = [c for c, d in zip(df.columns, df.dtypes) if d == np.float64]
+    has_inf = dict(zip(floats, np.isinf(df[floats].to_numpy()).any(axis=0))) if floats else {}
     for c in df.columns:
+        if not has_inf.get(c, True):
+            continue
         col = df[c]
         if pd.api.types.is_bool_dtype(col):
             bad = col.notna().to_numpy()

@@ -189,6 +189,7 @@ def _run(args) -> int:
     ckpt = args.checkpoint or str(out.with_suffix(out.suffix + ".ckpt"))
     weights, noise = parse_pairs(args.weights, "--weights"), parse_pairs(args.noise, "--noise")
     bounds, horizons, lag = parse_bounds(args.bounds), parse_horizons(args.horizons), lag_option(args.attitude_lag)
+    judge, allow = judge_option(args.judge_horizon), parse_allow(args.allow)
     check_outputs({"--out": out, "--json": args.json, "--checkpoint": ckpt}, {"--plots": args.plots})
     if args.resume:
         from uvsim.calibration.joint import joint_checkpoint_path
@@ -213,7 +214,7 @@ def _run(args) -> int:
                      attitude_lag=lag, latency=args.latency, supply_voltage=args.supply_voltage,
                      trade_off=args.trade_off,
                      low_speed_exponent=args.low_speed_exponent, progress=progress,
-                     judge_horizon=judge_option(args.judge_horizon), allow=parse_allow(args.allow))
+                     judge_horizon=judge, allow=allow)
     logger = logging.getLogger("uvsim")
     handler = None
     if not logger.handlers:  # "resuming from ..." and other notes reach the user

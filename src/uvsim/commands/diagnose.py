@@ -157,6 +157,7 @@ def run(args) -> int:
 
     progress = command_progress("diagnose", args)
     noise, weights = parse_pairs(args.noise, "--noise"), parse_pairs(args.weights, "--weights")
+    judge, lag, allow = judge_option(args.judge_horizon), lag_option(args.attitude_lag), parse_allow(args.allow)
     ckpt = args.checkpoint or next((f"{f}.ckpt" for f in (args.json_out, args.out) if f), None)
     check_outputs({"--json": args.json_out, "--out": args.out, "--checkpoint": ckpt}, {"--plots": args.plots})
     if args.resume and not Path(args.resume).is_file():
@@ -169,9 +170,8 @@ def run(args) -> int:
     try:
         diag = diagnose(ds, veh, retune=_list(args.retune), only=_list(args.only), noise=noise, weights=weights,
                         horizon=args.horizon, max_effects=args.max_effects, top=args.top, max_iter=args.max_iter,
-                        workers=args.workers, progress=progress, allow=parse_allow(args.allow), checkpoint=ckpt,
-                        resume=args.resume, attitude_lag=lag_option(args.attitude_lag),
-                        judge_horizon=judge_option(args.judge_horizon))
+                        workers=args.workers, progress=progress, allow=allow, checkpoint=ckpt,
+                        resume=args.resume, attitude_lag=lag, judge_horizon=judge)
     except KeyboardInterrupt:
         held = ckpt or args.resume
         if held and Path(held).is_file():
