@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 import yaml
 
+from uvsim.files import safe_load
 from uvsim.calibration.report import acc_bias_flags
 from uvsim.errors import VehicleError
 from uvsim.fitting import fit, make_space
@@ -40,7 +41,7 @@ def dataset(tmp_path_factory):
 
 
 def _truth_bias(path) -> dict:
-    truth = yaml.safe_load((Path(path) / "truth.yaml").read_text())
+    truth = safe_load((Path(path) / "truth.yaml").read_text())
     return {Path(r["file"]).stem: np.array(r["acc_bias"], float) for r in truth["runs"]}
 
 

@@ -10,14 +10,16 @@ pytest.importorskip("numba")
 
 
 def _plant(n=3, a=8, seed=0, current=True):
-    """Every trajectory with its own parameters: CG offset, full M_A, lags on half the actuators."""
+    """Every trajectory with its own parameters: CG offset, full M_A, lags on half the actuators,
+    drag along the relative velocity."""
     rng = np.random.default_rng(seed)
     MA = np.stack([(lambda B: B @ B.T + 6 * np.eye(6))(rng.normal(size=(6, 6))) for _ in range(n)], axis=2)
     I = np.repeat((np.diag([0.3, 0.4, 0.5]) + 0.01)[:, :, None], n, axis=2) + rng.normal(size=(3, 3, n)) * 1e-3
     return Plant(mass=rng.uniform(10, 14, n), r_g=rng.normal(size=(3, n)) * 0.01, inertia=I, added_mass=MA,
                  linear=-rng.uniform(1, 5, (6, n)), quadratic=-rng.uniform(1, 20, (6, n)), load=rng.normal(size=n),
                  load_moment=rng.normal(size=(3, n)), current=rng.normal(size=(3, n)) * 0.2 * current,
-                 allocation=rng.normal(size=(6, a, n)), lag_time=np.where(rng.random((a, n)) < 0.5, 0.1, 0.0))
+                 allocation=rng.normal(size=(6, a, n)), lag_time=np.where(rng.random((a, n)) < 0.5, 0.1, 0.0),
+                 along_flow=-rng.uniform(5, 30, (3, n)))
 
 
 def _state(rng, n, a):

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 import yaml
 
+from uvsim.files import safe_load
 import uvsim
 from uvsim.cli import main
 from uvsim.errors import SimulationError, VehicleError
@@ -16,7 +17,7 @@ from uvsim.vehicle import builtin_vehicles, load_vehicle, vehicle_path
 
 @pytest.fixture
 def rov_dict():
-    return yaml.safe_load(vehicle_path("bluerov2_heavy").read_text())
+    return safe_load(vehicle_path("bluerov2_heavy").read_text())
 
 
 def write(tmp_path, d, name="veh.yaml"):

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
 
+from uvsim.files import safe_load
 import uvsim.vehicle_schema as vs
 import uvsim.vehicle_rules as vehicle_rules
 from uvsim.errors import VehicleError
@@ -28,7 +28,7 @@ FILE = "veh.yaml"
 
 def full_vehicle() -> dict:
     """bluerov2_heavy with every optional field of the schema given (a valid file)."""
-    d = yaml.safe_load(vehicle_path("bluerov2_heavy").read_text())
+    d = safe_load(vehicle_path("bluerov2_heavy").read_text())
     d["meta"] = {"operator": "tank team", "anything": [1, 2]}
     d["rigid_body"]["inertia"].update({"I_xy": 0.01, "I_xz": -0.02, "I_yz": 0.005})
     MA = np.diag([15.6, 17.0, 40.0, 0.3, 0.3, 0.3])

@@ -237,6 +237,8 @@ def generate_dataset(vehicle="bluerov2_heavy", out_dir="dataset", *, description
 def _add_manifest_meta(path: Path, meta: dict) -> None:
     import yaml
 
-    d = yaml.safe_load(path.read_text())
+    from uvsim.files import safe_load
+
+    d = safe_load(path.read_text())
     d.update(meta)
     path.write_text(yaml.safe_dump(d, sort_keys=False))

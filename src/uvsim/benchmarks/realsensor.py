@@ -125,11 +125,11 @@ def calibrate(data, truth: dict, *, workers: int = 1, **kw):
 
 
 def run(quick: bool = False, workers: int = 2, out_dir=None) -> dict:
-    import yaml
+    from uvsim.files import safe_load
 
     with tempfile.TemporaryDirectory() as tmp:
         d = make_dataset(Path(out_dir or tmp) / "realsensor", quick=quick)
-        truth = yaml.safe_load((d / "truth.yaml").read_text())
+        truth = safe_load((d / "truth.yaml").read_text())
         t0 = time.perf_counter()
         serial = calibrate(d, truth)
         t1 = time.perf_counter()

@@ -53,11 +53,13 @@ def run_generate(args) -> int:
 
     import yaml
 
+    from uvsim.files import safe_load
+
     from uvsim.scenarios import ScenarioError, ScenarioSpec, generate, load_truth, sample_scenario
 
     if args.spec:
         try:
-            doc = yaml.safe_load(Path(args.spec).read_text())
+            doc = safe_load(Path(args.spec).read_text())
         except (OSError, yaml.YAMLError) as exc:
             raise ScenarioError(f"{args.spec}: cannot read the spec ({exc})") from None
         spec = ScenarioSpec.from_dict(doc.get("spec", doc) if isinstance(doc, dict) else doc)

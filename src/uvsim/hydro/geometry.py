@@ -25,6 +25,7 @@ import numpy as np
 import yaml
 
 from uvsim.errors import HydroError
+from uvsim.files import safe_load
 
 #: Folder of the built-in hull definitions (package data, ``data/hulls/*.yaml``).
 HULLS_DIR = Path(__file__).resolve().parent.parent / "data" / "hulls"
@@ -294,7 +295,7 @@ def load_hull(name_or_path: str | Path) -> HullGeometry:
     if not path.exists():
         raise HydroError(f"hull file {str(path)!r} does not exist")
     try:
-        spec = yaml.safe_load(path.read_text())
+        spec = safe_load(path.read_text())
     except yaml.YAMLError as exc:
         raise HydroError(f"hull file {str(path)!r}: invalid YAML ({exc})") from None
     return hull_from_dict(spec, name=path.stem, where=f"hull file {str(path)!r}")

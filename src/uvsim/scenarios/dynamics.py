@@ -29,7 +29,8 @@ velocity ``nu_r = nu - [R^T v_c; 0]``, ``nu_c_dot = [-omega x R^T v_c; 0]``::
 
       [ omega x a1 ;  v_r x a1 + omega x a2 ]
 
-* damping: diagonal, paper sign (seed 000 eq. 7-9), on ``nu_r``.
+* damping: diagonal, paper sign (seed 000 eq. 7-9), on ``nu_r``; optionally a translational
+  quadratic drag along the relative velocity, ``D_i |v_r| v_r,i`` (``along_flow``).
 * restoring (``g_loads``): vertical point loads ``F_i`` (N, + down) at ``r_i`` on the body:
   weight ``W`` at ``r_g``, buoyancy ``-B`` at ``r_b``, ballast.  With ``k = R^T e_3``,
   ``g_loads = [(sum F_i) k ; (sum F_i r_i) x k]``.
@@ -128,6 +129,9 @@ class Plant:
     current : (3, n) m/s, NED current.
     allocation : (6, a, n) actuator outputs -> generalized force.
     lag_time : (a, n) s, first-order lag per output (0: none).
+    along_flow : (3, n) translational quadratic drag along the relative velocity, paper sign:
+        ``tau_i += D_i |v_r| v_r,i`` (the field logs' truth, :mod:`uvsim.scenarios.field`); zeros
+        when not given.
     wrenches : extra generalized forces, each ``f(ctx) -> (6, n)``.
     """
 
@@ -143,9 +147,13 @@ class Plant:
     allocation: np.ndarray
     lag_time: np.ndarray
     wrenches: list = field(default_factory=list)
+    along_flow: np.ndarray | None = None
 
     def __post_init__(self):
         n = self.mass.shape[0]
+        if self.along_flow is None:
+            self.along_flow = np.zeros((3, n))
+        self.has_along_flow = bool(np.any(self.along_flow != 0.0))
         M = np.empty((6, 6, n))
         for i in range(n):
             M[:, :, i] = rigid_body_mass_matrix(self.mass[i], self.r_g[:, i], self.inertia[:, :, i])
@@ -219,6 +227,8 @@ class Plant:
         # rigid-body Coriolis/centripetal (Newton-Euler about the origin) and added-mass
         # Coriolis/centripetal (Kirchhoff) forces, damping, restoring
         tau = self.linear * nu_r + self.quadratic * np.abs(nu_r) * nu_r
+        if self.has_along_flow:
+            tau[:3] += self.along_flow * np.sqrt((v_r * v_r).sum(axis=0)) * v_r
         tau[:3] += self.load * k - self.mass * wxv - wxa1
         tau[3:] += mxk - wxIw - vxa - wxa2
         if self.has_cg_offset:

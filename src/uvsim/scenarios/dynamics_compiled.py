@@ -36,7 +36,8 @@ O_DQ = 55       # quadratic damping (6)
 O_LOAD = 61     # sum of the vertical point loads, N (+ down)
 O_LM = 62       # their moment sum F_i r_i (3), N m
 O_MINV = 65     # (M_RB + M_A)^-1 (6x6)
-O_ACT = 101     # per actuator: 1/T (a), lagged 1.0/0.0 (a), allocation (6 x a)
+O_DF = 101      # quadratic drag along the relative velocity (3), paper sign
+O_ACT = 104     # per actuator: 1/T (a), lagged 1.0/0.0 (a), allocation (6 x a)
 
 
 def pack(plant) -> np.ndarray:
@@ -45,7 +46,7 @@ def pack(plant) -> np.ndarray:
     M_inv = plant.M_inv if plant.M_inv.ndim == 3 else np.repeat(plant.M_inv[:, :, None], n, axis=2)
     rows = [plant.mass[None], plant.r_g, plant.inertia.reshape(9, n), plant.added_mass.reshape(36, n),
             plant.linear, plant.quadratic, plant.load[None], plant.load_moment, M_inv.reshape(36, n),
-            plant.rate, plant.lagged.astype(float), plant.allocation.reshape(6 * a, n)]
+            plant.along_flow, plant.rate, plant.lagged.astype(float), plant.allocation.reshape(6 * a, n)]
     th = np.ascontiguousarray(np.concatenate([np.asarray(r, dtype=float).reshape(-1, n) for r in rows]))
     assert th.shape[0] == O_ACT + 8 * a
     return th
@@ -107,6 +108,9 @@ def rhs(y, f_e, th, current, has_current, has_cg, tau_w, out):
         mxk0, mxk1, mxk2 = m1 * k2 - m2 * k1, m2 * k0 - m0 * k2, m0 * k1 - m1 * k0
         for i in range(6):
             tau[i] = th[O_DL + i, j] * nu_r[i] + th[O_DQ + i, j] * abs(nu_r[i]) * nu_r[i]
+        speed = np.sqrt(nu_r[0] * nu_r[0] + nu_r[1] * nu_r[1] + nu_r[2] * nu_r[2])
+        for i in range(3):
+            tau[i] += th[O_DF + i, j] * speed * nu_r[i]
         mass, load = th[O_MASS, j], th[O_LOAD, j]
         tau[0] += load * k0 - mass * wxv0 - wxa10
         tau[1] += load * k1 - mass * wxv1 - wxa11

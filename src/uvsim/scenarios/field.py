@@ -246,7 +246,7 @@ def _plant(spec: dict, veh, n: int):
     case, fault = spec["case"], spec["fault"]
     parts = base_parts(veh, n, veh.n_thrusters)
     quad = parts["quadratic"][:3].copy()
-    parts["quadratic"][:3] = 0.0                     # translational quadratic drag: coupled (below)
+    parts["quadratic"][:3] = 0.0                     # translational quadratic drag: along the flow (Plant.along_flow)
     A = veh.allocation()
     if case == "tilted_thruster":
         k = fault["thruster"] - 1
@@ -260,11 +260,7 @@ def _plant(spec: dict, veh, n: int):
         parts["current"][:] = _current_ned(fault, np.zeros(n), 1.0)
     t0 = np.array([r["session_start"] for r in spec["runs"]])
 
-    def coupled_drag(ctx):
-        v = ctx.nu_r[:3]
-        return np.concatenate((quad * np.sqrt((v * v).sum(axis=0)) * v, np.zeros_like(v)))
-
-    wrenches = [coupled_drag]
+    wrenches = []
     if case == "tether":
         a0, va = np.asarray(fault["anchor0"])[:, None], np.asarray(fault["anchor_velocity"])[:, None]
         ra = np.asarray(fault["attach"], dtype=float)
@@ -289,7 +285,7 @@ def _plant(spec: dict, veh, n: int):
             return np.concatenate((to_body(ctx.R, F), np.zeros((3, F.shape[1]))))
 
         wrenches.append(hose)
-    plant = Plant(allocation=np.repeat(A[:, :, None], n, axis=2), **parts)
+    plant = Plant(allocation=np.repeat(A[:, :, None], n, axis=2), along_flow=quad, **parts)
     plant.wrenches = wrenches
     if case == "current":
         plant.has_current = True

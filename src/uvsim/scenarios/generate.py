@@ -36,7 +36,7 @@ import pandas as pd
 import yaml
 from scipy.spatial.transform import Rotation
 
-from uvsim.files import plain
+from uvsim.files import plain, safe_load
 from uvsim.logs import Run, write_dataset
 from uvsim.scenarios.effects import (CATALOGUED, MAGNITUDE_MEANING, MAGNITUDE_RANGES, CoupledDamping, ScenarioError,
                                      effect_from_dict)
@@ -374,6 +374,6 @@ def load_truth(dataset_dir) -> dict:
     """Read ``truth.yaml`` of a generated dataset."""
     path = Path(dataset_dir) / TRUTH_FILE
     try:
-        return yaml.safe_load(path.read_text())
+        return safe_load(path.read_text())
     except (OSError, yaml.YAMLError) as exc:
         raise ScenarioError(f"{path}: cannot read the truth record ({exc})") from None

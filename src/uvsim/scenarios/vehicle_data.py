@@ -21,6 +21,7 @@ import numpy as np
 import yaml
 
 from uvsim.errors import VehicleError
+from uvsim.files import safe_load
 
 PACKAGE_DIR = Path(__file__).resolve().parents[1]
 #: The nominal vehicle of every profile (seed 000 Tables 2 and 5).
@@ -200,7 +201,7 @@ def load_vehicle_data(path: str | Path = DEFAULT_VEHICLE_FILE) -> VehicleData:
     (the form of ``vehicles/bluerov2_heavy.yaml``) and its thruster table."""
     path = Path(path)
     try:
-        doc = yaml.safe_load(path.read_text())
+        doc = safe_load(path.read_text())
     except (OSError, yaml.YAMLError) as exc:
         raise VehicleError(f"{path}: cannot read the vehicle file ({exc})") from None
     f = path.name
