@@ -135,7 +135,8 @@ def _signal_and_check(proc, sig, tmp_path, workers) -> str:
 
 
 @pytest.mark.parametrize("sig", [pytest.param(signal.SIGKILL, marks=pytest.mark.slow), signal.SIGTERM,
-                                 pytest.param(signal.SIGINT, marks=pytest.mark.slow)], ids=["SIGKILL", "SIGTERM", "SIGINT"])
+                                 pytest.param(signal.SIGINT, marks=pytest.mark.slow)],
+                         ids=["SIGKILL", "SIGTERM", "SIGINT"])
 def test_diagnosis_workers_die_with_the_parent(sig, tmp_path):
     """The worker processes a diagnosis keeps for all its fits (uvsim.fitting.worker_pool)."""
     import uvsim

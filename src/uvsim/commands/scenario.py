@@ -54,7 +54,6 @@ def run_generate(args) -> int:
     import yaml
 
     from uvsim.files import safe_load
-
     from uvsim.scenarios import ScenarioError, ScenarioSpec, generate, load_truth, sample_scenario
 
     if args.spec:

@@ -246,7 +246,7 @@ def _plant(spec: dict, veh, n: int):
     case, fault = spec["case"], spec["fault"]
     parts = base_parts(veh, n, veh.n_thrusters)
     quad = parts["quadratic"][:3].copy()
-    parts["quadratic"][:3] = 0.0                     # translational quadratic drag: along the flow (Plant.along_flow)
+    parts["quadratic"][:3] = 0.0                     # translational quadratic drag: Plant.along_flow
     A = veh.allocation()
     if case == "tilted_thruster":
         k = fault["thruster"] - 1
