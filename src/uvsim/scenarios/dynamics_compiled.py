@@ -4,7 +4,8 @@ The generator's time goes into :meth:`Plant.rhs <uvsim.scenarios.dynamics.Plant.
 operations on arrays of a few elements, 120-200 us a call however few trajectories it advances
 (issue 46, docs/records/performance.md). Here the same equations, in the same order, are written
 on scalars per trajectory for numba (the optional extra ``uvsim[fast]``), which the generator
-uses where numba is installed:
+uses where numba is installed (the sums of the wrenches and of the drag along the flow are the
+only terms added in another order):
 
 * :func:`rhs` is :meth:`Plant.rhs` without the extra wrenches, which stay Python callables: the
   caller sums them and passes the sum in ``tau_w``, added where :meth:`Plant.rhs` adds them;
@@ -12,7 +13,7 @@ uses where numba is installed:
   extra wrenches.
 
 The numpy form in :mod:`uvsim.scenarios.dynamics` stays the reference (and the path without
-numba); ``tests/test_scenarios.py`` holds the two to 1e-12 on derivatives and 1e-10 on
+numba); ``tests/test_truth_compiled.py`` holds the two to 1e-12 on derivatives and 1e-10 on
 trajectories. Like the numpy form, this module imports nothing of the fitting code (the truth is
 written apart from it, issue 21) and not :mod:`uvsim.kernels` (the fitted model's kernel).
 
