@@ -7,11 +7,14 @@ of a few seconds, each started from the logged state (uvsim.fitting.evaluate.win
 so in report.json (``judged``); open-loop tank data keep whole-run free simulations."""
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 import pytest
 
 from contract_data import SHIPPED_DATASET
-from uvsim.fitting.evaluate import CLOSED_LOOP_HORIZON_S, judged_prediction, open_loop, windowed
+from uvsim.fitting.evaluate import (CLOSED_LOOP_HORIZON_S, DECLARED_CLOSED_LOOP_HORIZON_S, judged_prediction, open_loop,
+                                   windowed)
 from uvsim.fitting.verdict import compare
 from uvsim.latency import runs_for
 from uvsim.logs import read_dataset
@@ -57,11 +60,25 @@ def test_a_window_as_long_as_the_run_is_one_free_simulation(dead):
     assert np.allclose(w["states"][0, 3:7], f["states"][0, 3:7], atol=1e-9)
 
 
+def _undeclared(runs):
+    """Copies of ``runs`` whose log does not say whether they were flown in closed loop."""
+    out = [copy.copy(r) for r in runs]
+    for r in out:
+        r.closed_loop = None
+    return out
+
+
 def test_closed_loop_logs_are_judged_over_windows_and_tank_runs_over_whole_runs(dead):
     veh, val, meas = dead
+    assert all(r.closed_loop for r in val)            # the field generator's log says so
     j = judged_prediction(veh, val, meas)
+    assert j["prediction"] == "windows" and j["horizon_s"] == DECLARED_CLOSED_LOOP_HORIZON_S == 1.0
+    assert j["declared"] == [r.name for r in val] and "flown under an autopilot" in j["why"]
+    assert j["left_data"]                             # recorded beside it
+    # not declared: the given model's free simulation leaves the data, so windows all the same
+    j = judged_prediction(veh, _undeclared(val), meas)
     assert j["prediction"] == "windows" and j["horizon_s"] == CLOSED_LOOP_HORIZON_S and j["left_data"]
-    assert "leaves the validation data" in j["why"]
+    assert "declared" not in j and "leaves the validation data" in j["why"]
     assert judged_prediction(veh, val, meas, "whole")["horizon_s"] is None
     assert judged_prediction(veh, val, meas, 2.5)["horizon_s"] == 2.5
     tank = read_dataset(SHIPPED_DATASET)
@@ -77,6 +94,10 @@ def test_the_caveat_says_what_was_judged(dead):
     veh, val, meas = dead
     rep = {"judged": judged_prediction(veh, val, meas), "rmse_before": {}, "rmse_after": {}}
     (c,) = diagnosis_caveats(rep, val)
+    assert "were flown under an autopilot (closed_loop in the manifest)" in c and "windows of 1 s" in c
+    undeclared = _undeclared(val)
+    rep = {"judged": judged_prediction(veh, undeclared, meas), "rmse_before": {}, "rmse_after": {}}
+    (c,) = diagnosis_caveats(rep, undeclared)
     assert "leaves the validation data" in c and f"windows of {CLOSED_LOOP_HORIZON_S:g} s" in c
 
 
@@ -111,9 +132,10 @@ def test_evidence_says_what_was_compared():
 
 def test_calibrate_judges_closed_loop_logs_as_diagnose_does(tmp_path):
     """Calibrate chooses what the verdict compares by the same rule as diagnose (issue 45: one
-    verdict): on a closed-loop log whose start model leaves the data, windows from the logged
-    states, and the verdict's per-channel RMSEs, the report's RMSEs and the plots' predictions are
-    those windows' (the start model's windowed RMSE, recomputed here, is the verdict's)."""
+    verdict): on a log that says its runs were flown under an autopilot (and whose start model
+    leaves the data), windows from the logged states, and the verdict's per-channel RMSEs, the
+    report's RMSEs and the plots' predictions are those windows' (the start model's windowed RMSE,
+    recomputed here, is the verdict's)."""
     from uvsim.calibration import Calibrator
     from uvsim.calibration.report import judged_for
     from uvsim.metrics import pooled_metrics
@@ -122,16 +144,17 @@ def test_calibrate_judges_closed_loop_logs_as_diagnose_does(tmp_path):
     out = generate_field(sample_field(1, "dead", duration=12.0), tmp_path / "dead1")
     cal = Calibrator(max_iter=3).fit(out)
     rep = cal.report_
-    assert rep["judged"]["prediction"] == "windows" and rep["judged"]["horizon_s"] == CLOSED_LOOP_HORIZON_S
-    assert rep["judged"]["left_data"] and "starting model" in rep["judged"]["why"]
+    h = DECLARED_CLOSED_LOOP_HORIZON_S
+    assert rep["judged"]["prediction"] == "windows" and rep["judged"]["horizon_s"] == h
+    assert rep["judged"]["declared"] and rep["judged"]["left_data"] and "autopilot" in rep["judged"]["why"]
     ds = read_dataset(out)
     val = runs_for(cal.initial_vehicle_, ds.validation)
     meas = [cal.evaluation_["meas"][r.name] for r in val]
-    again = windowed(cal.initial_vehicle_, val, CLOSED_LOOP_HORIZON_S, meas=meas)
+    again = windowed(cal.initial_vehicle_, val, h, meas=meas)
     ch = pooled_metrics([r["metrics"] for r in again])["channels"]
     for c, v in rep["verdict"]["channels"].items():
         assert v["rmse_a"] == pytest.approx(ch[c]["rmse"], rel=1e-9), c
-    assert cal.predict(val)[val[0].name]["horizon_s"] == CLOSED_LOOP_HORIZON_S
+    assert cal.predict(val)[val[0].name]["horizon_s"] == h
     # asked for whole runs, the same data are judged on free simulations
     cal.judge_horizon = "whole"
     assert judged_for(cal, ds.runs, cal._meas(ds.runs))["horizon_s"] is None

@@ -144,8 +144,10 @@ def test_a_random_angle_is_off_by_pi_over_root_3():
 def test_a_lost_heading_over_whole_runs_is_a_caveat(tmp_path):
     """A compass-less heading hold (the field generator, written apart from the fitting code) leaves the
     given model's free-simulated yaw as far off as a random angle, which the spread rule cannot see
-    for a wrapped angle: the verdict still compares whole runs, and says the heading is lost; the
-    shipped tank data lose nothing."""
+    for a wrapped angle: on a log that does not say it was flown in closed loop the verdict still
+    compares whole runs, says the heading is lost and how to declare the autopilot; declared, the
+    runs are judged over windows; the shipped tank data lose nothing."""
+    import copy
     from pathlib import Path
 
     from uvsim.fitting.evaluate import judged_prediction
@@ -153,14 +155,19 @@ def test_a_lost_heading_over_whole_runs_is_a_caveat(tmp_path):
     from uvsim.scenarios.field import generate_field, sample_field
 
     d = generate_field(sample_field(0, "clean", duration=40.0, n_train=1, n_validation=1), tmp_path / "field")
-    val = [r for r in read_dataset(d).runs if r.split == "validation"]
+    declared = [r for r in read_dataset(d).runs if r.split == "validation"]
     veh = str(Path(d) / "myrov.yaml")
-    judged = judged_prediction(veh, val, [measurements_for(r, veh) for r in val])
+    meas = [measurements_for(r, veh) for r in declared]
+    val = [copy.copy(r) for r in declared]
+    for r in val:
+        r.closed_loop = None                    # a topside log that does not record the flight mode
+    judged = judged_prediction(veh, val, meas)
     assert judged["prediction"] == "whole runs"
     assert set(judged["lost_angles"]) == {"yaw"} and judged["lost_angles"]["yaw"] > 1.0
     assert "has lost yaw" in judged["why"]
     (caveat,) = diagnosis_caveats({"judged": judged, "rmse_before": {}, "rmse_after": {}}, val)
-    assert "has lost yaw (RMS error" in caveat and "--judge-horizon" in caveat
+    assert "has lost yaw (RMS error" in caveat and "closed_loop: true" in caveat and "--judge-horizon" in caveat
+    assert judged_prediction(veh, declared, meas)["horizon_s"] == 1.0
     tank = [r for r in read_dataset(SHIPPED_DATASET).runs if r.split == "validation"]
     calm = judged_prediction("bluerov2_heavy", tank, [measurements_for(r, "bluerov2_heavy") for r in tank])
     assert "lost_angles" not in calm and diagnosis_caveats({"judged": calm, "rmse_before": {}}, tank) == []

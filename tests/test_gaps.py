@@ -33,7 +33,7 @@ def _blank(df: pd.DataFrame, t0: float, t1: float) -> pd.DataFrame:
 def _run(df: pd.DataFrame, tmp_path, name="surge_01.csv") -> Run:
     p = tmp_path / name
     df.to_csv(p, index=False)
-    return read_run(p, dof="surge", weight=2.0, split="validation")
+    return read_run(p, dof="surge", weight=2.0, split="validation", closed_loop=True)
 
 
 def test_blank_measurements_split_the_run_with_a_note(tmp_path):
@@ -44,7 +44,8 @@ def test_blank_measurements_split_the_run_with_a_note(tmp_path):
     assert [s.name for s in segs] == ["surge_01[1]", "surge_01[2]"]
     assert [len(s.t) for s in segs] == [200, 400 - 218]           # the 18 empty rows are left out
     assert [s.row_offset for s in segs] == [0, 218] and all(s.segment_of == "surge_01" for s in segs)
-    assert all((s.dof, s.weight, s.split, s.path) == ("surge", 2.0, "validation", run.path) for s in segs)
+    assert all((s.dof, s.weight, s.split, s.path, s.closed_loop) == ("surge", 2.0, "validation", run.path, True)
+               for s in segs)
     pd.testing.assert_frame_equal(segs[1].data, run.data.iloc[218:].reset_index(drop=True))
     note = segs[0].notes[-1]
     assert segs[1].notes == segs[0].notes

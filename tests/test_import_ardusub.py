@@ -127,6 +127,24 @@ def test_bin_run_ends_at_the_disarm(bin_ds):
     assert "armed when the log started" in imp["armed_from"]
 
 
+def test_the_flight_mode_says_whether_a_run_was_flown_in_closed_loop(tlog_ds, bin_ds):
+    """Both sample logs are flown in MANUAL (HEARTBEAT.custom_mode / MODE.ModeNum 19): the manifest
+    says closed_loop: false, and the record lists the modes; a mode that holds a state over a
+    whole segment is closed loop, a change of kind within it or no mode known says nothing."""
+    from uvsim.importers.ardusub import ArduSubLog
+
+    for res, ds in (tlog_ds, bin_ds):
+        assert [r.closed_loop for r in ds.runs] == [False]
+        modes = ds.meta["import"]["flight_modes"]
+        assert [c["mode"] for c in modes["changes"]] == ["MANUAL"]
+    log = ArduSubLog(Path("x.tlog"), "tlog", {}, [], [], (0.0, 40.0), modes=[(1.0, 19), (10.0, 0), (20.0, 2)])
+    assert log.closed_loop(2.0, 9.0) is False            # MANUAL throughout
+    assert log.closed_loop(11.0, 30.0) is True           # STABILIZE, then DEPTH HOLD (ALT_HOLD)
+    assert log.closed_loop(5.0, 15.0) is None            # MANUAL, then STABILIZE
+    assert log.closed_loop(0.0, 5.0) is None             # the mode at the start is not known
+    assert ArduSubLog(Path("x.tlog"), "tlog", {}, [], [], (0.0, 1.0)).closed_loop(0.0, 1.0) is None
+
+
 # --------------------------------------------------------------------- frame check
 def test_frame_mismatch_is_an_error_naming_log_vehicle_and_thrusters(tmp_path):
     with pytest.raises(LogFormatError) as e:

@@ -276,6 +276,20 @@ def test_manifest_defaults_and_extra_keys(tmp_path):
     assert ds.description == "" and ds.meta == {"noise": {"z": 0.01}}
 
 
+def test_closed_loop_is_a_run_attribute_that_travels_with_the_run(tmp_path):
+    """``closed_loop`` (flown under an autopilot): written only when said and read back (what the
+    verdict reads to judge over windows, docs/diagnose.md; a run cut at a gap keeps it: test_gaps)."""
+    rng = np.random.default_rng(5)
+    runs = [Run("held", None, frame(u=rng.normal(size=N)), closed_loop=True),
+            Run("manual", None, frame(u=rng.normal(size=N)), closed_loop=False),
+            Run("unsaid", None, frame(u=rng.normal(size=N)))]
+    out = write_dataset(tmp_path / "ds", runs, vehicle="bluerov2_heavy")
+    entries = yaml.safe_load((out / "manifest.yaml").read_text())["runs"]
+    assert [e.get("closed_loop") for e in entries] == [True, False, None] and "closed_loop" not in entries[2]
+    back = read_dataset(out).runs
+    assert [r.closed_loop for r in back] == [True, False, None]
+
+
 def test_parquet_round_trip(tmp_path):
     pytest.importorskip("pyarrow")
     run = Run("p", None, frame(**no_force(**pwm(3))), dof="yaw")
@@ -567,6 +581,8 @@ def test_manifest_unparseable_or_malformed(tmp_path, text, frag):
     ("weight: .inf", "weight inf"),
     ("weight: heavy", "weight 'heavy'"),
     ("weight: true", "weight True"),
+    ("closed_loop: yes please", "closed_loop 'yes please' must be true"),
+    ("closed_loop: 1", "closed_loop 1 must be true"),
 ])
 def test_manifest_bad_run_attributes(tmp_path, entry, frag):
     ds = make_ds(tmp_path, f"runs:\n  - file: a.csv\n    {entry}\n")

@@ -163,7 +163,8 @@ def _segment(run, a: int, b: int, name: str):
     if VOLTAGE_COLUMN in data.columns and np.isnan(data[VOLTAGE_COLUMN].iloc[0]):
         data.loc[0, VOLTAGE_COLUMN] = run.voltage[a]  # the sample that holds there (zero-order hold)
     # the run's own class (uvsim.logged_run.Run), which validates the rows: uvsim.logs imports this module
-    seg = type(run)(name=name, path=run.path, data=data, dof=run.dof, weight=run.weight, split=run.split)
+    seg = type(run)(name=name, path=run.path, data=data, dof=run.dof, weight=run.weight, split=run.split,
+                    closed_loop=run.closed_loop)
     seg.empty_columns = list(dict.fromkeys(run.empty_columns + seg.empty_columns))
     seg.row_offset = run.row_offset + a
     seg.segment_of = run.name

@@ -45,6 +45,14 @@ def _check_choice(value, allowed, what: str, source: str, none_ok: bool = True):
 MAX_RUN_WEIGHT = 1e6
 
 
+def _check_closed_loop(value, source: str) -> bool | None:
+    """A run's ``closed_loop`` (manifest): true, false or absent (None: not said)."""
+    if value is None or isinstance(value, (bool, np.bool_)):
+        return None if value is None else bool(value)
+    raise LogFormatError(f"{source}: closed_loop {value!r} must be true (flown under an autopilot that held some of "
+                         "the vehicle's states: ArduSub STABILIZE, DEPTH HOLD, heading hold), false (manual) or absent")
+
+
 def _check_weight(weight, source: str) -> float:
     ok = isinstance(weight, (int, float, np.integer, np.floating)) and not isinstance(weight, bool)
     if not ok or not math.isfinite(float(weight)) or float(weight) <= 0:
@@ -70,6 +78,9 @@ class Run:
     dof: str | None = None
     weight: float = 1.0
     split: str = "train"
+    #: Flown under an autopilot that held some of the vehicle's states (its logged inputs react to
+    #: them): True, False, or None when the log does not say (the manifest's ``closed_loop``).
+    closed_loop: bool | None = None
     empty_columns: list[str] = field(init=False, default_factory=list)
     #: What the reader changed in the data beyond the float64 conversion or did not use (e.g.
     #: quaternions renormalized by more than :data:`uvsim.log_columns.QUAT_NOTE_TOL`, columns not in the format,
@@ -94,6 +105,7 @@ class Run:
         self.dof = _check_choice(self.dof, DOFS, "dof", src)
         self.split = _check_choice(self.split, SPLITS, "split", src, none_ok=False)
         self.weight = _check_weight(self.weight, src)
+        self.closed_loop = _check_closed_loop(self.closed_loop, src)
         self.data, self.empty_columns, self._kind, self._input_columns = _validate(self.data, src)
         self.notes = (_quaternion_notes(self.data, src) + _extra_column_notes(self.data, self._input_columns, src)
                       + _empty_column_notes(self.empty_columns, src))

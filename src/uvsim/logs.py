@@ -35,7 +35,7 @@ from uvsim.log_columns import (  # noqa: F401  (the column names are part of thi
     MEASURED_COLUMNS, POSITION_COLUMNS, PWM_RANGE_US, QUAT_COLUMNS, QUAT_NORM_TOL, QUAT_NOTE_TOL, RATE_COLUMNS,
     VELOCITY_COLUMNS, VOLTAGE_COLUMN, FORMAT_COLUMNS)
 from uvsim.logged_run import (  # noqa: F401  (re-exported: the run class and its manifest attributes)
-    DOFS, MAX_RUN_WEIGHT, SPLITS, Run, _check_choice, _check_weight)
+    DOFS, MAX_RUN_WEIGHT, SPLITS, Run, _check_choice, _check_closed_loop, _check_weight)
 from uvsim.schema import check_keys, require_mapping
 
 MANIFEST = "manifest.yaml"
@@ -44,7 +44,7 @@ MANIFEST = "manifest.yaml"
 #: for free-form metadata.
 #: Anything else is a typo (``vehicel``, ``run``) and an error with a did-you-mean.
 MANIFEST_KEYS = ("vehicle", "description", "runs", "meta", "truth", "noise", "sources", "import")
-_RUN_KEYS = ("file", "dof", "weight", "split")
+_RUN_KEYS = ("file", "dof", "weight", "split", "closed_loop")
 
 
 @dataclass
@@ -111,13 +111,13 @@ def _csv_header(path: Path) -> list[str]:
         return [h.strip() for h in next(csv.reader(fh), [])]
 
 
-def read_run(path, *, dof=None, weight=1.0, split="train", n_thrusters: int | None = None) -> Run:
+def read_run(path, *, dof=None, weight=1.0, split="train", closed_loop=None, n_thrusters: int | None = None) -> Run:
     """Read and validate one run file (.csv or .parquet).
 
     Parameters
     ----------
     path : str or Path
-    dof, weight, split : manifest attributes of the run (validated).
+    dof, weight, split, closed_loop : manifest attributes of the run (validated).
     n_thrusters : int, optional
         If given, the run's thrust_i/pwm_i column count must equal it.
     """
@@ -167,7 +167,7 @@ def read_run(path, *, dof=None, weight=1.0, split="train", n_thrusters: int | No
             raise LogFormatError(f"{path}: cannot read as Parquet: {e}") from e
     else:
         raise LogFormatError(f"{path}: unknown run file type {path.suffix!r}; expected .csv or .parquet")
-    run = Run(name=path.stem, path=path, data=df, dof=dof, weight=weight, split=split)
+    run = Run(name=path.stem, path=path, data=df, dof=dof, weight=weight, split=split, closed_loop=closed_loop)
     if n_thrusters is not None and run.n_thrusters != n_thrusters:
         got = "force inputs X..N" if run.n_thrusters is None else f"{run.n_thrusters} {run.input_kind} columns"
         raise LogFormatError(f"{path}: expected {n_thrusters} thrusters (thrust_i or pwm_i columns), found {got}")
@@ -211,8 +211,9 @@ def read_dataset(path) -> Dataset:
         _check_choice(entry.get("dof"), DOFS, "dof", where)
         _check_choice(entry.get("split", "train"), SPLITS, "split", where, none_ok=False)
         _check_weight(entry.get("weight", 1.0), where)
+        _check_closed_loop(entry.get("closed_loop"), where)
         run = read_run(file, dof=entry.get("dof"), weight=entry.get("weight", 1.0),
-                       split=entry.get("split", "train"))
+                       split=entry.get("split", "train"), closed_loop=entry.get("closed_loop"))
         if run.name in seen_names:
             raise LogFormatError(f"{where}: run name {run.name!r} (file stem) is used by two files")
         seen_names.add(run.name)
@@ -258,6 +259,8 @@ def write_dataset(path, runs: list[Run], *, vehicle: str, description: str = "",
         if run.dof is not None:
             entry["dof"] = run.dof
         entry.update(weight=float(run.weight), split=run.split)
+        if run.closed_loop is not None:
+            entry["closed_loop"] = bool(run.closed_loop)
         entries.append(entry)
     doc = {"vehicle": vehicle, "description": description, "runs": entries}
     (path / MANIFEST).write_text(yaml.safe_dump(doc, sort_keys=False))

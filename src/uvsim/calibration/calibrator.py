@@ -134,10 +134,11 @@ class Calibrator:
         evaluation's unknown initial velocities (the joint stage estimates them).
     judge_horizon : what the verdict, the report's RMSEs and Fit % and the plots compare
         (:func:`uvsim.fitting.evaluate.judged_prediction`, as ``uvsim diagnose`` does): "auto"
-        (default) free simulations of whole runs, or predictions over windows of
-        :data:`uvsim.fitting.evaluate.CLOSED_LOOP_HORIZON_S` from the logged states when the
-        starting model's free simulation leaves the validation data (a vehicle flown under an
-        autopilot the model does not have); "whole"; or a window length in seconds.
+        (default) free simulations of whole runs, or predictions over windows from the logged
+        states on closed-loop logs: :data:`uvsim.fitting.evaluate.DECLARED_CLOSED_LOOP_HORIZON_S`
+        when the manifest says a run was flown under an autopilot,
+        :data:`uvsim.fitting.evaluate.CLOSED_LOOP_HORIZON_S` when the starting model's free
+        simulation leaves the validation data; "whole"; or a window length in seconds.
     prior : the joint stage fits maximum a posteriori with the starting vehicle as the prior
         (default True): each free parameter's prior mean is the vehicle file's value, its
         width the file's ``uncertainty:`` entry or :func:`uvsim.fitting.priors.default_prior_sd`

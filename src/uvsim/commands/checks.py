@@ -35,8 +35,9 @@ def add_judge_horizon_argument(p, who: str) -> None:
     the reference model ("given" for diagnose, "starting" for calibrate)."""
     p.add_argument("--judge-horizon", default="auto", metavar="auto|whole|SECONDS",
                    help="what the verdict, the RMSEs and the plots compare: 'auto' (default) free simulations of "
-                        f"whole runs, or predictions over 5-s windows from the logged states when the {who} model's "
-                        "free simulation leaves the validation data (closed-loop logs, docs/diagnose.md); 'whole'; "
+                        "whole runs, or predictions over windows from the logged states on closed-loop logs: 1 s when "
+                        f"the manifest says a run was flown under an autopilot (closed_loop), 5 s when the {who} "
+                        "model's free simulation leaves the validation data (docs/diagnose.md); 'whole'; "
                         "or a window length in seconds")
 
 
@@ -65,11 +66,15 @@ def judged_label(report: Mapping) -> str:
 
 def _windows_caveat(judged: Mapping, who: str, doc: str, shown: str) -> str:
     """The caveat of a verdict judged over windows (``judged``: the report's record): why, when the
-    reference model (``who``) left the data (its ``left_data``), and that ``shown`` are of the windows."""
-    left = judged.get("left_data")
+    log declared closed-loop runs (its ``declared``) or the reference model (``who``) left the data (its
+    ``left_data``), and that ``shown`` are of the windows."""
+    left, declared = judged.get("left_data"), judged.get("declared")
     why = (f"the {who} model's free simulation of whole runs leaves the {judged.get('split', 'validation')} data "
            f"({', '.join(left)} beyond {EXPLODE_FACTOR:g} times the measured spread: a model flown open loop where "
            "the vehicle was under an autopilot, or a large missing effect), so " if left else "")
+    if declared:
+        why = (f"the log says the {judged.get('split', 'validation')} runs {', '.join(declared)} were flown under an "
+               "autopilot (closed_loop in the manifest), so ")
     return (f"{why}the models were judged on predictions over windows of {judged['horizon_s']:g} s from the "
             f"logged states ({doc}, 'Closed-loop logs'); {shown} of those windows")
 
@@ -226,8 +231,9 @@ def _lost_angle_caveat(judged: Mapping, who: str, doc: str) -> list[str]:
             f"flown open loop does where an autopilot held the vehicle: over whole runs, {' and '.join(lost)} and the "
             "body-frame velocities of anything fixed in the world (a current, a tether's pull) are compared on "
             f"trajectories that have lost {'it' if len(lost) == 1 else 'them'}, so a trade-off there may be the "
-            "comparison's own; --judge-horizon "
-            f"SECONDS judges predictions over windows from the logged states instead ({doc}, 'Closed-loop logs')"]
+            "comparison's own; if the runs were flown under an autopilot, say so (closed_loop: true in the "
+            "manifest) or give --judge-horizon SECONDS, and predictions over windows from the logged states are "
+            f"judged instead ({doc}, 'Closed-loop logs')"]
 
 
 def calibration_caveats(rep: Mapping, ds) -> list[str]:

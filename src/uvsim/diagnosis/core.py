@@ -169,8 +169,10 @@ def diagnose(data, vehicle=None, *, retune: Sequence[str] | None = None, only: S
         longer than 1.5 sample intervals, as the calibration does
         (:func:`uvsim.estimation.lag.attitude_lag_setting`); 0: none.
     judge_horizon : what the verdict compares on the validation runs (:func:`judged_prediction`):
-        "auto" (default: whole runs, or windows of :data:`uvsim.fitting.evaluate.CLOSED_LOOP_HORIZON_S`
-        when the given model's free simulation leaves the data), "whole", or a window length in seconds.
+        "auto" (default: windows of :data:`uvsim.fitting.evaluate.DECLARED_CLOSED_LOOP_HORIZON_S` when
+        the manifest says a validation run was flown under an autopilot, else whole runs, or windows of
+        :data:`uvsim.fitting.evaluate.CLOSED_LOOP_HORIZON_S` when the given model's free simulation leaves
+        the data), "whole", or a window length in seconds.
     """
     t_start = time.perf_counter()
     progress = as_progress(progress)

@@ -49,7 +49,14 @@ MG_TO_MS2 = 9.80665e-3  # MAVLink SCALED_IMU accelerations are in mG
 #: outside is in another unit (hPa/mbar, kPa, psi), not air pressure in Pa.
 SURFACE_PRESSURE_PA = (55_000.0, 110_000.0)
 ARMED_FLAG = 128  # MAV_MODE_FLAG_SAFETY_ARMED in HEARTBEAT.base_mode
-BIN_TYPES = ["ATT", "IMU", "BARO", "XKF1", "VISP", "RCOU", "BAT", "ARM", "EV", "PARM", "MSG"]
+#: ArduSub flight modes (HEARTBEAT.custom_mode, DataFlash MODE.ModeNum): MAVLink ardupilotmega.xml,
+#: enum SUB_MODE.  MANUAL passes the pilot's sticks to the motors; every other mode holds some state
+#: (attitude, rates, depth, position) in closed loop, except MOTOR_DETECT, a test of the motors.
+SUB_MODES = {0: "STABILIZE", 1: "ACRO", 2: "ALT_HOLD", 3: "AUTO", 4: "GUIDED", 7: "CIRCLE", 9: "SURFACE",
+             16: "POSHOLD", 19: "MANUAL", 20: "MOTOR_DETECT", 21: "SURFTRAK"}
+OPEN_LOOP_MODES = {19}
+CLOSED_LOOP_MODES = {0, 1, 2, 3, 4, 7, 9, 16, 21}
+BIN_TYPES = ["ATT", "IMU", "BARO", "XKF1", "VISP", "RCOU", "BAT", "ARM", "EV", "PARM", "MSG", "MODE"]
 TLOG_TYPES = ["ATTITUDE", "SCALED_IMU", "SCALED_IMU2", "SCALED_IMU3", "SCALED_PRESSURE", "SCALED_PRESSURE2",
               "SCALED_PRESSURE3", "LOCAL_POSITION_NED", "VISION_POSITION_ESTIMATE", "SERVO_OUTPUT_RAW",
               "SYS_STATUS", "HEARTBEAT", "PARAM_VALUE", "STATUSTEXT", "RAW_IMU"]
@@ -67,6 +74,20 @@ class ArduSubLog:
     span: tuple                     # (first, last) time of the log, s
     meta: dict = field(default_factory=dict)
     motor_servo: dict = field(default_factory=dict)   # motor -> servo channel
+    modes: list = field(default_factory=list)         # [(time_s, flight mode number)] on the time base
+
+    def closed_loop(self, start: float, end: float) -> bool | None:
+        """Whether the vehicle flew ``start..end`` under a mode that holds some state (True), in
+        MANUAL (False), or not known (None: no mode logged, a mode of neither kind, or both)."""
+        before = [m for t, m in self.modes if t <= start]
+        if not before:  # no mode logged, or none yet when the segment starts
+            return None
+        inside = [before[-1]] + [m for t, m in self.modes if start < t < end]
+        if set(inside) <= CLOSED_LOOP_MODES:
+            return True
+        if set(inside) <= OPEN_LOOP_MODES:
+            return False
+        return None
 
     @property
     def frame_config(self) -> int:
@@ -316,7 +337,8 @@ def _bin_streams(path, msgs, water, surface_pressure, imu_instance) -> ArduSubLo
     firmware = next((m["Message"] for m in msgs["MSG"] if "ArduSub" in str(m.get("Message", ""))), None)
     meta = {"time_base": "autopilot boot clock, s (DataFlash TimeUS / 1e6)", "armed_from": armed_how,
             "position": pos_note, "firmware": firmware, "params_changed_during_log": changed}
-    return ArduSubLog(path, "bin", params, streams, armed, span, meta, motor_servo)
+    modes = [(float(m["TimeUS"]) / 1e6, int(m.get("ModeNum", m.get("Mode", -1)))) for m in msgs["MODE"]]
+    return ArduSubLog(path, "bin", params, streams, armed, span, meta, motor_servo, modes)
 
 
 def _bin_position(msgs, params, streams, w) -> str:
@@ -377,7 +399,9 @@ def _tlog_streams(path, msgs, water, surface_pressure, imu_instance) -> ArduSubL
     params, changed = _params(((m["param_id"], m["param_value"]) for m in mine("PARAM_VALUE")), w)
     hb = [m for m in mine("HEARTBEAT")]
     span = (float(tb.min()), float(tb.max()))
+    modes = []
     if hb:
+        modes = [(float(t), int(m["custom_mode"])) for t, m in zip(gcs_time(hb), hb)]
         armed = _intervals(list(zip(gcs_time(hb), [bool(m["base_mode"] & ARMED_FLAG) for m in hb])), span,
                            transitions=False)
         armed_how = "HEARTBEAT.base_mode armed flag (1 Hz; placed on the boot clock by GCS receive time)"
@@ -441,4 +465,4 @@ def _tlog_streams(path, msgs, water, surface_pressure, imu_instance) -> ArduSubL
             "params_changed_during_log": changed}
     if notes:
         meta["notes"] = notes
-    return ArduSubLog(path, "tlog", params, streams, armed, span, meta, motor_servo)
+    return ArduSubLog(path, "tlog", params, streams, armed, span, meta, motor_servo, modes)

@@ -90,10 +90,13 @@ def import_ardusub(log, out, *, vehicle=None, segments=None, water=None, surface
         segs = [Segment(a, b, f"{log.stem}_armed_{k + 1:02d}".replace(" ", "_"), origin=f"armed interval {k + 1}")
                 for k, (a, b) in enumerate(data.armed)]
         seg_from = f"armed intervals ({data.meta['armed_from']})"
+    for seg in segs:   # the flight mode the log records over the segment (ArduSubLog.closed_loop)
+        seg.closed_loop = data.closed_loop(seg.start, seg.end)
     sources = _pwm_sources(data)
     runs, rec = build_runs(data.streams, segs, where=where, tol=tol, input_sources=sources)
     record = {"tool": "uvsim import ardusub", **data.meta, "log_span_s": list(data.span),
               "armed_intervals_s": [list(a) for a in data.armed], "segments_from": seg_from,
+              "flight_modes": _mode_record(data),
               "frame": frame_rec, "motor_outputs": {f"pwm_{m}": f"Motor{m} on servo output {n}"
                                                     for m, n in sorted(data.motor_servo.items())},
               "inputs": sources, **rec}
@@ -108,6 +111,17 @@ def _vehicle_label(spec, veh) -> str:
     from uvsim.vehicle import builtin_vehicles
 
     return f"{veh.name} (built-in)" if str(spec) in builtin_vehicles() else str(spec)
+
+
+def _mode_record(data) -> dict:
+    """The flight modes the log records (their changes) and what was taken from them."""
+    from uvsim.importers.ardusub import SUB_MODES
+
+    changes = [(t, m) for k, (t, m) in enumerate(data.modes) if k == 0 or m != data.modes[k - 1][1]]
+    return {"source": "HEARTBEAT.custom_mode" if data.kind == "tlog" else "MODE.ModeNum",
+            "changes": [{"t_s": round(t, 3), "mode": SUB_MODES.get(m, f"mode {m}")} for t, m in changes],
+            "closed_loop": "true where every mode over a run holds some state (all but MANUAL and MOTOR_DETECT), "
+                           "false where it is MANUAL throughout, not written otherwise"}
 
 
 def _pwm_sources(data) -> dict:

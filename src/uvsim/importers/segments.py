@@ -42,6 +42,7 @@ class Segment:
     split: str = "train"
     weight: float = 1.0
     origin: str = ""
+    closed_loop: bool | None = None   # flown under an autopilot (the manifest's closed_loop); None: not known
 
 
 def load_segments(path, default_prefix: str) -> list[Segment]:
@@ -146,8 +147,10 @@ def write_imported_dataset(out, runs: list[tuple[Segment, pd.DataFrame]], *, veh
     entries = []
     for seg, df in runs:
         write_run(out / f"{seg.name}.csv", Run(name=seg.name, path=None, data=df, dof=seg.dof,
-                                               weight=seg.weight, split=seg.split))
+                                               weight=seg.weight, split=seg.split, closed_loop=seg.closed_loop))
         entries.append({"file": f"{seg.name}.csv", "dof": seg.dof, "weight": seg.weight, "split": seg.split})
+        if seg.closed_loop is not None:
+            entries[-1]["closed_loop"] = seg.closed_loop
     doc = {"vehicle": vehicle, "description": description, "runs": entries, "import": plain(record)}
     (out / MANIFEST).write_text(yaml.safe_dump(doc, sort_keys=False, width=110))
     return out

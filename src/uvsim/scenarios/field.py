@@ -437,7 +437,8 @@ def generate_field(spec: dict, out_dir, *, sim: dict | None = None) -> Path:
     out = Path(out_dir)
     sim = simulate_field(spec) if sim is None else sim
     tables = log_tables(spec, sim)
-    runs = [Run(name=r["name"], path=None, data=tab, dof="mixed", split=r["split"])
+    # every run is flown under the autopilot (stabilize or depth hold), as the topside's log says
+    runs = [Run(name=r["name"], path=None, data=tab, dof="mixed", split=r["split"], closed_loop=True)
             for r, tab in zip(spec["runs"], tables)]
     desc = (f"field logs (issue 48), seed {spec['seed']}: BlueROV2 Heavy under an ArduSub-like autopilot, "
             f"{spec['log_hz']:g} Hz topside log")
