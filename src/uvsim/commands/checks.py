@@ -68,13 +68,15 @@ def _windows_caveat(judged: Mapping, who: str, doc: str, shown: str) -> str:
     """The caveat of a verdict judged over windows (``judged``: the report's record): why, when the
     log declared closed-loop runs (its ``declared``) or the reference model (``who``) left the data (its
     ``left_data``), and that ``shown`` are of the windows."""
-    left, declared = judged.get("left_data"), judged.get("declared")
-    why = (f"the {who} model's free simulation of whole runs leaves the {judged.get('split', 'validation')} data "
-           f"({', '.join(left)} beyond {EXPLODE_FACTOR:g} times the measured spread: a model flown open loop where "
-           "the vehicle was under an autopilot, or a large missing effect), so " if left else "")
+    left, declared, split = judged.get("left_data"), judged.get("declared"), judged.get("split", "validation")
+    why = ""
     if declared:
-        why = (f"the log says the {judged.get('split', 'validation')} runs {', '.join(declared)} were flown under an "
-               "autopilot (closed_loop in the manifest), so ")
+        why = f"the log says the {split} runs {', '.join(declared)} were flown under an autopilot (closed_loop in the " \
+              "manifest), so "
+    elif left:
+        why = (f"the {who} model's free simulation of whole runs leaves the {split} data ({', '.join(left)} beyond "
+               f"{EXPLODE_FACTOR:g} times the measured spread: a model flown open loop where the vehicle was under an "
+               "autopilot, or a large missing effect), so ")
     return (f"{why}the models were judged on predictions over windows of {judged['horizon_s']:g} s from the "
             f"logged states ({doc}, 'Closed-loop logs'); {shown} of those windows")
 

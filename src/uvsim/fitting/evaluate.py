@@ -340,17 +340,7 @@ def judged_prediction(vehicle, val, meas, setting="auto", *, initial_velocity: s
     free = pooled(res)
     left = sorted(beyond_spread(free, signal_spread(val)))
     declared = [r.name for r in val if getattr(r, "closed_loop", None)]
-    if declared:
-        h = DECLARED_CLOSED_LOOP_HORIZON_S
-        out = {"prediction": "windows", "horizon_s": h, "setting": "auto", "declared": declared, "split": split,
-               "why": (f"predictions over windows of {h:g} s from the logged states: the log says the {split} runs "
-                       f"{', '.join(declared)} were flown under an autopilot (closed_loop), whose loop the model "
-                       "does not have, so free simulations of whole runs cannot tell models apart"),
-               "free_rmse_given": free}
-        if left:
-            out["left_data"] = left
-        return out
-    if not left:
+    if not declared and not left:
         lost = lost_angles(res)
         out = {"prediction": "whole runs", "horizon_s": None, "setting": "auto",
                "why": f"free simulations of whole runs: the {who} model's stays with the {split} data",
@@ -360,13 +350,22 @@ def judged_prediction(vehicle, val, meas, setting="auto", *, initial_velocity: s
             out["why"] = (f"free simulations of whole runs: the {who} model's stays within {EXPLODE_FACTOR:g} times the "
                           f"spread of the {split} data, but has lost {lost_angles_text(lost)}")
         return out
-    h = CLOSED_LOOP_HORIZON_S
-    return {"prediction": "windows", "horizon_s": h, "setting": "auto", "left_data": left, "split": split,
-            "why": (f"predictions over windows of {h:g} s from the logged states: the {who} model's free "
-                    f"simulation of whole runs leaves the {split} data ({', '.join(left)} beyond "
-                    f"{EXPLODE_FACTOR:g} times the measured spread), as a model flown open loop does where an "
-                    "autopilot held the vehicle, so whole runs cannot tell models apart"),
-            "free_rmse_given": free}
+    if declared:
+        h = DECLARED_CLOSED_LOOP_HORIZON_S
+        why = (f"the log says the {split} runs {', '.join(declared)} were flown under an autopilot (closed_loop), "
+               "whose loop the model does not have, so free simulations of whole runs cannot tell models apart")
+    else:
+        h = CLOSED_LOOP_HORIZON_S
+        why = (f"the {who} model's free simulation of whole runs leaves the {split} data ({', '.join(left)} beyond "
+               f"{EXPLODE_FACTOR:g} times the measured spread), as a model flown open loop does where an autopilot "
+               "held the vehicle, so whole runs cannot tell models apart")
+    out = {"prediction": "windows", "horizon_s": h, "setting": "auto", "split": split,
+           "why": f"predictions over windows of {h:g} s from the logged states: {why}", "free_rmse_given": free}
+    if declared:
+        out["declared"] = declared
+    if left:
+        out["left_data"] = left
+    return out
 
 
 def lost_angles_text(lost: dict) -> str:

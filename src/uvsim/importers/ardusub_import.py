@@ -14,7 +14,7 @@ from pathlib import Path
 
 
 from uvsim.errors import LogFormatError, VehicleError
-from uvsim.importers.ardusub import read_ardusub
+from uvsim.importers.ardusub import SUB_MODES, read_ardusub
 from uvsim.importers.ardusub_frames import FRAMES, adapted_vehicle_dict, check_frame, mismatch_message
 from uvsim.importers.build import build_runs
 from uvsim.importers.segments import Segment, load_segments, write_imported_dataset
@@ -115,8 +115,6 @@ def _vehicle_label(spec, veh) -> str:
 
 def _mode_record(data) -> dict:
     """The flight modes the log records (their changes) and what was taken from them."""
-    from uvsim.importers.ardusub import SUB_MODES
-
     changes = [(t, m) for k, (t, m) in enumerate(data.modes) if k == 0 or m != data.modes[k - 1][1]]
     return {"source": "HEARTBEAT.custom_mode" if data.kind == "tlog" else "MODE.ModeNum",
             "changes": [{"t_s": round(t, 3), "mode": SUB_MODES.get(m, f"mode {m}")} for t, m in changes],
