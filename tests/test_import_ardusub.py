@@ -231,6 +231,22 @@ def test_not_a_log_and_unknown_suffix(tmp_path):
         import_ardusub(csv, tmp_path / "o")
 
 
+def test_a_log_never_armed_says_so(tmp_path, monkeypatch):
+    """A log whose vehicle is never armed (a public tlog of a bench session was) has no run by
+    default: the error says why and what to give, not an empty list of skipped segments."""
+    import uvsim.importers.ardusub_import as imp
+    from uvsim.importers.ardusub import read_ardusub
+
+    def unarmed(*a, **k):
+        log = read_ardusub(*a, **k)
+        log.armed = []
+        return log
+
+    monkeypatch.setattr(imp, "read_ardusub", unarmed)
+    with pytest.raises(LogFormatError, match=r"small\.tlog: the vehicle is never armed in this log \(HEARTBEAT"):
+        import_ardusub(TLOG, tmp_path / "out", adapt_vehicle=True)
+
+
 def test_segments_yaml_errors_name_the_entry(tmp_path):
     seg = tmp_path / "seg.yaml"
     seg.write_text("segments:\n  - {start: 900, end: 910, dof: yaw}\n  - {start: 912, end: 905}\n")

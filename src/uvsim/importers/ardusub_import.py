@@ -90,6 +90,10 @@ def import_ardusub(log, out, *, vehicle=None, segments=None, water=None, surface
         segs = [Segment(a, b, f"{log.stem}_armed_{k + 1:02d}".replace(" ", "_"), origin=f"armed interval {k + 1}")
                 for k, (a, b) in enumerate(data.armed)]
         seg_from = f"armed intervals ({data.meta['armed_from']})"
+        if not segs:
+            raise LogFormatError(f"{where}: the vehicle is never armed in this log ({data.meta['armed_from']}), so "
+                                 "there is no run to import; give the stretches to import in a segments YAML "
+                                 "(--segments, docs/import_export.md)")
     for seg in segs:   # the flight mode the log records over the segment (ArduSubLog.closed_loop)
         seg.closed_loop = data.closed_loop(seg.start, seg.end)
     sources = _pwm_sources(data)
