@@ -40,10 +40,14 @@ def _truth(dt=0.02, n=300, seed=3):
 def _store():
     ts = typesys.get_typestore(typesys.Stores.ROS2_HUMBLE)
     ts.register(typesys.get_types_from_msg("std_msgs/Header header\nuint16[] channels\n", "mavros_msgs/msg/RCOut"))
+    ts.register(typesys.get_types_from_msg("std_msgs/Header header\nbool connected\nbool armed\nbool guided\n"
+                                           "bool manual_input\nstring mode\nuint8 system_status\n",
+                                           "mavros_msgs/msg/State"))
     return ts
 
 
-def _write_mavros_bag(path, t, pwm, res, acc_frd, volts):
+def _write_mavros_bag(path, t, pwm, res, acc_frd, volts, modes=()):
+    """A mavros-like ROS 2 bag; ``modes``: ``[(t_s, mode string)]`` published on /mavros/state."""
     ts = _store()
     T = ts.types
     Header, Time = T["std_msgs/msg/Header"], T["builtin_interfaces/msg/Time"]
@@ -64,6 +68,12 @@ def _write_mavros_bag(path, t, pwm, res, acc_frd, volts):
         c_p = w.add_connection("/mavros/imu/static_pressure", "sensor_msgs/msg/FluidPressure", typestore=ts)
         c_rc = w.add_connection("/mavros/rc/out", "mavros_msgs/msg/RCOut", typestore=ts)
         c_bat = w.add_connection("/mavros/battery", "sensor_msgs/msg/BatteryState", typestore=ts)
+        if modes:
+            c_st = w.add_connection("/mavros/state", "mavros_msgs/msg/State", typestore=ts)
+            for tm, mode in modes:
+                ns = T0_NS + int(round(tm * 1e9))
+                st = T["mavros_msgs/msg/State"](hdr(ns), True, True, False, True, mode, 4)
+                w.write(c_st, ns, ts.serialize_cdr(st, "mavros_msgs/msg/State"))
         for i, ti in enumerate(t):
             ns = T0_NS + int(round(ti * 1e9))
             pose = T["geometry_msgs/msg/PoseStamped"](hdr(ns), T["geometry_msgs/msg/Pose"](
@@ -160,6 +170,64 @@ def test_missing_topic_and_wrong_field_name_the_topic_and_field(mavros_bag, tmp_
         bad = tmp_path / "bad.bag"
         bad.write_bytes(b"#ROSBAG V2.0\nnot really")
         import_bag(bad, MAPS / "mavros_mocap.yaml", tmp_path / "o")
+
+
+def test_flight_mode_of_mavros_state_says_closed_loop_per_run(tmp_path, capsys):
+    """Issue 48: /mavros/state's mode decides each run's closed_loop (MANUAL: false, a mode that holds
+    a state: true, both: not written), the 1 Hz reports standing for the mode one interval early;
+    the shipped map skips the topic, and says so, when the bag did not record it."""
+    t, pwm, res = _truth()
+    rng = np.random.default_rng(5)
+    acc = rng.normal(size=(t.size, 3)) + [0.0, 0.0, -9.81]
+    volts = np.full(t.size, 16.0)
+    modes = [(0.4, "MANUAL"), (1.4, "MANUAL"), (2.4, "MANUAL"), (3.4, "ALT_HOLD"), (4.4, "CMODE(2)"),
+             (5.4, "ALT_HOLD")]
+    bag = tmp_path / "modes"
+    _write_mavros_bag(bag, t, pwm, res, acc, volts, modes=modes)
+    seg = tmp_path / "segments.yaml"
+    seg.write_text(yaml.safe_dump({"segments": [{"start": 0.0, "end": 2.9, "name": "manual"},
+                                                {"start": 3.5, "end": 5.9, "name": "held"},
+                                                {"start": 2.0, "end": 4.0, "name": "both"}]}))
+    assert main(["import", "bag", str(bag), "--map", str(MAPS / "mavros_mocap.yaml"), "--out", str(tmp_path / "d"),
+                 "--segments", str(seg)]) == 0
+    out = capsys.readouterr().out
+    assert "flight modes (/mavros/state [mavros_msgs/msg/State]): MANUAL from 0.4 s, ALT_HOLD from 3.4 s" in out
+    ds = read_dataset(tmp_path / "d")
+    assert {r.name: r.closed_loop for r in ds.runs} == {"manual": False, "held": True, "both": None}
+    man = yaml.safe_load((tmp_path / "d" / "manifest.yaml").read_text())
+    assert [("closed_loop" in e) for e in man["runs"]] == [True, True, False]
+    rec = ds.meta["import"]["flight_modes"]
+    assert [c["mode"] for c in rec["changes"]] == ["MANUAL", "ALT_HOLD"]  # CMODE(2) is ArduSub's ALT_HOLD
+    assert rec["report_interval_s"] == pytest.approx(1.0)
+    # the lead is one reporting interval: a run starting 1.2 s before the first report is not known
+    early = tmp_path / "early.yaml"
+    early.write_text(yaml.safe_dump({"segments": [{"start": 0.0, "end": 2.9}]}))
+    mp = yaml.safe_load((MAPS / "mavros_mocap.yaml").read_text())
+    mp["streams"]["mode"]["open_loop_modes"] = ["STABILIZE"]   # a map may say which modes are which
+    mp["streams"]["mode"]["closed_loop_modes"] = ["MANUAL"]
+    (tmp_path / "m.yaml").write_text(yaml.safe_dump(mp))
+    import_bag(bag, tmp_path / "m.yaml", tmp_path / "e", segments=early)
+    assert read_dataset(tmp_path / "e").runs[0].closed_loop is True
+    # without the topic the shipped map skips the optional stream and the record says it
+    plain = tmp_path / "plain"
+    _write_mavros_bag(plain, t, pwm, res, acc, volts)
+    res_plain = import_bag(plain, MAPS / "mavros_mocap.yaml", tmp_path / "p")
+    assert "mode" in res_plain["record"]["optional_streams_missing"]
+    assert "flight_modes" not in res_plain["record"]
+    assert read_dataset(tmp_path / "p").runs[0].closed_loop is None
+
+
+def test_mode_stream_map_errors_name_the_entry(mavros_bag, tmp_path):
+    path = mavros_bag[0]
+    with pytest.raises(LogFormatError, match=r"streams.mode: 'closed_loop_modes' must be a list of mode names"):
+        import_bag(path, _map_with(tmp_path, mode__closed_loop_modes="ALT_HOLD"), tmp_path / "o")
+    with pytest.raises(LogFormatError, match=r"streams.mode: modes \['MANUAL'\] are listed both"):
+        import_bag(path, _map_with(tmp_path, mode__closed_loop_modes=["MANUAL"], mode__open_loop_modes=["MANUAL"]),
+                   tmp_path / "o")
+    with pytest.raises(LogFormatError, match=r"streams.motors: 'optional' must be true or false, and the thruster"):
+        import_bag(path, _map_with(tmp_path, motors__optional=True), tmp_path / "o")
+    with pytest.raises(LogFormatError, match=r"streams.depth: 'open_loop_modes' must be a list of mode names"):
+        import_bag(path, _map_with(tmp_path, depth__open_loop_modes=["MANUAL"]), tmp_path / "o")
 
 
 def test_px4_map_reads_px4_msgs_layouts(tmp_path):

@@ -39,6 +39,7 @@ from uvsim.errors import LogFormatError
 from uvsim.schema import whole_number
 from uvsim.vehicle_schema import check_water_density
 from uvsim.importers import require
+from uvsim.importers.flight_modes import closed_loop_over
 from uvsim.importers.timeline import Stream
 
 G_BARO = 9.80665  # m/s^2, standard gravity used to turn pressure into depth
@@ -49,13 +50,6 @@ MG_TO_MS2 = 9.80665e-3  # MAVLink SCALED_IMU accelerations are in mG
 #: outside is in another unit (hPa/mbar, kPa, psi), not air pressure in Pa.
 SURFACE_PRESSURE_PA = (55_000.0, 110_000.0)
 ARMED_FLAG = 128  # MAV_MODE_FLAG_SAFETY_ARMED in HEARTBEAT.base_mode
-#: ArduSub flight modes (HEARTBEAT.custom_mode, DataFlash MODE.ModeNum): MAVLink ardupilotmega.xml,
-#: enum SUB_MODE.  MANUAL passes the pilot's sticks to the motors; every other mode holds some state
-#: (attitude, rates, depth, position) in closed loop, except MOTOR_DETECT, a test of the motors.
-SUB_MODES = {0: "STABILIZE", 1: "ACRO", 2: "ALT_HOLD", 3: "AUTO", 4: "GUIDED", 7: "CIRCLE", 9: "SURFACE",
-             16: "POSHOLD", 19: "MANUAL", 20: "MOTOR_DETECT", 21: "SURFTRAK"}
-OPEN_LOOP_MODES = {19}
-CLOSED_LOOP_MODES = {0, 1, 2, 3, 4, 7, 9, 16, 21}
 BIN_TYPES = ["ATT", "IMU", "BARO", "XKF1", "VISP", "RCOU", "BAT", "ARM", "EV", "PARM", "MSG", "MODE"]
 TLOG_TYPES = ["ATTITUDE", "SCALED_IMU", "SCALED_IMU2", "SCALED_IMU3", "SCALED_PRESSURE", "SCALED_PRESSURE2",
               "SCALED_PRESSURE3", "LOCAL_POSITION_NED", "VISION_POSITION_ESTIMATE", "SERVO_OUTPUT_RAW",
@@ -79,15 +73,7 @@ class ArduSubLog:
     def closed_loop(self, start: float, end: float) -> bool | None:
         """Whether the vehicle flew ``start..end`` under a mode that holds some state (True), in
         MANUAL (False), or not known (None: no mode logged, a mode of neither kind, or both)."""
-        before = [m for t, m in self.modes if t <= start]
-        if not before:  # no mode logged, or none yet when the segment starts
-            return None
-        inside = [before[-1]] + [m for t, m in self.modes if start < t < end]
-        if set(inside) <= CLOSED_LOOP_MODES:
-            return True
-        if set(inside) <= OPEN_LOOP_MODES:
-            return False
-        return None
+        return closed_loop_over(self.modes, start, end)
 
     @property
     def frame_config(self) -> int:

@@ -70,12 +70,19 @@ def summary_lines(result: dict) -> list[str]:
         lines.append(f"  {name}: {dur:.2f} s, {rows} rows, columns {', '.join(cols)}")
     for name, why in rec.get("skipped_segments", {}).items():
         lines.append(f"  skipped {name}: {why}")
+    for name, why in rec.get("optional_streams_missing", {}).items():
+        lines.append(f"  stream {name} skipped: {why}")
     for k, s in rec["streams"].items():
         if k.startswith("_"):
             continue
         rate = s.get("median_rate_hz")
         lines.append(f"  stream {k}: {s['source']}, {s['samples']} samples"
                      + (f", {rate:.1f} Hz" if rate else ""))
+    if rec.get("flight_modes"):
+        ch = rec["flight_modes"]["changes"]
+        lines.append(f"  flight modes ({rec['flight_modes']['source']}): "
+                     + (", ".join(f"{c['mode']} from {c['t_s']:g} s" for c in ch) if ch else "none reported")
+                     + "; each run's closed_loop is in the manifest")
     if rec.get("frame", {}).get("adapted"):
         a = rec["frame"]["adapted"]
         lines.append(f"  vehicle adapted: {a['file']} (flipped {', '.join(a['flipped'])})")

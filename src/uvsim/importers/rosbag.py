@@ -13,6 +13,7 @@ ROS 2 bag directories).  The map (YAML) names, per stream, a topic and how to re
       depth:    {topic: /mavros/imu/static_pressure, type: pressure, surface_pressure: 101325, density: 1000}
       motors:   {topic: /mavros/rc/out, type: pwm, field: channels, elements: [0, 1, 2, 3, 4, 5, 6, 7]}
       battery:  {topic: /mavros/battery, type: voltage, field: voltage}
+      mode:     {topic: /mavros/state, type: mode}                   # flight mode -> closed_loop
 
 Stream types:
 
@@ -31,7 +32,17 @@ Stream types:
   to PWM with offset 1500 and scale 400 on a 1100-1900 us ESC setup).  Samples with a
   NaN element (PX4: motor disarmed) are dropped and counted;
 * ``voltage``: a battery voltage (V) at ``field`` (sensor_msgs BatteryState ``voltage``);
-* ``fields``: a generic ``{column: field path}`` mapping for anything else.
+* ``fields``: a generic ``{column: field path}`` mapping for anything else;
+* ``mode``: the autopilot's flight mode, a string at ``field`` (default ``mode``: mavros_msgs
+  State).  It is no column: each run's ``closed_loop`` in the manifest comes from it
+  (:mod:`uvsim.importers.flight_modes`): true where every mode over the run is one of
+  ``closed_loop_modes``, false where every one is one of ``open_loop_modes`` (defaults: ArduSub's
+  mode names, MANUAL open loop and every mode that holds a state closed loop), not written
+  otherwise.  A report up to one median reporting interval after a run's start stands for the
+  mode at the start.
+
+Any stream but the thruster commands may say ``optional: true``: a map that fits several setups
+then skips a topic the bag lacks, and the import record lists it (``optional_streams_missing``).
 
 Frames: ``enu_flu`` topics are converted to uvsim's NED/FRD (positions ``(n, e, d) =
 (y, x, -z)``, attitude ``R_ned_frd = T R_enu_flu S``, body vectors ``(x, -y, -z)``; a ROS
@@ -51,19 +62,20 @@ from uvsim.errors import LogFormatError
 from uvsim.files import load_yaml
 from uvsim.importers import require
 from uvsim.importers.build import build_runs
+from uvsim.importers.flight_modes import CLOSED_LOOP_NAMES, OPEN_LOOP_NAMES, closed_loop_over, mode_changes, mode_name
 from uvsim.importers.segments import Segment, load_segments, write_imported_dataset
 from uvsim.importers.timeline import MERGE_TOL_S, Stream
 from uvsim.kinematics import quat_multiply
 from uvsim.log_aliases import format_name
 from uvsim.log_columns import FORMAT_COLUMNS
 
-TYPES = ("pose", "odometry", "imu", "pressure", "depth", "pwm", "thrust", "voltage", "fields")
+TYPES = ("pose", "odometry", "imu", "pressure", "depth", "pwm", "thrust", "voltage", "fields", "mode")
 FRAMES = ("enu_flu", "ned_frd")
 G0 = 9.80665
 _Q_T = np.array([0.0, np.sqrt(0.5), np.sqrt(0.5), 0.0])  # ENU -> NED: pi about (1, 1, 0)/sqrt(2)
 _Q_S = np.array([0.0, 1.0, 0.0, 0.0])                      # FRD -> FLU: pi about x
 _STREAM_KEYS = {"topic", "type", "field", "frame", "use", "elements", "scale", "offset", "surface_pressure",
-                "density", "stamp", "fields"}
+                "density", "stamp", "fields", "closed_loop_modes", "open_loop_modes", "optional"}
 
 
 def _get(msg, path: str, where: str):
@@ -205,6 +217,16 @@ def _check_spec(name: str, spec, where: str) -> dict:
         for k in ("surface_pressure", "density"):
             if not isinstance(spec.get(k), (int, float)) or not spec[k] > 0:
                 raise LogFormatError(f"{w}: '{k}' must be a positive number (Pa, kg/m^3)")
+    if "optional" in spec and (not isinstance(spec["optional"], bool) or (spec["optional"]
+                                                                         and spec["type"] in ("pwm", "thrust"))):
+        raise LogFormatError(f"{w}: 'optional' must be true or false, and the thruster commands cannot be optional")
+    for k in ("closed_loop_modes", "open_loop_modes"):
+        if k in spec and (spec["type"] != "mode" or not isinstance(spec[k], list)
+                          or not all(isinstance(m, str) and m.strip() for m in spec[k])):
+            raise LogFormatError(f"{w}: '{k}' must be a list of mode names (strings), in a stream of type mode")
+    if spec["type"] == "mode" and set(spec.get("closed_loop_modes", [])) & set(spec.get("open_loop_modes", [])):
+        raise LogFormatError(f"{w}: modes {sorted(set(spec['closed_loop_modes']) & set(spec['open_loop_modes']))} "
+                             "are listed both as closed_loop_modes and as open_loop_modes")
     if spec["type"] == "fields" and not isinstance(spec.get("fields"), dict):
         raise LogFormatError(f"{w}: 'fields' must map columns to field paths")
     for col in (spec["fields"] if spec["type"] == "fields" else {}):
@@ -234,6 +256,8 @@ def load_map(path) -> dict:
     kinds = [s["type"] for s in doc["streams"].values() if s["type"] in ("pwm", "thrust")]
     if len(kinds) != 1:
         raise LogFormatError(f"{path}: exactly one pwm or thrust stream is needed (the inputs), found {len(kinds)}")
+    if sum(s["type"] == "mode" for s in doc["streams"].values()) > 1:
+        raise LogFormatError(f"{path}: at most one stream of type mode (the flight mode) may be mapped")
     return doc
 
 
@@ -261,10 +285,13 @@ def read_bag(bag, mapping: dict, map_name: str = "map", progress=None) -> tuple[
         try:
             topics = {c.topic: c for c in reader.connections}
             streams, t_first = [], []
-            raw_streams = []
+            raw_streams, missing = [], {}
             for name, spec in mapping["streams"].items():
                 topic = spec["topic"]
                 where = f"{bag}: topic {topic} (map streams.{name})"
+                if topic not in topics and spec.get("optional"):
+                    missing[name] = f"{topic} is not in the bag (optional in the map)"
+                    continue
                 if topic not in topics:
                     raise LogFormatError(f"{bag}: topic {topic!r} (map streams.{name}) is not in the bag; "
                                          f"topics: {sorted(topics)}")
@@ -287,8 +314,22 @@ def read_bag(bag, mapping: dict, map_name: str = "map", progress=None) -> tuple[
             reader.close()
     t0 = min(t_first)
     n_in = 0
+    meta = {"time_base": f"s since the first mapped message, at {t0} ns on the stamps' clock",
+            "t0_clock_ns": int(t0)}
+    if missing:
+        meta["optional_streams_missing"] = missing
     for name, spec, msgs, times, where, stamp in raw_streams:
         kind = spec["type"]
+        if kind == "mode":  # no column: the runs' closed_loop (import_bag)
+            t_s = (times - t0) * 1e-9
+            names = [mode_name(_get(m, spec.get("field", "mode"), where)) for m in msgs]
+            order = np.argsort(t_s, kind="stable")
+            meta["modes"] = {"stream": name, "source": f"{spec['topic']} [{where.rsplit('(', 1)[-1].rstrip(')')}]",
+                             "reports": [(float(t_s[i]), names[i]) for i in order],
+                             "interval_s": float(np.median(np.diff(t_s[order]))) if len(msgs) > 1 else 0.0,
+                             "closed": list(spec.get("closed_loop_modes", CLOSED_LOOP_NAMES)),
+                             "open": list(spec.get("open_loop_modes", OPEN_LOOP_NAMES))}
+            continue
         frame = spec.get("frame", mapping.get("frame", "enu_flu"))
         cols_in = None
         if kind in ("pwm", "thrust"):
@@ -317,9 +358,18 @@ def read_bag(bag, mapping: dict, map_name: str = "map", progress=None) -> tuple[
                 notes.append(f"value -> {float(spec.get('offset', 0.0)):g} + {float(spec.get('scale', 1.0)):g} x value")
         src = f"{spec['topic']} [{where.rsplit('(', 1)[-1].rstrip(')')}]"
         streams.append(Stream(name, src, (times - t0) * 1e-9, cols, role=role, notes=notes + [f"stamp: {stamp}"]))
-    meta = {"time_base": f"s since the first mapped message, at {t0} ns on the stamps' clock",
-            "t0_clock_ns": int(t0), "n_thrusters": n_in}
+    meta["n_thrusters"] = n_in
     return streams, meta
+
+
+def _mode_record(modes: dict) -> dict:
+    """The flight modes the bag reports (their changes) and what was taken from them."""
+    return {"source": modes["source"], "stream": modes["stream"],
+            "changes": [{"t_s": round(t, 3), "mode": m} for t, m in mode_changes(modes["reports"])],
+            "report_interval_s": round(modes["interval_s"], 3),
+            "closed_loop": (f"true where every mode over a run is one of {modes['closed']}, false where every one is "
+                            f"one of {modes['open']}, not written otherwise; a report up to one interval after a "
+                            "run's start stands for the mode at its start")}
 
 
 def import_bag(bag, map_path, out, *, vehicle=None, segments=None, tol: float = MERGE_TOL_S, progress=None) -> dict:
@@ -327,6 +377,7 @@ def import_bag(bag, map_path, out, *, vehicle=None, segments=None, tol: float = 
     bag, map_path = Path(bag), Path(map_path)
     mapping = load_map(map_path)
     streams, meta = read_bag(bag, mapping, map_path.name, progress)
+    modes = meta.pop("modes", None)
     vehicle = vehicle or mapping.get("vehicle")
     if not vehicle:
         raise LogFormatError(f"{map_path}: no 'vehicle' in the map and none given (--vehicle)")
@@ -339,6 +390,10 @@ def import_bag(bag, map_path, out, *, vehicle=None, segments=None, tol: float = 
     end = max(float(s.t.max()) for s in streams)
     segs = load_segments(segments, bag.stem) if segments else [Segment(0.0, end, bag.stem.replace(" ", "_"),
                                                                         origin="whole bag")]
+    if modes is not None:  # the flight mode over each run: its closed_loop (uvsim.importers.flight_modes)
+        for seg in segs:
+            seg.closed_loop = closed_loop_over(modes["reports"], seg.start, seg.end, modes["closed"], modes["open"],
+                                               lead=modes["interval_s"])
     runs, rec = build_runs(streams, segs, where=str(bag), tol=tol)
     digest = hashlib.sha256()
     files = sorted(p for p in bag.rglob("*") if p.is_file()) if bag.is_dir() else [bag]
@@ -348,6 +403,8 @@ def import_bag(bag, map_path, out, *, vehicle=None, segments=None, tol: float = 
                                                      "sha256": digest.hexdigest(), "map": map_path.name},
               **meta, "segments_from": f"segments file {Path(segments).name}" if segments else "the whole bag",
               **rec}
+    if modes is not None:
+        record["flight_modes"] = _mode_record(modes)
     entry = str(Path(vehicle).resolve()) if Path(str(vehicle)).suffix in (".yaml", ".yml") else str(vehicle)
     path = write_imported_dataset(out, runs, vehicle=entry,
                                   description=f"Imported from {bag.name} with {map_path.name} by uvsim import bag",
