@@ -241,7 +241,16 @@ def search_bound_hits(c: Candidate, values: Mapping[str, float], at_bounds: Sequ
     physical floor, :func:`_physical_floor`): such an effect is not named, since the data
     push it beyond what the catalogue considers physical for this vehicle."""
     out = []
-    if c.effect == BASE_MODEL:  # a re-tune is not an effect: a coefficient at +-50 % says "far off", not "unphysical"
+    if c.effect == BASE_MODEL:
+        # a re-tune is not an effect: a coefficient at +-50 % says "far off", not "unphysical"; but a
+        # thrust scale on its floor is below what a supply voltage can do (THRUST_SCALE_RANGE) and
+        # stands in for something else: under an autopilot, thrust held against a force the model
+        # lacks, which a model without that force reads as thrust that moves nothing (below_supply)
+        n = "thrust_scale_scale"
+        if n in at_bounds and n in c.free:
+            lo, hi = c.bounds[n]
+            if abs(values.get(n, hi) - lo) <= abs(values.get(n, hi) - hi):
+                return [n]
         return out
     for n in at_bounds:
         if n not in c.free:
@@ -251,6 +260,25 @@ def search_bound_hits(c: Candidate, values: Mapping[str, float], at_bounds: Sequ
             continue
         out.append(n)
     return out
+
+
+def below_supply(c: Candidate, values: Mapping[str, float]) -> str | None:
+    """Why every unit's gain (``thruster_gain:all``) is no answer when all of them lie below the
+    thrust scale's floor (:data:`THRUST_SCALE_RANGE`: what a supply voltage can do), or None.  The
+    units fail one at a time; eight at once below what a flat battery gives is the scale of
+    ``base_model:thrust_scale`` on its bound in another form: under an autopilot the thrusters
+    hold against a force or moment the model lacks (a tether, a current), and a model without it
+    sees thrust that moves nothing (field logs, tether seed 7: every gain 0.08-0.18)."""
+    if c.effect != "thruster_gain" or c.variant != "all":
+        return None
+    gains = [float(values[n]) for n in c.free if n in values]
+    lo = THRUST_SCALE_RANGE[0]
+    if not gains or max(gains) >= lo:
+        return None
+    return (f"every unit at {min(gains):.2f}-{max(gains):.2f} of its curve, all below the {lo:g} a supply voltage "
+            "can explain (base_model:thrust_scale's range): no unit's fault but thrust that moves nothing in the "
+            "model, as when an autopilot holds against a force the model lacks (a tether, a current), so it is "
+            "not named")
 
 
 def mirror_start(c: Candidate, values: Mapping[str, float]) -> dict:

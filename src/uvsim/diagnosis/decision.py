@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.stats import chi2
 
-from uvsim.diagnosis.candidates import search_bound_hits
+from uvsim.diagnosis.candidates import below_supply, search_bound_hits
 from uvsim.fitting.compare import bootstrap_improvement
 from uvsim.fitting import verdict
 
@@ -111,6 +111,10 @@ def judge(row, val_cur) -> tuple[bool, str]:
         return False, row["problem"]
     c = row["candidate"]
     values = row.get("values", {})
+    low = below_supply(c, values)
+    if low is not None:
+        row["bound_rejected"], row["bound_hits"] = True, list(c.free)
+        return False, low
     hits = search_bound_hits(c, values, row.get("at_bounds") or [])
     if hits:
         # the selector fits one more candidate for it (Selector.step, Selector.fit_judged)
@@ -118,6 +122,10 @@ def judge(row, val_cur) -> tuple[bool, str]:
         if hits == ["thruster_lag_time_constant"] and values[hits[0]] <= c.bounds[hits[0]][0] * 1.0001:
             return False, (f"time constant on its floor {c.bounds[hits[0]][0]:.3g} s (half the log's sample "
                            "interval): indistinguishable from the timing of the logged inputs (candidates._lag)")
+        if hits == ["thrust_scale_scale"]:
+            return False, (f"thrust scale on its floor {c.bounds[hits[0]][0]:g}, below what a supply voltage can "
+                           "do: it stands in for something the model lacks (under an autopilot: a force the "
+                           "thrusters hold against), so the base model is kept")
         return False, (f"{', '.join(hits)} on the edge of the search range: the data push this effect beyond "
                        "what the catalogue considers physical, so it is not named (an effect outside the "
                        "catalogue or an error of the base model is the likelier cause)")
