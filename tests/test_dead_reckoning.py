@@ -31,11 +31,11 @@ def tether(tmp_path_factory):
     ds = read_dataset(out)
     veh = load_vehicle(ds.vehicle_file)
     step = int(round(spec["control_hz"] / spec["log_hz"]))
-    return veh, ds, sim["pos"][:, ::step], spec
+    return veh, ds, sim["pos"][:, ::step], spec, sim
 
 
 def test_the_track_follows_the_truth_within_the_dvl_and_heading_errors(tether):
-    veh, ds, pos, _ = tether
+    veh, ds, pos, *_ = tether
     for i, run in enumerate(ds.runs):
         xy = dead_reckoned_xy(run)
         truth = pos[i, : run.t.size, :2]
@@ -55,7 +55,7 @@ def test_a_run_that_logs_x_and_y_has_no_dead_reckoned_track(tether):
 
 
 def test_the_screening_and_the_fit_nodes_read_the_track(tether):
-    veh, ds, _, _ = tether
+    veh, ds, *_ = tether
     run = runs_for(veh, ds.train)[0]
     xy = dead_reckoned_xy(run)
     motion, why = motion_or_why(run)
@@ -70,7 +70,7 @@ def test_the_screening_and_the_fit_nodes_read_the_track(tether):
 
 
 def test_a_window_starts_where_the_track_is_when_a_term_reads_the_position(tether):
-    veh, ds, _, spec = tether
+    veh, ds, _, spec, _ = tether
     teth = veh.with_effects([{"type": "tether", "stiffness": 1.0, "anchor_n": 5.0, "anchor_e": 4.0}])
     val = runs_for(teth, ds.validation)
     meas = [measurements_for(r, teth, run_weight=1.0) for r in val]
@@ -88,7 +88,7 @@ def test_with_a_track_the_horizontal_tethers_are_screened_and_not_reported_unobs
     from uvsim.diagnosis.core import _split
     from uvsim.diagnosis.selector import Selector
 
-    veh, ds, _, _ = tether
+    veh, ds, *_ = tether
     train, val, _ = _split(ds)
     sel = Selector(veh, train, val, retune=[], noise=None, weights=None, horizon=3.0, max_iter=12, workers=1,
                    say=lambda m: None)
@@ -100,3 +100,35 @@ def test_with_a_track_the_horizontal_tethers_are_screened_and_not_reported_unobs
     assert {"horizontal", "horizontal_slack", "horizontal_full", "3d_attach"} <= got
     assert not [o for o in observability(has_position=has_pos, has_depth=has_depth, has_velocity=True, z_max=z_max,
                                          n_thrusters=veh.n_thrusters) if o["effect"] == "tether"]
+
+
+def test_nodes_read_channels_logged_at_5_hz(tether):
+    """Issue 48 item 3: the window-start states take a 5 Hz channel's own samples (a local fit over
+    +-2.5 of its sample intervals), not the whole-run simulation's value: at +-0.3 s a 5 Hz DVL or a
+    5 Hz log held 3 samples, fewer than the quadratic's 5, and every node velocity, angle and rate came
+    from a simulation that under the autopilot had lost the heading."""
+    from uvsim.fitting.nodes import NODE_HALF_WINDOW_S, PRIOR_SIGMA, half_width
+
+    veh, ds, _, spec, sim = tether
+    assert spec["log_hz"] == 5.0
+    run = runs_for(veh, ds.train)[0]
+    m = measurements_for(run, veh, run_weight=1.0)
+    assert half_width(run.t, run.velocity[:, 0]) == pytest.approx(0.5, abs=0.02)      # the DVL's 0.2 s
+    assert half_width(run.t, run.depth) == pytest.approx(0.5, abs=0.02)               # the log's 5 Hz
+    assert half_width(np.arange(0.0, 10.0, 0.02), np.ones(500)) == NODE_HALF_WINDOW_S  # 50 Hz as before
+    idx = np.arange(5, run.t.size - 5, 15)
+    wrong = np.zeros((run.t.size, 13))
+    wrong[:, 3] = 1.0                  # a reference simulation that knows nothing: level, at rest, heading 0
+    ref, sigma = NodeModel(run, m).references(idx, wrong)
+    dvl = np.isfinite(run.velocity[:, 0])
+    h = half_width(run.t, run.velocity[:, 0])
+    near = np.array([(dvl & (np.abs(run.t - run.t[i]) <= h)).sum() >= 5 for i in idx])
+    assert near.sum() >= 5
+    step = int(round(spec["control_hz"] / spec["log_hz"]))
+    nu_true = sim["nu"][0, ::step][idx]
+    # the DVL's velocities where it has samples around the node: measured, within 3 cm/s of the truth
+    assert np.all(sigma[near, 6:9] == PRIOR_SIGMA["measured"][6:9])
+    assert np.abs(ref[near, 7:10] - nu_true[near, :3]).max() < 0.03
+    # the angles and rates of the 5 Hz log everywhere: measured, not the reference's zeros
+    assert np.all(sigma[:, 3:6] == PRIOR_SIGMA["measured"][3:6]) and np.all(sigma[:, 9:12] == PRIOR_SIGMA["measured"][9:12])
+    assert np.abs(ref[:, 10:13] - nu_true[:, 3:]).max() < 0.05

@@ -93,6 +93,18 @@ def test_a_thrust_scale_on_its_bound_and_every_gain_below_it_stand_in_for_a_miss
     assert judge(_row(dead, {dead.free[0]: 0.0}, at_bounds=dead.free), None)[0]
 
 
+def test_a_reversed_unit_fitted_to_zero_is_a_dead_unit_not_an_edge():
+    """A reversed unit's range is -1.5..0 and its upper end, 0, is a dead unit (reported as unit_6,
+    units.reported_variant), a physical answer like a gain's floor (field logs, dead seed 1 once the
+    5 Hz DVL entered the window starts: fitted from the reversed side to -0.00 and refused before);
+    its lower end stays an edge."""
+    cands = {c.label: c for c in catalogue(input_kind="pwm", n_thrusters=8, dt=0.1, p_ref=np.zeros(3),
+                                           has_position=True, z_max=None)}
+    rev = cands["thruster_gain:reversed_6"]
+    ok, _ = judge(_row(rev, {rev.free[0]: -1e-4}, at_bounds=rev.free), None)
+    assert ok and search_bound_hits(rev, {rev.free[0]: -1.5}, rev.free) == rev.free
+
+
 def _drift_row(c, *, wald_p, windowed, p_better, channels, ok=True):
     """A fitted candidate whose windowed validation gain is below MIN_RELATIVE, with the open-loop
     verdict's channels given as (MSE ratio, better beyond the noise) and its status ``ok``."""

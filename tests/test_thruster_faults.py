@@ -39,7 +39,9 @@ def test_gain_ranges_are_physical_and_a_dead_unit_is_an_answer_not_an_edge():
     assert unit.bounds["thruster_gain_1"] == (0.0, 1.5) and reversed_.bounds["thruster_gain_1"] == (-1.5, 0.0)
     assert search_bound_hits(unit, {"thruster_gain_1": 0.0}, ["thruster_gain_1"]) == []     # dead: physical
     assert search_bound_hits(unit, {"thruster_gain_1": 1.5}, ["thruster_gain_1"]) == ["thruster_gain_1"]
-    assert search_bound_hits(reversed_, {"thruster_gain_1": 0.0}, ["thruster_gain_1"]) == ["thruster_gain_1"]
+    # a reversed unit at 0, the upper end of its range, is the same dead unit (reported as unit_1 below)
+    assert search_bound_hits(reversed_, {"thruster_gain_1": 0.0}, ["thruster_gain_1"]) == []
+    assert search_bound_hits(reversed_, {"thruster_gain_1": -1.5}, ["thruster_gain_1"]) == ["thruster_gain_1"]
     assert plain_answer(unit, {"thruster_gain_1": 0.004}) == "thruster 1 gives no thrust (gain 0.004: a dead unit)"
     assert plain_answer(unit, {"thruster_gain_1": 0.6}) is None
     assert "pushes the wrong way" in plain_answer(reversed_, {"thruster_gain_1": -1.0})

@@ -236,6 +236,12 @@ def _physical_floor(c: Candidate, n: str) -> bool:
                                     and n.startswith("thruster_gain_"))
 
 
+def _dead_end(c: Candidate, n: str) -> bool:
+    """Whether ``n`` is a reversed unit's gain, whose upper bound 0 is a physical limit too: a dead
+    unit, reported as the unit's own variant (:func:`uvsim.diagnosis.units.reported_variant`)."""
+    return c.effect == "thruster_gain" and bool(c.tags.get("reversed")) and n.startswith("thruster_gain_")
+
+
 def search_bound_hits(c: Candidate, values: Mapping[str, float], at_bounds: Sequence[str]) -> list[str]:
     """The parameters of ``c`` that ended on the edge of their search range (not on a
     physical floor, :func:`_physical_floor`): such an effect is not named, since the data
@@ -257,6 +263,8 @@ def search_bound_hits(c: Candidate, values: Mapping[str, float], at_bounds: Sequ
             continue
         lo, hi = c.bounds[n]
         if _physical_floor(c, n) and abs(values.get(n, hi) - lo) <= abs(values.get(n, hi) - hi):
+            continue
+        if _dead_end(c, n) and abs(values.get(n, lo) - hi) <= abs(values.get(n, lo) - lo):
             continue
         out.append(n)
     return out

@@ -187,6 +187,10 @@ class SimulatorFits:
     def fit_candidate(self, c: Candidate, s, cur, val_cur) -> dict:
         """Output-error fit of ``c`` together with the current model's free parameters,
         and its validation cost."""
+        clash = sorted(set(c.free) & set(cur["free"]))
+        if clash:  # e.g. a fouled unit's reverse ratio beside an accepted per-thruster asymmetry
+            return {"effect": c.effect, "variant": c.variant, "candidate": c, "free": c.free, "accepted": False,
+                    "why": f"not fitted: {', '.join(clash)} already free in the current model"}
         vehicle_cur, values_cur = cur["vehicle"], cur["values"]
         veh = vehicle_cur.with_effects([c.spec]) if c.spec is not None else vehicle_cur
         # start from the screening estimate (the best of its multi-start); without one, from

@@ -41,6 +41,12 @@ from uvsim.kinematics import euler_to_quat, quat_to_euler, quat_to_rotation, unw
 #: (noise of the fitted value ~ sigma / 4, of the slope ~ sigma / 0.1 s); short against the
 #: 1-3 s time constants of an ROV.
 NODE_HALF_WINDOW_S = 0.3
+#: ... widened for a channel logged slower, to this many of its own sample intervals either side,
+#: so that the fit has the 5 samples it needs (:func:`local_fit`'s ``min_samples``): a 5 Hz DVL or
+#: a 5 Hz topside log gets +-0.5 s.  At +-0.3 s such a channel held 3 samples, every local fit was
+#: empty, and the node took the whole-run simulation's value instead (field logs: every DVL
+#: velocity, and on 5 Hz logs every angle and rate, from a simulation that had lost the heading).
+NODE_SPAN_INTERVALS = 2.5
 #: Prior standard deviations of free node components, by how the reference was obtained:
 #: "measured" (a sensor of that quantity: DVL, gyro, logged angle, depth; a few noise
 #: sigmas of a smoothed value), "derived" (slope of a smoothed position/angle), "model"
@@ -83,6 +89,15 @@ def local_fit(t: np.ndarray, x: np.ndarray, t0: np.ndarray, half: float, *, min_
             while len(_local_fits) > LOCAL_FIT_CACHE:
                 _local_fits.popitem(last=False)
     return hit[0].copy(), hit[1].copy()
+
+
+def half_width(t: np.ndarray, x: np.ndarray) -> float:
+    """The local fits' half-width (s) for channel ``x`` (n,) at times ``t``: :data:`NODE_HALF_WINDOW_S`,
+    or :data:`NODE_SPAN_INTERVALS` of the channel's median interval between valid samples when longer."""
+    tv = t[np.isfinite(x)]
+    if tv.size < 2:
+        return NODE_HALF_WINDOW_S
+    return max(NODE_HALF_WINDOW_S, NODE_SPAN_INTERVALS * float(np.median(np.diff(tv))))
 
 
 def _local_fit(t, x, t0, half: float, min_samples: int):
@@ -135,14 +150,13 @@ class NodeModel:
         W = idx.size
         ref = ref_states[idx, :13].copy()
         kind = np.full((W, 12), "model", dtype=object)
-        h = NODE_HALF_WINDOW_S
         e_ref = quat_to_euler(ref[:, 3:7])
         euler = e_ref.copy()
         if run.has_attitude:
             e_log = unwrap_angles(run.euler)
             lag = float(getattr(self.meas, "attitude_lag", 0.0))
             for j in np.flatnonzero(run.euler_mask):
-                v, s = local_fit(t, e_log[:, j], t0, h)
+                v, s = local_fit(t, e_log[:, j], t0, half_width(t, e_log[:, j]))
                 if lag > 0:  # a lagged attitude filter: x = y + tau dy/dt undoes the lag
                     v = v + lag * s
                 ok = np.isfinite(v)
@@ -155,7 +169,7 @@ class NodeModel:
         vned = np.full((W, 3), np.nan)
         for j in range(3):
             if np.isfinite(pos[:, j]).any():
-                v, s = local_fit(t, pos[:, j], t0, h)
+                v, s = local_fit(t, pos[:, j], t0, half_width(t, pos[:, j]))
                 ok = np.isfinite(v)
                 ref[ok, j] = v[ok]
                 kind[ok, j] = "measured"
@@ -167,7 +181,7 @@ class NodeModel:
             if track is not None:
                 ref[:, :2] = track[idx]
         if run.has_depth and kind[0, 2] != "measured":
-            d, _ = local_fit(t, run.depth, t0, h)
+            d, _ = local_fit(t, run.depth, t0, half_width(t, run.depth))
             r_p = self.meas.sensors.get("pressure")
             off = R[:, 2, :] @ r_p if r_p is not None else 0.0
             ok = np.isfinite(d)
@@ -177,7 +191,7 @@ class NodeModel:
         vel = run.velocity
         for j in range(6):
             if np.isfinite(vel[:, j]).any():
-                v, _ = local_fit(t, vel[:, j], t0, h)
+                v, _ = local_fit(t, vel[:, j], t0, half_width(t, vel[:, j]))
                 ok = np.isfinite(v)
                 ref[ok, 7 + j] = v[ok]
                 kind[ok, 6 + j] = "measured"
@@ -188,7 +202,7 @@ class NodeModel:
             kind[:, 6:9] = np.where(sel, "derived", kind[:, 6:9])
         if run.has_full_attitude:
             e_log = unwrap_angles(run.euler)
-            slopes = np.stack([local_fit(t, e_log[:, j], t0, h)[1] for j in range(3)], 1)
+            slopes = np.stack([local_fit(t, e_log[:, j], t0, half_width(t, e_log[:, j]))[1] for j in range(3)], 1)
             if np.isfinite(slopes).all():
                 w = euler_rates_to_body(euler, slopes)
                 sel = kind[:, 9:12] == "model"
