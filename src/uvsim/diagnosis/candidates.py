@@ -274,7 +274,7 @@ def below_supply(c: Candidate, values: Mapping[str, float]) -> str | None:
     """Why every unit's gain (``thruster_gain:all``) is no answer when all of them lie below the
     thrust scale's floor (:data:`THRUST_SCALE_RANGE`: what a supply voltage can do), or None.  The
     units fail one at a time; eight at once below what a flat battery gives is the scale of
-    ``base_model:thrust_scale`` on its bound in another form: under an autopilot the thrusters
+    ``base_model:thrust_scale`` on its floor in another form: under an autopilot the thrusters
     hold against a force or moment the model lacks (a tether, a current), and a model without it
     sees thrust that moves nothing (field logs, tether seed 7: every gain 0.08-0.18)."""
     if c.effect != "thruster_gain" or c.variant != "all":

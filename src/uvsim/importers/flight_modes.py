@@ -16,9 +16,10 @@ from __future__ import annotations
 import re
 
 #: ArduSub flight modes (HEARTBEAT.custom_mode, DataFlash MODE.ModeNum): MAVLink ardupilotmega.xml,
-#: enum SUB_MODE; mavros reports the same names on ``mavros_msgs/State.mode`` for ArduSub, and
-#: ``CMODE(n)`` for a number it has no name for.  MANUAL passes the pilot's sticks to the motors;
-#: every other mode holds some state (attitude, rates, depth, position) in closed loop, except
+#: enum SUB_MODE; a bag's ``mavros_msgs/State.mode`` carries a mode's name, or ``CMODE(n)`` for a
+#: number mavros has no name for, which :func:`mode_name` reads as ArduSub's mode ``n`` (for another
+#: autopilot it then matches none of its names, so such a run is "not known").  MANUAL passes the
+#: pilot's sticks to the motors; every other mode holds some state (attitude, rates, depth, position) in closed loop, except
 #: MOTOR_DETECT, a test of the motors (ArduPilot wiki, "Sub Modes").
 SUB_MODES = {0: "STABILIZE", 1: "ACRO", 2: "ALT_HOLD", 3: "AUTO", 4: "GUIDED", 7: "CIRCLE", 9: "SURFACE",
              16: "POSHOLD", 19: "MANUAL", 20: "MOTOR_DETECT", 21: "SURFTRAK"}
