@@ -242,6 +242,15 @@ def _dead_end(c: Candidate, n: str) -> bool:
     return c.effect == "thruster_gain" and bool(c.tags.get("reversed")) and n.startswith("thruster_gain_")
 
 
+def _on_floor(c: Candidate, n: str, values: Mapping[str, float]) -> bool | None:
+    """Whether ``n``, ended on a bound of its range, is on the lower one (nearer it than the upper);
+    None when ``values`` lacks it."""
+    if n not in values:
+        return None
+    lo, hi = c.bounds[n]
+    return abs(values[n] - lo) <= abs(values[n] - hi)
+
+
 def search_bound_hits(c: Candidate, values: Mapping[str, float], at_bounds: Sequence[str]) -> list[str]:
     """The parameters of ``c`` that ended on the edge of their search range (not on a
     physical floor, :func:`_physical_floor`): such an effect is not named, since the data
@@ -253,18 +262,12 @@ def search_bound_hits(c: Candidate, values: Mapping[str, float], at_bounds: Sequ
         # stands in for something else: under an autopilot, thrust held against a force the model
         # lacks, which a model without that force reads as thrust that moves nothing (below_supply)
         n = "thrust_scale_scale"
-        if n in at_bounds and n in c.free:
-            lo, hi = c.bounds[n]
-            if abs(values.get(n, hi) - lo) <= abs(values.get(n, hi) - hi):
-                return [n]
-        return out
+        return [n] if n in at_bounds and n in c.free and _on_floor(c, n, values) else out
     for n in at_bounds:
         if n not in c.free:
             continue
-        lo, hi = c.bounds[n]
-        if _physical_floor(c, n) and abs(values.get(n, hi) - lo) <= abs(values.get(n, hi) - hi):
-            continue
-        if _dead_end(c, n) and abs(values.get(n, lo) - hi) <= abs(values.get(n, lo) - lo):
+        floor = _on_floor(c, n, values)
+        if (_physical_floor(c, n) and floor) or (_dead_end(c, n) and floor is False):
             continue
         out.append(n)
     return out

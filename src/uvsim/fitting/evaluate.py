@@ -32,6 +32,7 @@ import numpy as np
 from uvsim.blas import single_thread
 from uvsim.errors import UvsimError
 from uvsim.fitting.fitter import group_by_input
+from uvsim.fitting.nodes import half_width
 from uvsim.fitting.objective import gyro_bias_sd
 from uvsim.fitting.parameters import ParameterSpace
 from uvsim.fitting.windows import whole_runs
@@ -154,7 +155,7 @@ def _local_value(t: np.ndarray, x: np.ndarray, t0: float) -> float:
     if not ok.any():
         return float("nan")
     tv, xv = t[ok], x[ok]
-    half = max(START_HALF_S, 1.5 * float(np.median(np.diff(tv)))) if tv.size > 1 else START_HALF_S
+    half = half_width(t, x, START_HALF_S, 1.5)
     sel = np.abs(tv - t0) <= half
     if sel.sum() >= 2:
         return float(np.polyfit(tv[sel] - t0, xv[sel], 1)[-1])

@@ -91,13 +91,15 @@ def local_fit(t: np.ndarray, x: np.ndarray, t0: np.ndarray, half: float, *, min_
     return hit[0].copy(), hit[1].copy()
 
 
-def half_width(t: np.ndarray, x: np.ndarray) -> float:
-    """The local fits' half-width (s) for channel ``x`` (n,) at times ``t``: :data:`NODE_HALF_WINDOW_S`,
-    or :data:`NODE_SPAN_INTERVALS` of the channel's median interval between valid samples when longer."""
+def half_width(t: np.ndarray, x: np.ndarray, least: float = NODE_HALF_WINDOW_S,
+               intervals: float = NODE_SPAN_INTERVALS) -> float:
+    """A local fit's half-width (s) for channel ``x`` (n,) at times ``t``: ``least`` (the nodes':
+    :data:`NODE_HALF_WINDOW_S`), or ``intervals`` (:data:`NODE_SPAN_INTERVALS`) of the channel's median
+    interval between valid samples when longer."""
     tv = t[np.isfinite(x)]
     if tv.size < 2:
-        return NODE_HALF_WINDOW_S
-    return max(NODE_HALF_WINDOW_S, NODE_SPAN_INTERVALS * float(np.median(np.diff(tv))))
+        return least
+    return max(least, intervals * float(np.median(np.diff(tv))))
 
 
 def _local_fit(t, x, t0, half: float, min_samples: int):

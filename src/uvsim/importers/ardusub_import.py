@@ -15,7 +15,7 @@ from pathlib import Path
 
 from uvsim.errors import LogFormatError, VehicleError
 from uvsim.importers.ardusub import read_ardusub
-from uvsim.importers.flight_modes import SUB_MODES, mode_changes
+from uvsim.importers.flight_modes import SUB_MODES, mode_record
 from uvsim.importers.ardusub_frames import FRAMES, adapted_vehicle_dict, check_frame, mismatch_message
 from uvsim.importers.build import build_runs
 from uvsim.importers.segments import Segment, load_segments, write_imported_dataset
@@ -120,11 +120,10 @@ def _vehicle_label(spec, veh) -> str:
 
 def _mode_record(data) -> dict:
     """The flight modes the log records (their changes) and what was taken from them."""
-    changes = mode_changes(data.modes)
-    return {"source": "HEARTBEAT.custom_mode" if data.kind == "tlog" else "MODE.ModeNum",
-            "changes": [{"t_s": round(t, 3), "mode": SUB_MODES.get(m, f"mode {m}")} for t, m in changes],
-            "closed_loop": "true where every mode over a run holds some state (all but MANUAL and MOTOR_DETECT), "
-                           "false where it is MANUAL throughout, not written otherwise"}
+    return mode_record(data.modes, source="HEARTBEAT.custom_mode" if data.kind == "tlog" else "MODE.ModeNum",
+                       name=lambda m: SUB_MODES.get(m, f"mode {m}"),
+                       rule="true where every mode over a run holds some state (all but MANUAL and MOTOR_DETECT), "
+                            "false where it is MANUAL throughout, not written otherwise")
 
 
 def _pwm_sources(data) -> dict:

@@ -61,6 +61,15 @@ def mode_changes(modes) -> list:
     return [(t, m) for k, (t, m) in enumerate(modes) if k == 0 or m != modes[k - 1][1]]
 
 
+def mode_record(modes, *, source: str, rule: str, name=str, **extra) -> dict:
+    """An import record's ``flight_modes``: ``source`` (what the modes were read from), ``extra``
+    entries, ``changes`` (:func:`mode_changes`, each mode shown by ``name``) and ``closed_loop``
+    (``rule``: how a run's closed_loop was taken from them)."""
+    return {"source": source, **extra,
+            "changes": [{"t_s": round(t, 3), "mode": name(m)} for t, m in mode_changes(modes)],
+            "closed_loop": rule}
+
+
 def mode_name(value) -> str:
     """The name of a mode as a bag carries it: ``CMODE(n)`` (mavros, a mode without a name) becomes
     ArduSub's name for ``n`` where it has one; anything else is kept, stripped."""
@@ -72,4 +81,4 @@ def mode_name(value) -> str:
 
 
 __all__ = ["SUB_MODES", "OPEN_LOOP_MODES", "CLOSED_LOOP_MODES", "OPEN_LOOP_NAMES", "CLOSED_LOOP_NAMES",
-           "closed_loop_over", "mode_changes", "mode_name"]
+           "closed_loop_over", "mode_changes", "mode_name", "mode_record"]

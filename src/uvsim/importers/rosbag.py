@@ -62,7 +62,7 @@ from uvsim.errors import LogFormatError
 from uvsim.files import load_yaml
 from uvsim.importers import require
 from uvsim.importers.build import build_runs
-from uvsim.importers.flight_modes import CLOSED_LOOP_NAMES, OPEN_LOOP_NAMES, closed_loop_over, mode_changes, mode_name
+from uvsim.importers.flight_modes import CLOSED_LOOP_NAMES, OPEN_LOOP_NAMES, closed_loop_over, mode_name, mode_record
 from uvsim.importers.segments import Segment, load_segments, write_imported_dataset
 from uvsim.importers.timeline import MERGE_TOL_S, Stream
 from uvsim.kinematics import quat_multiply
@@ -320,11 +320,12 @@ def read_bag(bag, mapping: dict, map_name: str = "map", progress=None) -> tuple[
         meta["optional_streams_missing"] = missing
     for name, spec, msgs, times, where, stamp in raw_streams:
         kind = spec["type"]
+        src = f"{spec['topic']} [{where.rsplit('(', 1)[-1].rstrip(')')}]"
         if kind == "mode":  # no column: the runs' closed_loop (import_bag)
             t_s = (times - t0) * 1e-9
             names = [mode_name(_get(m, spec.get("field", "mode"), where)) for m in msgs]
             order = np.argsort(t_s, kind="stable")
-            meta["modes"] = {"stream": name, "source": f"{spec['topic']} [{where.rsplit('(', 1)[-1].rstrip(')')}]",
+            meta["modes"] = {"stream": name, "source": src,
                              "reports": [(float(t_s[i]), names[i]) for i in order],
                              "interval_s": float(np.median(np.diff(t_s[order]))) if len(msgs) > 1 else 0.0,
                              "closed": list(spec.get("closed_loop_modes", CLOSED_LOOP_NAMES)),
@@ -356,7 +357,6 @@ def read_bag(bag, mapping: dict, map_name: str = "map", progress=None) -> tuple[
                 times, cols = times[keep], {k: v[keep] for k, v in cols.items()}
             if spec.get("scale") is not None or spec.get("offset") is not None:
                 notes.append(f"value -> {float(spec.get('offset', 0.0)):g} + {float(spec.get('scale', 1.0)):g} x value")
-        src = f"{spec['topic']} [{where.rsplit('(', 1)[-1].rstrip(')')}]"
         streams.append(Stream(name, src, (times - t0) * 1e-9, cols, role=role, notes=notes + [f"stamp: {stamp}"]))
     meta["n_thrusters"] = n_in
     return streams, meta
@@ -364,12 +364,11 @@ def read_bag(bag, mapping: dict, map_name: str = "map", progress=None) -> tuple[
 
 def _mode_record(modes: dict) -> dict:
     """The flight modes the bag reports (their changes) and what was taken from them."""
-    return {"source": modes["source"], "stream": modes["stream"],
-            "changes": [{"t_s": round(t, 3), "mode": m} for t, m in mode_changes(modes["reports"])],
-            "report_interval_s": round(modes["interval_s"], 3),
-            "closed_loop": (f"true where every mode over a run is one of {modes['closed']}, false where every one is "
-                            f"one of {modes['open']}, not written otherwise; a report up to one interval after a "
-                            "run's start stands for the mode at its start")}
+    return mode_record(modes["reports"], source=modes["source"], stream=modes["stream"],
+                       report_interval_s=round(modes["interval_s"], 3),
+                       rule=(f"true where every mode over a run is one of {modes['closed']}, false where every one "
+                             f"is one of {modes['open']}, not written otherwise; a report up to one interval after "
+                             "a run's start stands for the mode at its start"))
 
 
 def import_bag(bag, map_path, out, *, vehicle=None, segments=None, tol: float = MERGE_TOL_S, progress=None) -> dict:
